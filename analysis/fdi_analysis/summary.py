@@ -1,0 +1,73 @@
+"""The structural summary of a model: counts, DM decomposition, detectability, isolability.
+
+`summarize` computes it once; `fdi_analysis.report` renders it as JSON and Markdown.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from fdi_analysis.dm import DMResult, dulmage_mendelsohn, equivalence_classes
+from fdi_analysis.isolability import IsolabilityResult, isolability
+from fdi_analysis.model import Model
+from fdi_analysis.structure import Structure
+
+
+@dataclass(frozen=True)
+class Summary:
+    model: Model
+    structure: Structure
+    dm: DMResult
+    equivalence_classes: tuple[tuple[int, ...], ...]
+    isolability: IsolabilityResult
+
+    @property
+    def redundancy(self) -> int:
+        return self.dm.redundancy
+
+    def to_dict(self) -> dict[str, Any]:
+        st = self.structure
+        eq = st.equations
+        var = st.unknowns
+        iso = self.isolability
+        return {
+            "model": self.model.name,
+            "description": self.model.description,
+            "source": str(self.model.source) if self.model.source else None,
+            "symbolic": self.model.symbolic,
+            "counts": self.model.counts(),
+            "structural_redundancy": self.redundancy,
+            "dm": {
+                "overdetermined": {"equations": [eq[i] for i in self.dm.plus_eqs],
+                                   "unknowns": [var[i] for i in self.dm.plus_vars]},
+                "just_determined_blocks": [
+                    {"equations": [eq[i] for i in b_eqs], "unknowns": [var[i] for i in b_vars]}
+                    for b_eqs, b_vars in self.dm.zero_blocks
+                ],
+                "underdetermined": {"equations": [eq[i] for i in self.dm.minus_eqs],
+                                    "unknowns": [var[i] for i in self.dm.minus_vars]},
+                "equivalence_classes": [[eq[i] for i in c] for c in self.equivalence_classes],
+            },
+            "faults": {
+                "detectable": [f for f, d in zip(st.faults, iso.detectable, strict=True) if d],
+                "not_detectable": [f for f, d in zip(st.faults, iso.detectable, strict=True) if not d],
+                "isolability_classes": [[st.faults[i] for i in c] for c in iso.classes],
+                "non_isolable_pairs": [[st.faults[i], st.faults[j]] for i, j in iso.non_isolable_pairs()],
+                "isolable_from": {
+                    st.faults[i]: [st.faults[j] for j in range(st.nf) if iso.isolable[i, j]]
+                    for i in range(st.nf)
+                },
+            },
+        }
+
+
+def summarize(model: Model) -> Summary:
+    st = model.structure()
+    return Summary(
+        model=model,
+        structure=st,
+        dm=dulmage_mendelsohn(st.X),
+        equivalence_classes=tuple(equivalence_classes(st.X)),
+        isolability=isolability(st),
+    )

@@ -1,0 +1,48 @@
+"""`fdi-analyze`: help, the report subcommand's files, conversion, and errors on bad models."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from fdi_analysis.cli import main
+
+
+def test_help_has_examples(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as info:
+        main(["--help"])
+    assert info.value.code == 0
+    assert "example" in capsys.readouterr().out
+
+
+def test_report_writes_json_markdown_and_plots(
+    models_dir: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["report", str(models_dir / "romo_quasistatic.toml"), "-o", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "structural redundancy 9" in out
+    data = json.loads((tmp_path / "report.json").read_text())
+    assert data["counts"]["normal_equations"] == 63 and data["structural_redundancy"] == 9
+    assert ["f10", "f14"] in data["faults"]["non_isolable_pairs"]
+    md = (tmp_path / "report.md").read_text()
+    assert "| 82 | 63 | 19 |" in md and "![DM decomposition](dm.png)" in md
+    for png in ("dm.png", "isolability.png"):
+        assert (tmp_path / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_convert_round_trips_through_report(models_dir: Path, tmp_path: Path) -> None:
+    out = tmp_path / "g.json"
+    assert main(["convert", str(models_dir / "romo_grouped.toml"), "--to-fdt", str(out)]) == 0
+    assert main(["report", str(out), "-o", str(tmp_path / "r"), "--no-plots"]) == 0
+    data = json.loads((tmp_path / "r" / "report.json").read_text())
+    assert data["counts"]["equations"] == 41 and data["structural_redundancy"] == 9
+
+
+def test_bad_model_is_a_clear_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[[unknown]]\nname = "x"\n[[equation]]\nid = "e1"\nexpr = "x = y"\n')
+    assert main(["report", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "bad.toml: equation 'e1': undeclared symbol 'y'" in err
