@@ -63,3 +63,47 @@ def plot_isolability(summary: Summary, path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=130)
     plt.close(fig)
+
+
+def plot_fault_matrix(fm_a: np.ndarray, fm_b: np.ndarray, faults: tuple[str, ...], title: str, path: Path) -> None:
+    """The paper's Fig. 4: method A as 'x', method B as red squares (row = occurred fault, 0 = no fault)."""
+    n = fm_a.shape[0]
+    labels = ["0", *(f.lstrip("f") for f in faults)]
+    fig, ax = plt.subplots(figsize=(max(4.0, 0.3 * n), max(4.0, 0.3 * n)))
+    by, bx = np.nonzero(fm_b)
+    ax.scatter(bx, by, marker="s", s=70, facecolors="none", edgecolors="tab:red", linewidths=1.2,
+               label="method B (signatures identical)")
+    ay, ax_ = np.nonzero(fm_a)
+    ax.scatter(ax_, ay, marker="x", s=30, c="black", linewidths=0.9, label="method A (signature contained)")
+    ax.set_xticks(range(n), labels, fontsize=6)
+    ax.set_yticks(range(n), labels, fontsize=6)
+    ax.set_xlim(-0.5, n - 0.5)
+    ax.set_ylim(n - 0.5, -0.5)
+    ax.set_xlabel("interpreted as fault")
+    ax.set_ylabel("occurred fault")
+    ax.grid(True, lw=0.3, alpha=0.5)
+    ax.set_title(title, fontsize=9)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=7, ncol=2)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+
+
+def plot_selected_faults(fsm: np.ndarray, faults: tuple[str, ...], row_labels: list[str], title: str,
+                         path: Path) -> None:
+    """The paper's Fig. 5: which faults affect each selected MSO set (rows = selection index)."""
+    nt, nf = fsm.shape
+    fig, ax = plt.subplots(figsize=(max(5.0, 0.3 * nf), max(2.5, 0.35 * nt + 1.2)))
+    yy, xx = np.nonzero(fsm)
+    ax.scatter(xx, yy, marker="s", s=60, c="tab:blue")
+    ax.set_xticks(range(nf), [f.lstrip("f") for f in faults], fontsize=7)
+    ax.set_yticks(range(nt), row_labels, fontsize=7)
+    ax.set_xlim(-0.5, nf - 0.5)
+    ax.set_ylim(nt - 0.5, -0.5)
+    ax.set_xlabel("fault")
+    ax.set_ylabel("selected MSO set")
+    ax.grid(True, lw=0.3, alpha=0.5)
+    ax.set_title(title, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)

@@ -2,16 +2,15 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from fdi_analysis.dm import overdetermined_part, redundancy
+from fdi_analysis.dm import redundancy
 from fdi_analysis.isolability import isolability
 from fdi_analysis.model_loader import load_model
-from fdi_analysis.structure import Structure
+from msos_bruteforce import all_msos
 
 
 def test_quasistatic_counts(models_dir: Path) -> None:
@@ -57,24 +56,6 @@ def test_variants_have_redundancy_nine_and_all_faults_detectable(
     assert pairs == {("f10", "f14"), ("f11", "f15"), ("f12", "f16"), ("f13", "f17")}
 
 
-def _msos(st: Structure, eqs: np.ndarray) -> Iterator[frozenset[int]]:
-    """All MSO subsets of `eqs` (plain Krysander recursion with a seen-set; fine for small inputs)."""
-    seen: set[frozenset[int]] = set()
-    found: set[frozenset[int]] = set()
-    stack = [frozenset(int(e) for e in overdetermined_part(st.X, eqs))]
-    while stack:
-        m = stack.pop()
-        if m in seen or not m:
-            continue
-        seen.add(m)
-        if redundancy(st.X, sorted(m)) == 1:
-            found.add(m)
-            continue
-        for e in m:
-            stack.append(frozenset(int(x) for x in overdetermined_part(st.X, sorted(m - {e}))))
-    yield from found
-
-
 @pytest.mark.parametrize(
     ("faults", "n_unknowns", "paper_constraints"),
     [
@@ -92,7 +73,7 @@ def test_table_two_rows_one_to_four(
     target = np.zeros(st.nf, dtype=bool)
     target[[f - 1 for f in faults]] = True
     allowed = np.flatnonzero(~(st.F.astype(bool) & ~target).any(axis=1))
-    hits = [m for m in _msos(st, allowed) if np.array_equal(st.equation_faults(sorted(m)), target)]
+    hits = [m for m in all_msos(st, allowed) if np.array_equal(st.equation_faults(sorted(m)), target)]
     sizes = sorted(int((st.X[sorted(m)] != 0).any(axis=0).sum()) for m in hits)
     assert n_unknowns in sizes
     smallest = min(hits, key=len)
