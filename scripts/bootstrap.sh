@@ -21,7 +21,7 @@ if [ "${#missing[@]}" -gt 0 ]; then
 fi
 
 py="${PYTHON:-python3}"
-stamp=".venv/.installed-$(sha1sum pyproject.toml setup.py 2>/dev/null | sha1sum | cut -c1-12)"
+stamp=".venv/.installed-$(cat pyproject.toml $(ls setup.py 2>/dev/null) | sha1sum | cut -c1-12)"
 if [ ! -x .venv/bin/python ]; then
   echo "bootstrap: creating .venv"
   "$py" -m venv .venv
