@@ -6,11 +6,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from msos_bruteforce import all_msos
 
 from fdi_analysis.dm import redundancy
 from fdi_analysis.isolability import isolability
 from fdi_analysis.model_loader import load_model
-from msos_bruteforce import all_msos
 
 
 def test_quasistatic_counts(models_dir: Path) -> None:
