@@ -1,0 +1,1 @@
+"""Host-side tooling: vehicle simulator with fault injection, CAN database and logs, ECU process, monitor."""
