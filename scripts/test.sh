@@ -8,4 +8,5 @@ bash scripts/bootstrap.sh
 .venv/bin/python -m pip install -q --no-deps --no-build-isolation -e .
 echo "== ruff"; .venv/bin/ruff check analysis host_tools tests
 echo "== mypy"; .venv/bin/mypy
+echo "== fw (C library)"; bash scripts/test_fw.sh
 echo "== pytest"; .venv/bin/python -m pytest -q

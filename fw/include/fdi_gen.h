@@ -1,0 +1,81 @@
+/*
+ * fdi_gen.h - residual generators: one residual per step from the signal frame.
+ *
+ * A generator is an instance (fdi_gen_t) with a kind (fdi_gen_kind_t from the table) and enough filter
+ * state for the largest kind. Dispatch is a switch on the kind (no function pointers, MISRA-friendly); a new
+ * hand-written or generated generator adds one enum value in fdi_table.h, one case in fdi_gen.c, its
+ * input mask in fdi_gen_inputs() and its function in an fdi_arr_<group>.c file.
+ *
+ * Kinematic generators (sign conventions of the structural model; w = psidot_m, d_x, d_y = position of the
+ * velocity sensor relative to the CoG):
+ *   vx = vx_m + d_y*w,  vy = vy_m - d_x*w  (S4, S5)
+ *   MSO1  r1 = ax_m - (d/dt vx - vy*w)
+ *   MSO2  r2 = ay_m - (d/dt vy + vx*w)
+ *   MSO3  p = d/dt vx - ax_m,  r3 = w*d/dt p - p*d/dt w - (ay_m - vx*w)*w^2     (eq. 8-10)
+ *   MSO4  q = d/dt vy - ay_m,  r4 = w*d/dt q - q*d/dt w + (ax_m + vy*w)*w^2
+ *   MSO1 observer: xh' = ax_m + vy*w + L*(vx - xh), r = vx - xh   (MSO2 likewise with ay_m - vx*w)
+ * Derivatives come from fdi_svf filters. Every signal of one relation passes through the same number of
+ * equal filters (one stage for r1, r2; two for r3, r4, whose p and q already contain a derivative), so all
+ * terms carry the same delay and the residual of consistent signals stays near 0 in dynamic manoeuvres.
+ * Note r3, r4 scale with w^2: they lose sensitivity when driving straight (w -> 0).
+ *
+ * Cost per step: r1, r2 4 filters (~70 flops); r3, r4 8 filters (~140 flops); observer ~12 flops.
+ * Memory: fdi_gen_t 4 + 8 filters * 12 + 8 = 108 bytes; fdi_gen_param_t 32 bytes (shared by all tests).
+ */
+#ifndef FDI_GEN_H
+#define FDI_GEN_H
+
+#include <stdint.h>
+
+#include "fdi_obs.h"
+#include "fdi_signals.h"
+#include "fdi_status.h"
+#include "fdi_svf.h"
+#include "fdi_table.h"
+
+#define FDI_GEN_MAX_FILTERS 8U
+
+typedef struct
+{
+    float dt;        /* sample time [s] */
+    float cutoff_hz; /* cut-off of every derivative filter [Hz], < 0.5/dt */
+    float zeta;      /* damping of the derivative filters (0.7071 typical) */
+    float obs_gain;  /* observer gain L [1/s] of the observer-based generators, > 0 */
+    float d_x;       /* velocity sensor position ahead of the CoG [m] */
+    float d_y;       /* velocity sensor position left of the CoG [m] */
+} fdi_gen_config_t;
+
+typedef struct
+{
+    fdi_svf_coef_t svf;
+    fdi_obs_coef_t obs;
+    float d_x;
+    float d_y;
+} fdi_gen_param_t;
+
+typedef struct
+{
+    fdi_gen_kind_t kind;
+    fdi_svf_t filt[FDI_GEN_MAX_FILTERS];
+    fdi_obs_t obs;
+} fdi_gen_t; /* opaque by convention */
+
+/* Design the shared parameters. BAD_ARG / NOT_FINITE on a bad config (see fdi_svf.h, fdi_obs.h). */
+fdi_status_t fdi_gen_param_init(fdi_gen_param_t *par, const fdi_gen_config_t *cfg);
+
+/* Bind an instance to a kind (not FDI_GEN_NONE). It must be reset before the first step. */
+fdi_status_t fdi_gen_init(fdi_gen_t *self, fdi_gen_kind_t kind);
+
+/* Put every filter in steady state at the current inputs (used at start and after invalid inputs). */
+fdi_status_t fdi_gen_reset(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi_inputs_t *in);
+
+/*
+ * One step: *r = residual. NOT_FINITE when an input the kind reads is not finite or a value overflows; the
+ * state may then be partly updated, so the caller resets the generator before using it again.
+ */
+fdi_status_t fdi_gen_step(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi_inputs_t *in, float *r);
+
+/* Signals (FDI_SIGM_*) read by a kind; 0 for FDI_GEN_NONE and unknown kinds. Cannot fail. */
+uint32_t fdi_gen_inputs(fdi_gen_kind_t kind);
+
+#endif /* FDI_GEN_H */

@@ -1,0 +1,165 @@
+/* fdi_arr_kin.c - kinematic residual generators MSO1..MSO4 (see fdi_gen.h for the equations). */
+#include "fdi_arr_kin.h"
+
+#include "fdi_float.h"
+
+/* Filter slots. Stage 1 filters raw signals, stage 2 filters stage-1 outputs (r3, r4 only). */
+#define S1_V 0U  /* the differentiated velocity (vx for MSO1/3, vy for MSO2/4) */
+#define S1_A 1U  /* the acceleration on the same axis (ax_m for MSO1/3, ay_m for MSO2/4) */
+#define S1_W 2U  /* yaw rate */
+#define S1_O 3U  /* the other quantity (vy / vx for MSO1/2, ay_m / ax_m for MSO3/4) */
+#define S2_P 4U  /* p or q */
+#define S2_W 5U  /* yaw rate, second stage */
+#define S2_O 6U  /* other acceleration, second stage */
+#define S2_V 7U  /* velocity, second stage */
+
+static fdi_status_t filt(fdi_gen_t *g, const fdi_gen_param_t *par, uint32_t idx, float u, bool reset,
+                         fdi_svf_out_t *out)
+{
+    fdi_status_t st;
+    if (reset)
+    {
+        st = fdi_svf_reset(&g->filt[idx], u);
+        out->y = u;
+        out->dy = 0.0f;
+    }
+    else
+    {
+        st = fdi_svf_step(&g->filt[idx], &par->svf, u, out);
+    }
+    return st;
+}
+
+static fdi_status_t worst(fdi_status_t a, fdi_status_t b)
+{
+    return (a != FDI_OK) ? a : b;
+}
+
+static fdi_status_t finish(fdi_status_t st, float value, bool reset, float *r)
+{
+    fdi_status_t res = st;
+    if ((res == FDI_OK) && !fdi_float_is_finite(value))
+    {
+        res = FDI_NOT_FINITE;
+    }
+    if (res == FDI_OK)
+    {
+        *r = reset ? 0.0f : value;
+    }
+    return res;
+}
+
+/* r = a_along - (dv/dt + sign * v_other * w), one filter stage: MSO1 (sign -1), MSO2 (sign +1). */
+static fdi_status_t one_stage(fdi_gen_t *g, const fdi_gen_param_t *par, float v, float a_along, float w,
+                              float v_other, float sign, bool reset, float *r)
+{
+    fdi_svf_out_t fv = {0.0f, 0.0f};
+    fdi_svf_out_t fa = {0.0f, 0.0f};
+    fdi_svf_out_t fw = {0.0f, 0.0f};
+    fdi_svf_out_t fo = {0.0f, 0.0f};
+    fdi_status_t st = filt(g, par, S1_V, v, reset, &fv);
+    st = worst(st, filt(g, par, S1_A, a_along, reset, &fa));
+    st = worst(st, filt(g, par, S1_W, w, reset, &fw));
+    st = worst(st, filt(g, par, S1_O, v_other, reset, &fo));
+    return finish(st, fa.y - (fv.dy + (sign * fo.y * fw.y)), reset, r);
+}
+
+/*
+ * Two filter stages: pq = dv/dt - a_along; r = w*d/dt pq - pq*d/dt w + sign * (a_other + cross*v*w)*w^2.
+ * MSO3: v = vx, a_along = ax_m, a_other = ay_m, cross = -1, sign = -1.
+ * MSO4: v = vy, a_along = ay_m, a_other = ax_m, cross = +1, sign = +1.
+ */
+static fdi_status_t two_stage(fdi_gen_t *g, const fdi_gen_param_t *par, float v, float a_along, float w,
+                              float a_other, float cross, float sign, bool reset, float *r)
+{
+    fdi_svf_out_t fv = {0.0f, 0.0f};
+    fdi_svf_out_t fa = {0.0f, 0.0f};
+    fdi_svf_out_t fw = {0.0f, 0.0f};
+    fdi_svf_out_t fo = {0.0f, 0.0f};
+    fdi_svf_out_t fp2 = {0.0f, 0.0f};
+    fdi_svf_out_t fw2 = {0.0f, 0.0f};
+    fdi_svf_out_t fo2 = {0.0f, 0.0f};
+    fdi_svf_out_t fv2 = {0.0f, 0.0f};
+    fdi_status_t st = filt(g, par, S1_V, v, reset, &fv);
+    st = worst(st, filt(g, par, S1_A, a_along, reset, &fa));
+    st = worst(st, filt(g, par, S1_W, w, reset, &fw));
+    st = worst(st, filt(g, par, S1_O, a_other, reset, &fo));
+    st = worst(st, filt(g, par, S2_P, fv.dy - fa.y, reset, &fp2));
+    st = worst(st, filt(g, par, S2_W, fw.y, reset, &fw2));
+    st = worst(st, filt(g, par, S2_O, fo.y, reset, &fo2));
+    st = worst(st, filt(g, par, S2_V, fv.y, reset, &fv2));
+    {
+        const float w2 = fw2.y;
+        const float bracket = fo2.y + (cross * fv2.y * w2);
+        const float value = ((w2 * fp2.dy) - (fp2.y * fw2.dy)) + (sign * bracket * w2 * w2);
+        st = finish(st, value, reset, r);
+    }
+    return st;
+}
+
+fdi_status_t fdi_arr_kin_x_deriv(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_inputs_t *in, bool reset,
+                                 float *r)
+{
+    const float w = in->psidot_m;
+    const float vx = in->vx_m + (par->d_y * w);
+    const float vy = in->vy_m - (par->d_x * w);
+    return one_stage(g, par, vx, in->ax_m, w, vy, -1.0f, reset, r);
+}
+
+fdi_status_t fdi_arr_kin_y_deriv(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_inputs_t *in, bool reset,
+                                 float *r)
+{
+    const float w = in->psidot_m;
+    const float vx = in->vx_m + (par->d_y * w);
+    const float vy = in->vy_m - (par->d_x * w);
+    return one_stage(g, par, vy, in->ay_m, w, vx, 1.0f, reset, r);
+}
+
+fdi_status_t fdi_arr_kin_arr3(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_inputs_t *in, bool reset,
+                              float *r)
+{
+    const float w = in->psidot_m;
+    const float vx = in->vx_m + (par->d_y * w);
+    return two_stage(g, par, vx, in->ax_m, w, in->ay_m, -1.0f, -1.0f, reset, r);
+}
+
+fdi_status_t fdi_arr_kin_arr4(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_inputs_t *in, bool reset,
+                              float *r)
+{
+    const float w = in->psidot_m;
+    const float vy = in->vy_m - (par->d_x * w);
+    return two_stage(g, par, vy, in->ay_m, w, in->ax_m, 1.0f, 1.0f, reset, r);
+}
+
+static fdi_status_t observe(fdi_gen_t *g, const fdi_gen_param_t *par, float f, float y, bool reset, float *r)
+{
+    fdi_status_t st;
+    float res = 0.0f;
+    if (reset)
+    {
+        st = fdi_obs_reset(&g->obs, &par->obs, f, y);
+    }
+    else
+    {
+        st = fdi_obs_step(&g->obs, &par->obs, f, y, &res);
+    }
+    return finish(st, res, reset, r);
+}
+
+fdi_status_t fdi_arr_kin_x_obs(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_inputs_t *in, bool reset,
+                               float *r)
+{
+    const float w = in->psidot_m;
+    const float vx = in->vx_m + (par->d_y * w);
+    const float vy = in->vy_m - (par->d_x * w);
+    return observe(g, par, in->ax_m + (vy * w), vx, reset, r); /* K1 + D1: vx' = ax + vy w */
+}
+
+fdi_status_t fdi_arr_kin_y_obs(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_inputs_t *in, bool reset,
+                               float *r)
+{
+    const float w = in->psidot_m;
+    const float vx = in->vx_m + (par->d_y * w);
+    const float vy = in->vy_m - (par->d_x * w);
+    return observe(g, par, in->ay_m - (vx * w), vy, reset, r); /* K2 + D2: vy' = ay - vx w */
+}

@@ -1,0 +1,230 @@
+/* fdi_diag.c - the diagnoser: generators, evaluators, warm-up and isolation per table (see fdi_diag.h). */
+#include "fdi_diag.h"
+
+#include <math.h>
+#include <stddef.h>
+
+#include "fdi_float.h"
+#include "fdi_gen_internal.h"
+
+#define FDI_TWO_PI_F 6.28318530717959f
+
+/* Settling time of the design point in steps (see fdi_diag.h); 0 if it is not representable. */
+static uint32_t settle_steps(const fdi_table_design_t *d)
+{
+    const float rate = d->zeta * FDI_TWO_PI_F * d->cutoff_hz; /* decay rate of one filter stage [1/s] */
+    uint32_t steps = 0U;
+    if ((rate > 0.0f) && (d->obs_gain > 0.0f) && (d->dt > 0.0f))
+    {
+        const float t_svf = (2.0f * FDI_DIAG_SETTLE_TAUS) / rate;
+        const float t_obs = FDI_DIAG_SETTLE_TAUS / d->obs_gain;
+        const float t = (t_svf > t_obs) ? t_svf : t_obs;
+        const float n = ceilf(t / d->dt);
+        if (fdi_float_is_finite(n) && (n < 65535.0f))
+        {
+            steps = (uint32_t)n;
+        }
+    }
+    return steps;
+}
+
+static fdi_status_t check_config(const fdi_diag_config_t *cfg)
+{
+    fdi_status_t st = fdi_table_check(cfg->table);
+    if (st != FDI_OK)
+    {
+        /* keep the status of the table check */
+    }
+    else if (!fdi_float_is_finite(cfg->cusum_k) || !fdi_float_is_finite(cfg->cusum_h))
+    {
+        st = FDI_NOT_FINITE;
+    }
+    else if ((cfg->table->n_tests > FDI_DIAG_MAX_TESTS) ||
+             ((cfg->mode != FDI_ISO_NO_EXONERATION) && (cfg->mode != FDI_ISO_EXONERATION)))
+    {
+        st = FDI_BAD_ARG;
+    }
+    else
+    {
+        const uint32_t need = settle_steps(&cfg->table->design);
+        if ((need == 0U) || ((uint32_t)cfg->warmup_steps < need))
+        {
+            st = FDI_BAD_ARG;
+        }
+    }
+    return st;
+}
+
+fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
+{
+    fdi_status_t st = FDI_BAD_ARG;
+    if ((self != NULL) && (cfg != NULL))
+    {
+        st = check_config(cfg);
+    }
+    if (st == FDI_OK)
+    {
+        const fdi_table_t *t = cfg->table;
+        const fdi_gen_config_t gcfg = {t->design.dt, t->design.cutoff_hz, t->design.zeta, t->design.obs_gain,
+                                       cfg->d_x, cfg->d_y};
+        uint32_t i;
+        st = fdi_gen_param_init(&self->par, &gcfg);
+        for (i = 0U; (st == FDI_OK) && (i < (uint32_t)t->n_tests); ++i)
+        {
+            const fdi_test_desc_t *d = &t->tests[i];
+            const fdi_eval_config_t ecfg = {d->gate,        d->variance,    cfg->cusum_k,
+                                            cfg->cusum_h,   cfg->set_count, cfg->clear_count};
+            st = fdi_eval_init(&self->eval[i], &ecfg);
+            if ((st == FDI_OK) && (d->kind != FDI_GEN_NONE))
+            {
+                st = fdi_gen_init(&self->gen[i], d->kind);
+            }
+            self->residual[i] = 0.0f;
+            self->ratio[i] = 0.0f;
+            self->warm[i] = cfg->warmup_steps;
+        }
+        if (st == FDI_OK)
+        {
+            self->table = t;
+            self->mode = cfg->mode;
+            self->warmup_steps = cfg->warmup_steps;
+            self->n_tests = t->n_tests;
+            self->rearm = 0xFFFFFFFFU;
+            self->alarm = 0U;
+            self->evaluable = 0U;
+            self->iso.candidates = 0U;
+            self->iso.class_mask = 0U;
+            self->iso.n_classes = 0U;
+            self->iso.detected = false;
+            self->iso.isolated = false;
+        }
+    }
+    if ((self != NULL) && (st != FDI_OK))
+    {
+        self->table = NULL; /* a failed init leaves an instance that fdi_diag_step() refuses */
+    }
+    return st;
+}
+
+/* Run test i on a usable frame; returns true if it is evaluable this step (then *alarm is set). */
+static bool run_test(fdi_diag_t *self, uint32_t i, const fdi_inputs_t *in, bool *alarm)
+{
+    const uint32_t bit = (uint32_t)1U << i;
+    bool evaluable = false;
+    fdi_status_t st = FDI_OK;
+    float r = 0.0f;
+    if ((self->rearm & bit) != 0U)
+    {
+        float r0 = 0.0f;
+        st = fdi_gen_run_checked(&self->gen[i], &self->par, in, true, &r0);
+        if (st == FDI_OK)
+        {
+            st = fdi_eval_reset(&self->eval[i]);
+            self->warm[i] = self->warmup_steps;
+            self->rearm &= ~bit;
+        }
+    }
+    if (st == FDI_OK)
+    {
+        st = fdi_gen_run_checked(&self->gen[i], &self->par, in, false, &r); /* inputs checked by the caller */
+    }
+    if (st != FDI_OK)
+    {
+        self->rearm |= bit;
+        self->residual[i] = 0.0f;
+        self->ratio[i] = 0.0f;
+    }
+    else if (self->warm[i] > 0U)
+    {
+        self->warm[i]--;
+        self->residual[i] = r;
+        self->ratio[i] = 0.0f;
+    }
+    else
+    {
+        fdi_eval_out_t eo = {FDI_TEST_OK, 0.0f};
+        if (fdi_eval_step(&self->eval[i], r, &eo) == FDI_OK)
+        {
+            evaluable = true;
+            *alarm = (eo.status == FDI_TEST_ALARM);
+            self->residual[i] = r;
+            self->ratio[i] = eo.ratio;
+        }
+        else
+        {
+            self->rearm |= bit;
+        }
+    }
+    return evaluable;
+}
+
+fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_inputs_t *inputs, uint32_t validity)
+{
+    fdi_status_t st = FDI_OK;
+    if ((self == NULL) || (inputs == NULL) || (self->table == NULL))
+    {
+        st = FDI_BAD_ARG;
+    }
+    else
+    {
+        const uint32_t usable = validity & fdi_signals_finite_mask(inputs);
+        uint32_t alarm = 0U;
+        uint32_t evaluable = 0U;
+        uint32_t i;
+        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+        {
+            const fdi_test_desc_t *d = &self->table->tests[i];
+            const uint32_t bit = (uint32_t)1U << i;
+            bool test_alarm = false;
+            if ((d->kind == FDI_GEN_NONE) || ((usable & d->input_mask) != d->input_mask))
+            {
+                self->rearm |= bit;
+                self->residual[i] = 0.0f;
+                self->ratio[i] = 0.0f;
+            }
+            else if (run_test(self, i, inputs, &test_alarm))
+            {
+                evaluable |= bit;
+                alarm |= test_alarm ? bit : 0U;
+            }
+            else
+            {
+                /* warming up or rejected: not evaluable */
+            }
+        }
+        self->alarm = alarm;
+        self->evaluable = evaluable;
+        st = fdi_iso_run(self->table, alarm, evaluable, self->mode, &self->iso);
+    }
+    return st;
+}
+
+fdi_status_t fdi_diag_result(const fdi_diag_t *self, fdi_diag_result_t *out)
+{
+    fdi_status_t st = FDI_BAD_ARG;
+    if ((self != NULL) && (out != NULL) && (self->table != NULL))
+    {
+        uint32_t i;
+        out->n_tests = self->n_tests;
+        out->alarm_mask = self->alarm;
+        out->evaluable_mask = self->evaluable;
+        for (i = 0U; i < FDI_DIAG_MAX_TESTS; ++i)
+        {
+            const uint32_t bit = (uint32_t)1U << (i & 31U);
+            const bool used = i < (uint32_t)self->n_tests;
+            if ((self->evaluable & bit) == 0U)
+            {
+                out->status[i] = FDI_TEST_NOT_EVALUABLE;
+            }
+            else
+            {
+                out->status[i] = ((self->alarm & bit) != 0U) ? FDI_TEST_ALARM : FDI_TEST_OK;
+            }
+            out->residual[i] = used ? self->residual[i] : 0.0f;
+            out->ratio[i] = used ? self->ratio[i] : 0.0f;
+        }
+        out->iso = self->iso;
+        st = FDI_OK;
+    }
+    return st;
+}

@@ -1,0 +1,154 @@
+/* fdi_gen.c - generator parameters, input masks and dispatch on the kind (see fdi_gen.h). */
+#include "fdi_gen.h"
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "fdi_arr_kin.h"
+#include "fdi_gen_internal.h"
+#include "fdi_float.h"
+
+fdi_status_t fdi_gen_param_init(fdi_gen_param_t *par, const fdi_gen_config_t *cfg)
+{
+    fdi_status_t st = FDI_BAD_ARG;
+    if ((par != NULL) && (cfg != NULL))
+    {
+        fdi_svf_coef_t svf = {0.0f, 0.0f, 0.0f};
+        fdi_obs_coef_t obs = {0.0f, 0.0f, 0.0f};
+        const fdi_svf_config_t svf_cfg = {cfg->dt, cfg->cutoff_hz, cfg->zeta};
+        const fdi_obs_config_t obs_cfg = {cfg->dt, 0.0f, cfg->obs_gain};
+        st = fdi_svf_design(&svf, &svf_cfg);
+        if (st == FDI_OK)
+        {
+            st = fdi_obs_design(&obs, &obs_cfg);
+        }
+        if ((st == FDI_OK) && (!fdi_float_is_finite(cfg->d_x) || !fdi_float_is_finite(cfg->d_y)))
+        {
+            st = FDI_NOT_FINITE;
+        }
+        if (st == FDI_OK)
+        {
+            par->svf = svf;
+            par->obs = obs;
+            par->d_x = cfg->d_x;
+            par->d_y = cfg->d_y;
+        }
+    }
+    return st;
+}
+
+uint32_t fdi_gen_inputs(fdi_gen_kind_t kind)
+{
+    uint32_t m;
+    switch (kind)
+    {
+    case FDI_GEN_KIN_X_DERIV:
+    case FDI_GEN_KIN_X_OBS:
+        m = FDI_SIGM_AX_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M;
+        break;
+    case FDI_GEN_KIN_Y_DERIV:
+    case FDI_GEN_KIN_Y_OBS:
+        m = FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M;
+        break;
+    case FDI_GEN_KIN_ARR3:
+        m = FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M;
+        break;
+    case FDI_GEN_KIN_ARR4:
+        m = FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VY_M;
+        break;
+    case FDI_GEN_NONE:
+    default:
+        m = 0U;
+        break;
+    }
+    return m;
+}
+
+fdi_status_t fdi_gen_init(fdi_gen_t *self, fdi_gen_kind_t kind)
+{
+    fdi_status_t st = FDI_BAD_ARG;
+    if ((self != NULL) && (fdi_gen_inputs(kind) != 0U))
+    {
+        uint32_t i;
+        self->kind = kind;
+        for (i = 0U; i < FDI_GEN_MAX_FILTERS; ++i)
+        {
+            self->filt[i].x1 = 0.0f;
+            self->filt[i].x2 = 0.0f;
+            self->filt[i].u_prev = 0.0f;
+        }
+        self->obs.xh = 0.0f;
+        self->obs.g_prev = 0.0f;
+        st = FDI_OK;
+    }
+    return st;
+}
+
+fdi_status_t fdi_gen_run_checked(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi_inputs_t *in, bool reset,
+                                 float *r)
+{
+    fdi_status_t st;
+    switch (self->kind)
+    {
+    case FDI_GEN_KIN_X_DERIV:
+        st = fdi_arr_kin_x_deriv(self, par, in, reset, r);
+        break;
+    case FDI_GEN_KIN_Y_DERIV:
+        st = fdi_arr_kin_y_deriv(self, par, in, reset, r);
+        break;
+    case FDI_GEN_KIN_ARR3:
+        st = fdi_arr_kin_arr3(self, par, in, reset, r);
+        break;
+    case FDI_GEN_KIN_ARR4:
+        st = fdi_arr_kin_arr4(self, par, in, reset, r);
+        break;
+    case FDI_GEN_KIN_X_OBS:
+        st = fdi_arr_kin_x_obs(self, par, in, reset, r);
+        break;
+    case FDI_GEN_KIN_Y_OBS:
+        st = fdi_arr_kin_y_obs(self, par, in, reset, r);
+        break;
+    case FDI_GEN_NONE:
+    default:
+        st = FDI_BAD_ARG;
+        break;
+    }
+    return st;
+}
+
+static fdi_status_t run(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi_inputs_t *in, bool reset, float *r)
+{
+    fdi_status_t st;
+    if ((self == NULL) || (par == NULL) || (in == NULL) || (r == NULL))
+    {
+        st = FDI_BAD_ARG;
+    }
+    else
+    {
+        const uint32_t need = fdi_gen_inputs(self->kind);
+        if (need == 0U)
+        {
+            st = FDI_BAD_ARG;
+        }
+        else if ((fdi_signals_finite_mask(in) & need) != need)
+        {
+            st = FDI_NOT_FINITE;
+        }
+        else
+        {
+            st = fdi_gen_run_checked(self, par, in, reset, r);
+        }
+    }
+    return st;
+}
+
+fdi_status_t fdi_gen_reset(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi_inputs_t *in)
+{
+    float r = 0.0f;
+    return run(self, par, in, true, &r);
+}
+
+fdi_status_t fdi_gen_step(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi_inputs_t *in, float *r)
+{
+    return run(self, par, in, false, r);
+}

@@ -1,0 +1,62 @@
+/* fdi_iso.c - signature matching with and without exoneration (see fdi_iso.h). */
+#include "fdi_iso.h"
+
+#include <stddef.h>
+
+static uint32_t iso_low_bits(uint32_t n)
+{
+    return (n >= 32U) ? 0xFFFFFFFFU : (((uint32_t)1U << (n & 31U)) - 1U);
+}
+
+fdi_status_t fdi_iso_run(const fdi_table_t *table, uint32_t alarm_mask, uint32_t evaluable_mask,
+                         fdi_iso_mode_t mode, fdi_iso_result_t *out)
+{
+    fdi_status_t st = FDI_OK;
+    if ((table == NULL) || (out == NULL) || (table->fault_signature == NULL) || (table->iso_class == NULL) ||
+        (table->n_faults > FDI_TABLE_MAX_FAULTS) || (table->n_tests > FDI_TABLE_MAX_TESTS))
+    {
+        st = FDI_BAD_ARG;
+    }
+    else if (((alarm_mask & ~evaluable_mask) != 0U) || ((evaluable_mask & ~iso_low_bits(table->n_tests)) != 0U) ||
+             ((mode != FDI_ISO_NO_EXONERATION) && (mode != FDI_ISO_EXONERATION)))
+    {
+        st = FDI_BAD_ARG;
+    }
+    else
+    {
+        const uint32_t quiet = (mode == FDI_ISO_EXONERATION) ? (evaluable_mask & ~alarm_mask) : 0U;
+        uint32_t cand = 0U;
+        uint32_t classes = 0U;
+        uint32_t left;
+        uint8_t n_classes = 0U;
+        uint32_t j;
+        if (alarm_mask != 0U)
+        {
+            for (j = 0U; j < (uint32_t)table->n_faults; ++j)
+            {
+                const uint32_t sig = table->fault_signature[j];
+                if (((alarm_mask & ~sig) == 0U) && ((quiet & sig) == 0U))
+                {
+                    cand |= ((uint32_t)1U << j);
+                }
+            }
+        }
+        /* Count the classes: take the lowest remaining candidate, remove its whole class. */
+        left = cand;
+        for (j = 0U; (j < (uint32_t)table->n_faults) && (left != 0U); ++j)
+        {
+            if ((left & ((uint32_t)1U << j)) != 0U)
+            {
+                classes |= table->iso_class[j];
+                left &= ~table->iso_class[j];
+                ++n_classes;
+            }
+        }
+        out->candidates = cand;
+        out->class_mask = classes;
+        out->n_classes = n_classes;
+        out->detected = (alarm_mask != 0U);
+        out->isolated = (n_classes == 1U);
+    }
+    return st;
+}

@@ -1,0 +1,108 @@
+/* fdi_table.c - validation of an exported diagnosis table (see fdi_table.h). */
+#include "fdi_table.h"
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "fdi_float.h"
+#include "fdi_gen.h"
+#include "fdi_signals.h"
+
+static uint32_t table_low_bits(uint32_t n)
+{
+    return (n >= 32U) ? 0xFFFFFFFFU : (((uint32_t)1U << (n & 31U)) - 1U);
+}
+
+static bool table_positive_finite(float x)
+{
+    return fdi_float_is_finite(x) && (x > 0.0f);
+}
+
+static bool header_ok(const fdi_table_t *t)
+{
+    return (t->format_version == FDI_TABLE_FORMAT_VERSION) && (t->n_faults >= 1U) &&
+           (t->n_faults <= FDI_TABLE_MAX_FAULTS) && (t->n_tests >= 1U) && (t->n_tests <= FDI_TABLE_MAX_TESTS) &&
+           (t->fault_names != NULL) && (t->tests != NULL) && (t->fault_signature != NULL) &&
+           (t->iso_class != NULL) && table_positive_finite(t->design.dt) && table_positive_finite(t->design.cutoff_hz) &&
+           table_positive_finite(t->design.zeta) && table_positive_finite(t->design.obs_gain);
+}
+
+static bool test_ok(const fdi_test_desc_t *d, uint32_t fault_universe)
+{
+    bool ok = (d->interpretation != NULL) && ((uint32_t)d->kind < FDI_GEN_KIND_COUNT) &&
+              (d->fault_mask != 0U) && ((d->fault_mask & ~fault_universe) == 0U) &&
+              ((d->input_mask & ~FDI_SIGM_ALL) == 0U) && table_positive_finite(d->gate) && table_positive_finite(d->variance);
+    if (ok)
+    {
+        const uint32_t need = fdi_gen_inputs(d->kind);
+        ok = ((d->input_mask & need) == need);
+    }
+    return ok;
+}
+
+/* Signature of fault j rebuilt from the tests' fault masks. */
+static uint32_t column(const fdi_table_t *t, uint32_t j)
+{
+    uint32_t sig = 0U;
+    uint32_t i;
+    for (i = 0U; i < (uint32_t)t->n_tests; ++i)
+    {
+        if ((t->tests[i].fault_mask & ((uint32_t)1U << j)) != 0U)
+        {
+            sig |= ((uint32_t)1U << i);
+        }
+    }
+    return sig;
+}
+
+static bool faults_ok(const fdi_table_t *t)
+{
+    const uint32_t n = (uint32_t)t->n_faults;
+    bool ok = true;
+    uint32_t j;
+    for (j = 0U; ok && (j < n); ++j)
+    {
+        uint32_t same = 0U;
+        uint32_t g;
+        ok = (t->fault_names[j] != NULL) && (t->fault_signature[j] == column(t, j));
+        for (g = 0U; ok && (g < n); ++g)
+        {
+            if (t->fault_signature[g] == t->fault_signature[j])
+            {
+                same |= ((uint32_t)1U << g);
+            }
+        }
+        ok = ok && (t->iso_class[j] == same);
+    }
+    return ok;
+}
+
+fdi_status_t fdi_table_check(const fdi_table_t *table)
+{
+    fdi_status_t st = FDI_OK;
+    if (table == NULL)
+    {
+        st = FDI_BAD_ARG;
+    }
+    else if (!header_ok(table))
+    {
+        st = FDI_BAD_TABLE;
+    }
+    else
+    {
+        const uint32_t universe = table_low_bits((uint32_t)table->n_faults);
+        uint32_t i;
+        for (i = 0U; (st == FDI_OK) && (i < (uint32_t)table->n_tests); ++i)
+        {
+            if (!test_ok(&table->tests[i], universe))
+            {
+                st = FDI_BAD_TABLE;
+            }
+        }
+        if ((st == FDI_OK) && !faults_ok(table))
+        {
+            st = FDI_BAD_TABLE;
+        }
+    }
+    return st;
+}

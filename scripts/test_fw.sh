@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# Quality gates of the on-vehicle C library fw/ (see fw/README.md). Build dirs under build/ (gitignored):
+#   1. host build (-Werror, all warnings) + cmocka unit tests through CTest         build/fw
+#   2. ASan + UBSan (float-divide-by-zero, no recovery) build + CTest              build/fw-san
+#   3. cross build for Cortex-M4F (library + bare-metal bench ELF)                  build/m4
+#   4. cppcheck --addon=misra over fw/src and fw/include (zero findings, suppressions: fw/misra_suppressions.txt)
+#   5. clang-tidy over fw/src with fw/.clang-tidy (warnings are errors)
+#   6. install to a temporary prefix and build a find_package(fdi) consumer against it
+# Exits non-zero on the first failing gate.
+set -euo pipefail
+top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$top"
+jobs="${FDI_JOBS:-2}"
+
+run_ctest() { # print CTest's summary lines; fail if any test fails
+  local dir="$1" log
+  log="$(mktemp)"
+  if ! ctest --test-dir "$dir" -j "$jobs" --output-on-failure >"$log" 2>&1; then
+    cat "$log"; rm -f "$log"; return 1
+  fi
+  grep -E "tests passed|tests failed|Total Test time" "$log"
+  rm -f "$log"
+}
+
+echo "== fw: host build + unit tests"
+cmake -S . -B build/fw -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_EXPORT_COMPILE_COMMANDS=ON -DFDI_BUILD_TESTS=ON \
+  -DFDI_SANITIZE=OFF >/dev/null
+cmake --build build/fw -j "$jobs" >/dev/null
+run_ctest build/fw
+
+echo "== fw: sanitizer build (ASan + UBSan) + unit tests"
+cmake -S . -B build/fw-san -DCMAKE_BUILD_TYPE=Debug -DFDI_SANITIZE=ON -DFDI_BUILD_TESTS=ON -DFDI_BUILD_BENCH=OFF >/dev/null
+cmake --build build/fw-san -j "$jobs" >/dev/null
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 run_ctest build/fw-san
+
+echo "== fw: cross build for Cortex-M4F"
+toolchain=()
+[ -f build/m4/CMakeCache.txt ] || toolchain=(-DCMAKE_TOOLCHAIN_FILE=cmake/arm-none-eabi-cortex-m4f.cmake)
+cmake -S . -B build/m4 "${toolchain[@]}" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build/m4 -j "$jobs" >/dev/null
+arm-none-eabi-size -t build/m4/fw/libfdi.a | tail -1 | awk '{print "libfdi.a (cortex-m4f): text " $1 " B, data " $2 " B, bss " $3 " B"}'
+
+echo "== fw: cppcheck --addon=misra"
+cppcheck --addon=misra --std=c99 --enable=warning,style,portability --inline-suppr --error-exitcode=1 -q \
+  --suppressions-list=fw/misra_suppressions.txt -I fw/include -I fw/src fw/src fw/include
+echo "cppcheck: no findings"
+
+echo "== fw: clang-tidy"
+clang-tidy -p build/fw --quiet fw/src/*.c 2>/dev/null
+echo "clang-tidy: no findings"
+
+echo "== fw: find_package(fdi) consumer"
+prefix="$top/build/fw-install"
+rm -rf "$prefix" build/fw-consumer
+cmake --install build/fw --prefix "$prefix" >/dev/null
+cmake -S tests/fw/consumer -B build/fw-consumer -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
+cmake --build build/fw-consumer >/dev/null
+build/fw-consumer/fdi_consumer
+
+echo "== fw: all gates passed"

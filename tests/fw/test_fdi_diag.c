@@ -1,0 +1,284 @@
+/*
+ * test_fdi_diag.c - the diagnoser on the kinematic table and the noisy reference vehicle: arguments,
+ * warm-up and validity handling (exact step counts), non-finite signals, no false alarm in 10 min of
+ * fault-free driving, isolation of each drifting sensor fault f1..f5 with and without exoneration,
+ * a test without generator, and a 1e6-step run.
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+
+#include <cmocka.h>
+
+#include "fdi_diag.h"
+#include "fdi_kin_table.h"
+#include "fdi_test_util.h"
+
+#define DT 0.01
+#define WARMUP 320U /* >= 300 steps: max(2 stages * 6 / (zeta * 2 pi 1 Hz), 6 / L = 3 s) at 100 Hz */
+
+static const double sigma[5] = {0.02, 0.02, 0.001, 0.01, 0.01}; /* the table's noise assumption */
+
+static fdi_diag_config_t config(fdi_iso_mode_t mode)
+{
+    fdi_diag_config_t c;
+    c.table = &fdi_kin_table;
+    c.d_x = (float)VEH_DX;
+    c.d_y = (float)VEH_DY;
+    /* The residuals are low-pass noise (correlation ~0.2 s), so the CUSUM needs a larger drift and
+       threshold than for white noise: with k = 1.5 sigma the largest fault-free excursion in 1e6 steps
+       was 71 (ARR3); h = 150 leaves a factor 2. */
+    c.cusum_k = 1.5f;
+    c.cusum_h = 150.0f;
+    c.set_count = 10U;
+    c.clear_count = 100U;
+    c.warmup_steps = WARMUP;
+    c.mode = mode;
+    return c;
+}
+
+static void noisy(veh_meas_cfg_t *mc)
+{
+    int i;
+    for (i = 0; i < 5; ++i)
+    {
+        mc->f[i] = 0.0;
+        mc->noise[i] = sigma[i];
+    }
+}
+
+static void test_bad_args(void **state)
+{
+    fdi_diag_t d;
+    fdi_diag_result_t res;
+    fdi_inputs_t in;
+    fdi_diag_config_t c = config(FDI_ISO_EXONERATION);
+    fdi_table_t bad_table = fdi_kin_table;
+    (void)state;
+    memset(&in, 0, sizeof in);
+    assert_int_equal(fdi_diag_init(NULL, &c), FDI_BAD_ARG);
+    assert_int_equal(fdi_diag_init(&d, NULL), FDI_BAD_ARG);
+    c.warmup_steps = 299U; /* shorter than the settling time */
+    assert_int_equal(fdi_diag_init(&d, &c), FDI_BAD_ARG);
+    assert_int_equal(fdi_diag_step(&d, &in, FDI_SIGM_ALL), FDI_BAD_ARG); /* failed init: refused */
+    assert_int_equal(fdi_diag_result(&d, &res), FDI_BAD_ARG);
+    c = config((fdi_iso_mode_t)3);
+    assert_int_equal(fdi_diag_init(&d, &c), FDI_BAD_ARG);
+    c = config(FDI_ISO_EXONERATION);
+    c.cusum_k = NAN;
+    assert_int_equal(fdi_diag_init(&d, &c), FDI_NOT_FINITE);
+    c = config(FDI_ISO_EXONERATION);
+    c.set_count = 0U;
+    assert_int_equal(fdi_diag_init(&d, &c), FDI_BAD_ARG);
+    c = config(FDI_ISO_EXONERATION);
+    bad_table.format_version = 0U;
+    c.table = &bad_table;
+    assert_int_equal(fdi_diag_init(&d, &c), FDI_BAD_TABLE);
+    c.table = NULL;
+    assert_int_equal(fdi_diag_init(&d, &c), FDI_BAD_ARG);
+    c = config(FDI_ISO_EXONERATION);
+    assert_int_equal(fdi_diag_init(&d, &c), FDI_OK);
+    assert_int_equal(fdi_diag_step(NULL, &in, 0U), FDI_BAD_ARG);
+    assert_int_equal(fdi_diag_step(&d, NULL, 0U), FDI_BAD_ARG);
+    assert_int_equal(fdi_diag_result(NULL, &res), FDI_BAD_ARG);
+    assert_int_equal(fdi_diag_result(&d, NULL), FDI_BAD_ARG);
+    assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
+    assert_int_equal(res.evaluable_mask, 0U);
+    assert_int_equal(res.status[0], FDI_TEST_NOT_EVALUABLE);
+}
+
+static uint32_t step_eval_mask(fdi_diag_t *d, double t, veh_meas_cfg_t *mc, test_rng_t *rng, uint32_t validity,
+                               fdi_inputs_t *in)
+{
+    fdi_diag_result_t res;
+    veh_measure(t, mc, rng, in);
+    assert_int_equal(fdi_diag_step(d, in, validity), FDI_OK);
+    assert_int_equal(fdi_diag_result(d, &res), FDI_OK);
+    assert_int_equal(res.alarm_mask, 0U);
+    return res.evaluable_mask;
+}
+
+/*
+ * Steps 1..WARMUP are not evaluable, step WARMUP + 1 is. Invalid vx_m: MSO1..3 (which read it) become
+ * not evaluable at once, MSO4 stays evaluable; when vx_m returns they need WARMUP steps again. A NaN in a
+ * signal flagged valid counts as invalid; a NaN in a signal no test reads changes nothing.
+ */
+static void test_warmup_and_validity(void **state)
+{
+    fdi_diag_t d;
+    fdi_inputs_t in;
+    const fdi_diag_config_t c = config(FDI_ISO_EXONERATION);
+    veh_meas_cfg_t mc;
+    test_rng_t rng = {11ULL};
+    uint32_t k;
+    uint32_t n = 0U;
+    (void)state;
+    noisy(&mc);
+    assert_int_equal(fdi_diag_init(&d, &c), FDI_OK);
+    for (k = 1U; k <= WARMUP; ++k)
+    {
+        assert_int_equal(step_eval_mask(&d, (++n) * DT, &mc, &rng, FDI_SIGM_ALL, &in), 0U);
+    }
+    assert_int_equal(step_eval_mask(&d, (++n) * DT, &mc, &rng, FDI_SIGM_ALL, &in), 0xFU);
+    for (k = 1U; k <= 20U; ++k)
+    {
+        assert_int_equal(step_eval_mask(&d, (++n) * DT, &mc, &rng, FDI_SIGM_ALL & ~FDI_SIGM_VX_M, &in), 0x8U);
+    }
+    for (k = 1U; k <= WARMUP; ++k)
+    {
+        assert_int_equal(step_eval_mask(&d, (++n) * DT, &mc, &rng, FDI_SIGM_ALL, &in), 0x8U);
+    }
+    assert_int_equal(step_eval_mask(&d, (++n) * DT, &mc, &rng, FDI_SIGM_ALL, &in), 0xFU);
+    /* NaN in vy_m (flagged valid): MSO1, MSO2, MSO4 drop out; stale omega signals do not matter */
+    veh_measure((++n) * DT, &mc, &rng, &in);
+    in.vy_m = NAN;
+    in.omega3_m = INFINITY;
+    assert_int_equal(fdi_diag_step(&d, &in, FDI_SIGM_ALL & ~FDI_SIGM_OMEGA1_M), FDI_OK);
+    {
+        fdi_diag_result_t res;
+        assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
+        assert_int_equal(res.evaluable_mask, 0x4U);
+        assert_int_equal(res.status[0], FDI_TEST_NOT_EVALUABLE);
+        assert_int_equal(res.status[2], FDI_TEST_OK);
+        assert_int_equal(res.status[3], FDI_TEST_NOT_EVALUABLE);
+    }
+}
+
+/* Run one diagnoser pair (exoneration / none) for t_end seconds with fault j drifting from t_fault. */
+typedef struct
+{
+    uint32_t alarm_steps_before; /* steps with any alarm before the fault (after warm-up) */
+    fdi_diag_result_t end_ex;    /* results at t_end */
+    fdi_diag_result_t end_ne;
+    double first_detect; /* time of the first alarm after the fault, -1 if none */
+} run_t;
+
+static run_t run(int j, double rate, double t_fault, double t_end, uint64_t seed)
+{
+    fdi_diag_t dx;
+    fdi_diag_t dn;
+    fdi_inputs_t in;
+    const fdi_diag_config_t cx = config(FDI_ISO_EXONERATION);
+    const fdi_diag_config_t cn = config(FDI_ISO_NO_EXONERATION);
+    veh_meas_cfg_t mc;
+    test_rng_t rng = {seed};
+    run_t out;
+    long k;
+    const long n = (long)(t_end / DT + 0.5);
+    out.alarm_steps_before = 0U;
+    out.first_detect = -1.0;
+    noisy(&mc);
+    assert_int_equal(fdi_diag_init(&dx, &cx), FDI_OK);
+    assert_int_equal(fdi_diag_init(&dn, &cn), FDI_OK);
+    for (k = 1; k <= n; ++k)
+    {
+        const double t = (double)k * DT;
+        if ((j >= 0) && (t > t_fault))
+        {
+            mc.f[j] = rate * (t - t_fault);
+        }
+        veh_measure(t, &mc, &rng, &in);
+        assert_int_equal(fdi_diag_step(&dx, &in, FDI_SIGM_ALL), FDI_OK);
+        assert_int_equal(fdi_diag_step(&dn, &in, FDI_SIGM_ALL), FDI_OK);
+        assert_int_equal(fdi_diag_result(&dx, &out.end_ex), FDI_OK);
+        if ((j < 0) || (t <= t_fault))
+        {
+            out.alarm_steps_before += (out.end_ex.alarm_mask != 0U) ? 1U : 0U;
+        }
+        else if ((out.first_detect < 0.0) && (out.end_ex.alarm_mask != 0U))
+        {
+            out.first_detect = t - t_fault;
+        }
+    }
+    assert_int_equal(fdi_diag_result(&dn, &out.end_ne), FDI_OK);
+    return out;
+}
+
+/* 10 minutes of noisy fault-free driving, two noise seeds: no alarm at all, every test evaluable. */
+static void test_no_false_alarm(void **state)
+{
+    uint64_t seed;
+    (void)state;
+    for (seed = 1U; seed <= 2U; ++seed)
+    {
+        const run_t r = run(-1, 0.0, 0.0, 600.0, seed);
+        assert_int_equal(r.alarm_steps_before, 0U);
+        assert_int_equal(r.end_ex.evaluable_mask, 0xFU);
+        assert_false(r.end_ex.iso.detected);
+    }
+}
+
+/*
+ * Drifting sensor faults from t = 30 s (rates: f1, f2 0.05 m/s^2 per s; f3 0.002 rad/s per s; f4, f5
+ * 0.05 m/s per s), observed at t = 60 s. With exoneration the fault is isolated exactly (every fault has
+ * a unique signature in Table II's kinematic rows); without exoneration it is among the candidates and
+ * every candidate explains the alarms. Detection within 10 s of the fault start.
+ */
+static void test_isolation_of_each_fault(void **state)
+{
+    static const double rate[5] = {0.05, 0.05, 0.002, 0.05, 0.05};
+    int j;
+    (void)state;
+    for (j = 0; j < 5; ++j)
+    {
+        const run_t r = run(j, rate[j], 30.0, 60.0, 5U);
+        print_message("f%d: detected after %.2f s, alarms 0x%X, candidates ex 0x%X, no-ex 0x%X\n", j + 1,
+                      r.first_detect, r.end_ex.alarm_mask, r.end_ex.iso.candidates, r.end_ne.iso.candidates);
+        assert_int_equal(r.alarm_steps_before, 0U);
+        assert_true((r.first_detect >= 0.0) && (r.first_detect < 10.0));
+        assert_int_equal(r.end_ex.alarm_mask, fdi_kin_table.fault_signature[j]);
+        assert_int_equal(r.end_ex.iso.candidates, 1U << j);
+        assert_true(r.end_ex.iso.isolated);
+        assert_int_equal(r.end_ex.iso.class_mask, fdi_kin_table.iso_class[j]);
+        assert_int_equal(r.end_ne.iso.candidates & (1U << j), 1U << j);
+    }
+}
+
+/* A table whose MSO4 has no generator yet: MSO4 is never evaluable, the others work as before. */
+static void test_kind_none(void **state)
+{
+    fdi_test_desc_t tests[4];
+    fdi_table_t t = fdi_kin_table;
+    fdi_diag_t d;
+    fdi_diag_config_t c = config(FDI_ISO_EXONERATION);
+    fdi_inputs_t in;
+    veh_meas_cfg_t mc;
+    test_rng_t rng = {3ULL};
+    uint32_t k;
+    (void)state;
+    memcpy(tests, fdi_kin_table.tests, sizeof tests);
+    tests[3].kind = FDI_GEN_NONE;
+    t.tests = tests;
+    c.table = &t;
+    noisy(&mc);
+    assert_int_equal(fdi_diag_init(&d, &c), FDI_OK);
+    for (k = 1U; k <= WARMUP + 5U; ++k)
+    {
+        (void)step_eval_mask(&d, k * DT, &mc, &rng, FDI_SIGM_ALL, &in);
+    }
+    assert_int_equal(step_eval_mask(&d, k * DT, &mc, &rng, FDI_SIGM_ALL, &in), 0x7U);
+}
+
+/* 1e6 steps (2.8 h) of fault-free, noisy driving: no alarm, results stay finite. */
+static void test_long_run(void **state)
+{
+    const run_t r = run(-1, 0.0, 0.0, 10000.0, 9U);
+    int i;
+    (void)state;
+    assert_int_equal(r.alarm_steps_before, 0U);
+    for (i = 0; i < 4; ++i)
+    {
+        assert_true(isfinite(r.end_ex.residual[i]));
+        assert_true(fabs((double)r.end_ex.residual[i]) < 0.1);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_bad_args),          cmocka_unit_test(test_warmup_and_validity),
+        cmocka_unit_test(test_no_false_alarm),    cmocka_unit_test(test_isolation_of_each_fault),
+        cmocka_unit_test(test_kind_none),         cmocka_unit_test(test_long_run),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,102 @@
+/*
+ * test_fdi_table.c - table validation: the hand-made kinematic table passes; each kind of corruption an
+ * exporter could produce is rejected with FDI_BAD_TABLE.
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+
+#include <cmocka.h>
+
+#include "fdi_kin_table.h"
+#include "fdi_test_util.h"
+
+static fdi_test_desc_t tests_copy[4];
+static uint32_t sig_copy[5];
+static uint32_t class_copy[5];
+static const char *names_copy[5];
+static fdi_table_t t;
+
+/* A writable copy of the kinematic table. */
+static int setup(void **state)
+{
+    int i;
+    (void)state;
+    t = fdi_kin_table;
+    for (i = 0; i < 4; ++i)
+    {
+        tests_copy[i] = fdi_kin_table.tests[i];
+    }
+    for (i = 0; i < 5; ++i)
+    {
+        sig_copy[i] = fdi_kin_table.fault_signature[i];
+        class_copy[i] = fdi_kin_table.iso_class[i];
+        names_copy[i] = fdi_kin_table.fault_names[i];
+    }
+    t.tests = tests_copy;
+    t.fault_signature = sig_copy;
+    t.iso_class = class_copy;
+    t.fault_names = names_copy;
+    return 0;
+}
+
+static void test_kin_table_ok(void **state)
+{
+    (void)state;
+    assert_int_equal(fdi_table_check(&fdi_kin_table), FDI_OK);
+    assert_int_equal(fdi_table_check(&t), FDI_OK);
+    assert_int_equal(fdi_table_check(NULL), FDI_BAD_ARG);
+}
+
+#define EXPECT_BAD(stmt)                                                                                      \
+    do                                                                                                        \
+    {                                                                                                         \
+        (void)setup(NULL);                                                                                    \
+        stmt;                                                                                                 \
+        assert_int_equal(fdi_table_check(&t), FDI_BAD_TABLE);                                                 \
+    } while (0)
+
+static void test_corruptions(void **state)
+{
+    (void)state;
+    EXPECT_BAD(t.format_version = 99U);
+    EXPECT_BAD(t.n_faults = 0U);
+    EXPECT_BAD(t.n_tests = 33U);
+    EXPECT_BAD(t.tests = NULL);
+    EXPECT_BAD(t.fault_names = NULL);
+    EXPECT_BAD(names_copy[2] = NULL);
+    EXPECT_BAD(t.design.dt = 0.0f);
+    EXPECT_BAD(t.design.cutoff_hz = NAN);
+    EXPECT_BAD(tests_copy[1].interpretation = NULL);
+    EXPECT_BAD(tests_copy[1].kind = (fdi_gen_kind_t)FDI_GEN_KIND_COUNT);
+    EXPECT_BAD(tests_copy[2].input_mask = FDI_SIGM_AX_M); /* misses signals ARR3 reads */
+    EXPECT_BAD(tests_copy[2].input_mask |= 0x00100000U);  /* no such signal */
+    EXPECT_BAD(tests_copy[0].variance = 0.0f);
+    EXPECT_BAD(tests_copy[0].gate = INFINITY);
+    EXPECT_BAD(tests_copy[3].fault_mask |= 0x20U);     /* fault beyond n_faults */
+    EXPECT_BAD(tests_copy[3].fault_mask = 0U);         /* a test that sees no fault */
+    EXPECT_BAD(sig_copy[3] = 0x3U);                    /* signature != transposed fault masks */
+    EXPECT_BAD(tests_copy[0].fault_mask &= ~0x08U);    /* fault masks != signatures */
+    EXPECT_BAD(class_copy[0] = 0x03U);                 /* f1, f2 have different signatures */
+    EXPECT_BAD(class_copy[4] = 0x00U);                 /* a class must contain its fault */
+}
+
+/* A test without a generator yet (kind NONE) is valid data. */
+static void test_kind_none_allowed(void **state)
+{
+    (void)state;
+    (void)setup(NULL);
+    tests_copy[3].kind = FDI_GEN_NONE;
+    tests_copy[3].input_mask = 0U;
+    assert_int_equal(fdi_table_check(&t), FDI_OK);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test_setup(test_kin_table_ok, setup),
+        cmocka_unit_test(test_corruptions),
+        cmocka_unit_test(test_kind_none_allowed),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
