@@ -1,0 +1,135 @@
+"""``fdi-sim``: simulate a ROMO drive with faults and write the sensor CAN traffic as a log file.
+
+One entry point; ``fdi-sim fig6 ...`` dispatches to `fdi_host.fig6`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from fdi_host import canlog, fig6
+from fdi_host.dbc import RomoDatabase
+from fdi_host.faults import FaultSpecError, ground_truth, parse_fault
+from fdi_host.scenario import ScenarioError, available, load_scenario
+from fdi_host.vehicle_sim import SimConfig, default_plant, simulate
+
+EPILOG = """\
+examples:
+  fdi-sim --scenario fig6 --fault f4@5s:0.5 --out drive.blf
+  fdi-sim --scenario cornering --fault f6@10s:0.02:ramp=2s --out drive.asc --out drive.log --plot drive.png
+  fdi-sim --scenario slalom --fault f10@3s:-80:end=9s --fault f22@4s:2:intermittent=1s/0.3 --npz raw.npz
+  fdi-sim --scenario straight --no-scenario-faults --no-noise --out clean.blf
+  fdi-sim --list
+  fdi-sim fig6 --out-dir out/fig6        (the paper's Fig. 6, see fdi-sim fig6 --help)
+
+fault syntax: fID@ONSET:MAGNITUDE[:ramp=T][:end=T][:for=T][:intermittent=PERIOD[/DUTY]]
+  magnitude in the fault's unit (Table I): m/s^2, rad/s, m/s, rad, N m, N. Faults given here are added to
+  the scenario's own faults unless --no-scenario-faults is set.
+outputs: every --out gets a ground-truth file <out>.truth.json next to it (unless --truth is given).
+"""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(
+        prog="fdi-sim",
+        description="Simulate the ROboMObil dual-track model (from analysis/models/romo_quasistatic.toml) "
+        "driven by a geometric controller, inject Table I faults, and write the sensor CAN frames "
+        "(dbc/romo.dbc) as candump .log, Vector .asc or .blf.",
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    ap.add_argument("--scenario", default="fig6", help="scenario name in host_tools/scenarios or a TOML path")
+    ap.add_argument("--fault", action="append", default=[], metavar="SPEC", help="fault to inject (repeatable)")
+    ap.add_argument("--no-scenario-faults", action="store_true", help="ignore the faults of the scenario file")
+    ap.add_argument("--out", action="append", default=[], type=Path, metavar="FILE",
+                    help="CAN log to write; format from the extension: .log .asc .blf (repeatable)")
+    ap.add_argument("--truth", type=Path, help="ground-truth JSON (default: <first out>.truth.json)")
+    ap.add_argument("--npz", type=Path, help="also write true and measured signals at 1 kHz as .npz")
+    ap.add_argument("--plot", type=Path, help="PNG with the signals and the fault windows")
+    ap.add_argument("--duration", type=float, help="override the scenario duration [s]")
+    ap.add_argument("--seed", type=int, help="override the noise seed")
+    ap.add_argument("--no-noise", action="store_true", help="switch sensor noise off (quantisation stays)")
+    ap.add_argument("--start-time", type=float, default=0.0, help="timestamp of t = 0 in the logs [s]")
+    ap.add_argument("--list", action="store_true", help="list the scenarios and exit")
+    ap.add_argument("--quiet", action="store_true", help="no progress bars")
+    return ap
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args_list = list(sys.argv[1:] if argv is None else argv)
+    if args_list and args_list[0] == "fig6":
+        return fig6.main(args_list[1:])
+    ap = build_parser()
+    args = ap.parse_args(args_list)
+    if args.list:
+        for name in available():
+            print(f"{name:12s} {load_scenario(name).description}")
+        return 0
+    for out in args.out:
+        if out.suffix not in canlog.LOG_SUFFIXES:
+            ap.error(f"--out {out}: unsupported extension; use {', '.join(canlog.LOG_SUFFIXES)}")
+    try:
+        sc = load_scenario(args.scenario)
+        extra = [parse_fault(f) for f in args.fault]
+    except (ScenarioError, FaultSpecError) as exc:
+        ap.error(str(exc))
+    faults = ([] if args.no_scenario_faults else list(sc.faults)) + extra
+    duration = args.duration if args.duration is not None else sc.duration
+    cfg = SimConfig(noise_scale=0.0 if args.no_noise else 1.0)
+    n_steps = round(duration / cfg.dt) + 1
+    try:
+        plant = default_plant()
+        with tqdm(total=n_steps, unit="ms", desc=f"simulate {sc.name}", disable=args.quiet) as bar:
+            result = simulate(sc, faults, seed=args.seed, plant=plant, config=cfg, duration=duration,
+                              progress=bar.update)
+        frames: list[canlog.Frame] = []
+        if args.out:
+            db = RomoDatabase()
+            with tqdm(desc="encode frames", unit="frame", disable=args.quiet) as bar:
+                frames = canlog.build_frames(result, db, t0=args.start_time, progress=bar.update)
+            for out in args.out:
+                n = canlog.write_log(frames, out)
+                load = 100 * canlog.bus_load(frames, db.baudrate(), duration)
+                print(f"wrote {out} ({n} frames, bus load {load:.1f} %)")
+    except KeyboardInterrupt:
+        print("interrupted, nothing written after this point", file=sys.stderr)
+        return 130
+    truth_path = args.truth or (args.out[0].with_suffix(".truth.json") if args.out else None)
+    if truth_path is not None:
+        info = {
+            v.name: {
+                "unit": v.unit,
+                "desc": v.desc,
+                "equations": [e.id for e in plant.model.equations if v.name in e.faults],
+            }
+            for v in plant.model.faults
+        }
+        gt = ground_truth(result.faults, result.t, info)
+        gt |= {"scenario": sc.name, "seed": result.seed, "duration": duration, "start_time": args.start_time,
+               "noise": not args.no_noise}
+        truth_path.parent.mkdir(parents=True, exist_ok=True)
+        truth_path.write_text(json.dumps(gt, indent=2) + "\n", encoding="utf-8")
+        print(f"wrote {truth_path}")
+    if args.npz:
+        args.npz.parent.mkdir(parents=True, exist_ok=True)
+        arrays = {"t": result.t, "faults": result.fault_values}
+        arrays |= {f"true_{k}": v for k, v in result.true.items()}
+        arrays |= {f"meas_{k}": v for k, v in result.measured.items()}
+        np.savez_compressed(args.npz, **arrays)  # type: ignore[arg-type]
+        print(f"wrote {args.npz}")
+    if args.plot:
+        from fdi_host.plots import plot_drive
+
+        print(f"wrote {plot_drive(result, args.plot)}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

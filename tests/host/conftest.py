@@ -1,0 +1,19 @@
+"""Fixtures for the host-tool tests: the compiled plant and the CAN database (built once per session)."""
+
+from __future__ import annotations
+
+import pytest
+
+from fdi_host.dbc import RomoDatabase
+from fdi_host.plant import Plant
+from fdi_host.vehicle_sim import default_plant
+
+
+@pytest.fixture(scope="session")
+def plant() -> Plant:
+    return default_plant()
+
+
+@pytest.fixture(scope="session")
+def db() -> RomoDatabase:
+    return RomoDatabase()
