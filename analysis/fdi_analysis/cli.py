@@ -6,14 +6,18 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from fdi_analysis import cli_convert, cli_report
+from fdi_analysis import cli_convert, cli_export, cli_mso, cli_report, cli_select
 from fdi_analysis.model import ModelError
 from fdi_analysis.structure import StructureError
 
-SUBCOMMANDS = (cli_report, cli_convert)
+SUBCOMMANDS = (cli_report, cli_mso, cli_select, cli_export, cli_convert)
 
 EPILOG = """examples:
   fdi-analyze report analysis/models/romo_quasistatic.toml -o out/romo
+  fdi-analyze mso analysis/models/romo_grouped.toml
+  fdi-analyze select analysis/models/romo_grouped.toml -o out/grouped
+  fdi-analyze export-c analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \
+      --out fw/generated
   fdi-analyze convert analysis/models/romo_grouped.toml --to-fdt out/romo_grouped_fdt.json
 """
 

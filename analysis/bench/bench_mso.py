@@ -1,0 +1,172 @@
+"""Benchmark of the MSO engine against Fault Diagnosis Toolbox (FDT) MSO(), measured in the same run.
+
+    python analysis/bench/bench_mso.py                  # FDT examples, random structures, grouped ROMO (+FDT, ~2 min)
+    python analysis/bench/bench_mso.py --no-fdt-romo    # skip FDT's 100 s grouped ROMO run
+    python analysis/bench/bench_mso.py --ungrouped      # also count the 75M MSO sets of the ungrouped model
+
+Prints measured times, MSO/s and ratios; nothing is hard-coded.
+"""
+
+from __future__ import annotations
+
+import argparse
+import resource
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from fdi_analysis.mso import find_msos, isolability, iter_msos, load_reference, mtes, prepare
+from fdi_analysis.structure import Structure
+
+REF = Path("/work/shared/reference/romo_model")
+
+
+def random_structure(seed: int, ne: int, phi: int, maxdeg: int = 3, nf: int = 12) -> Structure:
+    """Same generator as tests/analysis/test_mso_engine.py."""
+    rng = np.random.default_rng(seed)
+    nx = ne - phi
+    X = np.zeros((ne, nx), dtype=np.int8)
+    for e in range(ne):
+        X[e, rng.choice(nx, size=int(rng.integers(1, maxdeg + 1)), replace=False)] = 1
+    for x in range(nx):
+        if not X[:, x].any():
+            X[rng.integers(ne), x] = 1
+    F = np.zeros((ne, nf), dtype=np.int8)
+    for f in range(nf):
+        F[rng.integers(ne), f] = 1
+    if nf > 2:
+        F[rng.integers(ne), 0] = 1
+    return Structure.from_fdt_dict({"X": X.tolist(), "F": F.tolist(), "name": f"random-{seed}"})
+
+
+def redundancy(s: Structure) -> tuple[int, int]:
+    p = prepare(s)
+    eqs = [e for e in range(s.ne) if p.root >> e & 1]
+    nvars = int(s.incidence[eqs].any(axis=0).sum()) if eqs else 0
+    return len(eqs), len(eqs) - nvars
+
+
+def fdt_msos(s: Structure) -> tuple[set[int], float]:
+    from faultdiagnosistoolbox import dmperm
+
+    t = time.perf_counter()
+    res = dmperm.MSO(s.X)
+    dt = time.perf_counter() - t
+    return {sum(1 << int(e) for e in m) for m in res}, dt
+
+
+def ours_msos(s: Structure) -> tuple[set[int], float]:
+    t = time.perf_counter()
+    res = list(iter_msos(s))
+    dt = time.perf_counter() - t
+    out = set(res)
+    assert len(out) == len(res), "duplicate MSO set"
+    return out, dt
+
+
+def peak_rss_mb() -> tuple[float, float]:
+    own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    return own, kids
+
+
+def row(name: str, ne: int, mp: int, phi: int, n: int, same: bool | None, t_ours: float, t_fdt: float | None) -> None:
+    ratio = f"{t_fdt / t_ours:8.1f}x" if t_fdt is not None and t_ours > 0 else "       -"
+    tf = f"{t_fdt:9.3f}" if t_fdt is not None else "        -"
+    print(
+        f"{name:<24} {ne:>4} {mp:>4} {phi:>4} {n:>9} {'-' if same is None else ('yes' if same else 'NO'):>5} "
+        f"{t_ours:9.4f} {tf} {ratio} {n / t_ours if t_ours > 0 else 0:12.0f}"
+    )
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--no-fdt-romo", action="store_true", help="do not run FDT on grouped ROMO (about 100 s)")
+    ap.add_argument("--ungrouped", action="store_true", help="count the ungrouped ROMO MSO sets (75M) on 2 workers")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--slow", action="store_true", help="add a 150-equation case where FDT needs minutes")
+    args = ap.parse_args(argv)
+
+    try:
+        import faultdiagnosistoolbox as fdt
+        from faultdiagnosistoolbox import models
+    except ImportError:
+        print("faultdiagnosistoolbox is not importable; the benchmark needs it as the anchor", file=sys.stderr)
+        return 2
+    print(f"FDT {fdt.__version__}; numbers are wall-clock seconds on this machine, same run")
+    print(
+        f"{'structure':<24} {'ne':>4} {'M+':>4} {'phi':>4} {'MSOs':>9} {'same':>5} {'ours[s]':>9} {'FDT[s]':>9} "
+        f"{'ratio':>9} {'ours MSO/s':>12}"
+    )
+    cases: list[tuple[str, Structure]] = []
+    for m in (models.three_tank, models.electric_motor, models.induction_motor):
+        cases.append((m.name, Structure.from_fdt_dict({"X": m.X.tolist(), "F": m.F.tolist()})))
+    randoms = [(100, 40, 3), (101, 60, 5), (102, 80, 6), (105, 70, 8), (103, 110, 4)]
+    if args.slow:
+        randoms.append((104, 150, 3))  # FDT needs about 5 minutes here
+    for seed, ne, phi in randoms:
+        cases.append((f"random s{seed} n{ne}", random_structure(seed, ne, phi)))
+    tot_ours = tot_fdt = 0.0
+    for name, s in cases:
+        mp, phi = redundancy(s)
+        ours, t_ours = ours_msos(s)
+        theirs, t_fdt = fdt_msos(s)
+        tot_ours += t_ours
+        tot_fdt += t_fdt
+        row(name, s.ne, mp, phi, len(ours), ours == theirs, t_ours, t_fdt)
+    print(
+        f"{'all of the above':<24} {'':>4} {'':>4} {'':>4} {'':>9} {'':>5} {tot_ours:9.4f} {tot_fdt:9.3f} "
+        f"{tot_fdt / tot_ours:8.1f}x"
+    )
+
+    print("\nROMO reference structures (find_msos: C aggregation, nothing stored)")
+    g = load_reference(REF / "romo_dual_track_grouped.json")
+    mp, phi = redundancy(g)
+    s1 = find_msos(g, workers=1, progress=False)
+    s2 = find_msos(g, workers=args.workers, progress=False)
+    same_par = (s1.count, s1.by_equations, s1.signatures) == (s2.count, s2.by_equations, s2.signatures)
+    print(
+        f"grouped: {s1.count} MSO sets, {len(s1.signatures)} fault signatures; serial {s1.elapsed_s:.2f} s "
+        f"({s1.count / s1.elapsed_s:,.0f} MSO/s), {args.workers} workers {s2.elapsed_s:.2f} s "
+        f"({s2.count / s2.elapsed_s:,.0f} MSO/s, {s2.tasks} tasks); parallel == serial: {same_par}"
+    )
+    if not args.no_fdt_romo:
+        from faultdiagnosistoolbox import dmperm
+
+        t = time.perf_counter()
+        n_fdt = len(dmperm.MSO(g.X))
+        t_fdt = time.perf_counter() - t
+        print(
+            f"grouped FDT MSO(): {n_fdt} MSO sets in {t_fdt:.1f} s -> ours serial {t_fdt / s1.elapsed_s:.0f}x, "
+            f"{args.workers} workers {t_fdt / s2.elapsed_s:.0f}x faster; same count: {n_fdt == s1.count}"
+        )
+
+    full = load_reference(REF / "romo_dual_track_full.json")
+    iso = isolability(full)
+    t = time.perf_counter()
+    mt = mtes(full)
+    t_mt = time.perf_counter() - t
+    print(
+        f"full vertical ({full.ne} eq.): single-fault isolability in {iso.elapsed_s * 1000:.1f} ms, "
+        f"non-isolable pairs {iso.non_isolable_pairs()}; {len(mt.mtes)} MTES "
+        f"({len(mt.minimal_signatures())} distinct fault supports) in {t_mt:.1f} s"
+    )
+
+    if args.ungrouped:
+        u = load_reference(REF / "romo_dual_track_63x73.json")
+        su = find_msos(u, workers=args.workers, progress=True)
+        own, kids = peak_rss_mb()
+        print(
+            f"ungrouped ({u.ne} eq.): {su.count} MSO sets, {len(su.signatures)} fault signatures, complete="
+            f"{su.complete}, {su.elapsed_s:.1f} s on {args.workers} workers ({su.count / su.elapsed_s:,.0f} MSO/s); "
+            f"peak RSS main {own:.0f} MB, largest worker {kids:.0f} MB"
+        )
+        hist = ", ".join(f"{k}:{v}" for k, v in sorted(su.by_equations.items()))
+        print(f"  MSO sets by number of equations: {hist}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,611 @@
+/*
+ * fdi_analysis.mso._core -- native MSO / MTES search (CPython extension, plain C API, C11).
+ *
+ * Equation sets are bitsets of 1, 2 or 4 64-bit words (up to 64, 128, 256 equations); the engine in
+ * _core_impl.h is instantiated for each width. Python sees equation sets as non-negative ints
+ * (bit e = equation e) and opaque capsules for the model, the aggregator and the iterators.
+ *
+ * Functions (all internal; the typed API is fdi_analysis.mso):
+ *   model_new(ne, nv, rows, eqfault)        rows[e] = unknown indices of equation e, eqfault[e] = fault mask
+ *   mplus(model, S) -> int                  overdetermined part S+ of equation set S
+ *   split(model, S, R) -> (phi, [(S', R')]) children of search node (S, R)
+ *   agg_new(model) / agg_run(model, agg, S, R, check_signals) -> interrupted / agg_result(agg)
+ *   iter_new(model, S, R, mode, emit_all) / iter_next(it, limit) -> [int]
+ * Memory: an iterator holds (ne + 2) frames of O(ne) words; the aggregator a histogram and one hash entry
+ * per distinct fault signature. Nothing grows with the number of MSO sets.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef uint64_t w64;
+#define NWMAX 4
+#define CAT_(a, b) a##_##b
+#define CAT(a, b) CAT_(a, b)
+
+/* for (each set bit i of bitset a with nw words) body;  `break` is not allowed inside. */
+#define BS_FOREACH(a, nw, i)                                                                   \
+    for (int i##_k = 0; i##_k < (nw); i##_k++)                                                 \
+        for (w64 i##_x = (a).w[i##_k]; i##_x; i##_x &= i##_x - 1)                              \
+            for (int i = i##_k * 64 + __builtin_ctzll(i##_x), i##_once = 1; i##_once; i##_once = 0)
+
+typedef struct {
+    int ne, nv, nw;
+    int *row_off;     /* ne + 1 */
+    int16_t *row_var; /* row_off[ne] */
+    w64 *col;         /* nv * NWMAX: equations holding each unknown */
+    w64 *eqfault;     /* ne: fault mask (<= 64 faults) */
+} model_t;
+
+/* ---- aggregation without storing MSO sets --------------------------------------------------------- */
+typedef struct {
+    w64 key;
+    uint64_t count;
+    int32_t size;
+    int32_t used;
+    w64 best[NWMAX];
+} sigent_t;
+
+typedef struct {
+    int ne, nw;
+    uint64_t count;
+    uint64_t *hist; /* ne + 1, by number of equations */
+    sigent_t *tab;
+    size_t cap, n;
+    int shift;
+} agg_t;
+
+static void agg_free(agg_t *a) {
+    if (a) {
+        free(a->hist);
+        free(a->tab);
+        free(a);
+    }
+}
+
+static agg_t *agg_create(int ne, int nw) {
+    agg_t *a = (agg_t *)calloc(1, sizeof(agg_t));
+    if (!a) return NULL;
+    a->ne = ne;
+    a->nw = nw;
+    a->cap = 1024;
+    a->shift = 64 - 10;
+    a->hist = (uint64_t *)calloc((size_t)ne + 1, sizeof(uint64_t));
+    a->tab = (sigent_t *)calloc(a->cap, sizeof(sigent_t));
+    if (!a->hist || !a->tab) {
+        agg_free(a);
+        return NULL;
+    }
+    return a;
+}
+
+static inline size_t agg_slot(const agg_t *a, w64 key) {
+    return (size_t)((key * 0x9E3779B97F4A7C15ull) >> a->shift);
+}
+
+/* a lexicographically before b (as sorted equation index lists of equal length) */
+static inline int lex_less(const w64 *a, const w64 *b, int nw) {
+    for (int k = 0; k < nw; k++) {
+        w64 d = a[k] ^ b[k];
+        if (d) return (a[k] & (d & (~d + 1))) != 0;
+    }
+    return 0;
+}
+
+static int agg_grow(agg_t *a) {
+    size_t oldcap = a->cap;
+    sigent_t *old = a->tab;
+    sigent_t *t = (sigent_t *)calloc(oldcap * 2, sizeof(sigent_t));
+    if (!t) return -1;
+    a->tab = t;
+    a->cap = oldcap * 2;
+    a->shift -= 1;
+    for (size_t i = 0; i < oldcap; i++) {
+        if (old[i].used) {
+            size_t j = agg_slot(a, old[i].key);
+            while (t[j].used) j = (j + 1) & (a->cap - 1);
+            t[j] = old[i];
+        }
+    }
+    free(old);
+    return 0;
+}
+
+static sigent_t *agg_find(agg_t *a, w64 key) {
+    size_t j = agg_slot(a, key);
+    while (a->tab[j].used && a->tab[j].key != key) j = (j + 1) & (a->cap - 1);
+    if (!a->tab[j].used) {
+        if (2 * (a->n + 1) > a->cap) {
+            if (agg_grow(a) != 0) return NULL;
+            return agg_find(a, key);
+        }
+        a->tab[j].used = 1;
+        a->tab[j].key = key;
+        a->tab[j].size = INT32_MAX;
+        a->n++;
+    }
+    return &a->tab[j];
+}
+
+static int agg_oom = 0; /* set if the hash table could not grow (reported by agg_run) */
+
+static inline void agg_add(agg_t *a, const w64 *S, int nw, int size, w64 sig) {
+    a->count++;
+    a->hist[size]++;
+    sigent_t *e = agg_find(a, sig);
+    if (!e) {
+        agg_oom = 1;
+        return;
+    }
+    e->count++;
+    if (size < e->size || (size == e->size && lex_less(S, e->best, nw))) {
+        e->size = size;
+        for (int k = 0; k < nw; k++) e->best[k] = S[k];
+    }
+}
+
+/* ---- engine instances ------------------------------------------------------------------------------- */
+#define NW 1
+#include "_core_impl.h"
+#undef NW
+#define NW 2
+#include "_core_impl.h"
+#undef NW
+#define NW 4
+#include "_core_impl.h"
+#undef NW
+
+/* ---- Python glue ------------------------------------------------------------------------------------ */
+static void model_free(model_t *m) {
+    if (m) {
+        free(m->row_off);
+        free(m->row_var);
+        free(m->col);
+        free(m->eqfault);
+        free(m);
+    }
+}
+
+static void model_capsule_destructor(PyObject *cap) {
+    model_free((model_t *)PyCapsule_GetPointer(cap, "fdi_mso.model"));
+}
+
+static int py_to_words(PyObject *o, w64 *out, int nw) {
+    if (!PyLong_Check(o)) {
+        PyErr_SetString(PyExc_TypeError, "equation set must be an int bitset");
+        return -1;
+    }
+    PyObject *zero = PyLong_FromLong(0);
+    if (!zero) return -1;
+    int neg = PyObject_RichCompareBool(o, zero, Py_LT);
+    Py_DECREF(zero);
+    if (neg != 0) {
+        if (neg > 0) PyErr_SetString(PyExc_ValueError, "equation set must be non-negative");
+        return -1;
+    }
+    Py_INCREF(o);
+    PyObject *v = o;
+    PyObject *sh = PyLong_FromLong(64);
+    if (!sh) {
+        Py_DECREF(v);
+        return -1;
+    }
+    for (int k = 0; k < NWMAX; k++) out[k] = 0;
+    for (int k = 0; k < nw; k++) {
+        out[k] = (w64)PyLong_AsUnsignedLongLongMask(v);
+        PyObject *nv = PyNumber_Rshift(v, sh);
+        Py_DECREF(v);
+        v = nv;
+        if (!v) {
+            Py_DECREF(sh);
+            return -1;
+        }
+    }
+    Py_DECREF(sh);
+    int nonzero = PyObject_IsTrue(v);
+    Py_DECREF(v);
+    if (nonzero) {
+        PyErr_SetString(PyExc_OverflowError, "equation set has bits beyond the model's equations");
+        return -1;
+    }
+    return 0;
+}
+
+static PyObject *words_to_py(const w64 *w, int nw) {
+    unsigned char bytes[NWMAX * 8];
+    for (int k = 0; k < nw; k++)
+        for (int b = 0; b < 8; b++) bytes[k * 8 + b] = (unsigned char)(w[k] >> (8 * b));
+    return _PyLong_FromByteArray(bytes, (size_t)nw * 8, 1, 0);
+}
+
+static model_t *get_model(PyObject *cap) { return (model_t *)PyCapsule_GetPointer(cap, "fdi_mso.model"); }
+
+static PyObject *py_model_new(PyObject *self, PyObject *args) {
+    (void)self;
+    int ne, nv;
+    PyObject *rows, *faults;
+    if (!PyArg_ParseTuple(args, "iiOO", &ne, &nv, &rows, &faults)) return NULL;
+    if (ne < 1 || ne > 64 * NWMAX || nv < 0 || nv > 32000) {
+        PyErr_SetString(PyExc_ValueError, "need 1 <= equations <= 256 and unknowns <= 32000");
+        return NULL;
+    }
+    if (!PyList_Check(rows) || PyList_GET_SIZE(rows) != ne || !PyList_Check(faults) || PyList_GET_SIZE(faults) != ne) {
+        PyErr_SetString(PyExc_ValueError, "rows and eqfault must be lists with one entry per equation");
+        return NULL;
+    }
+    model_t *m = (model_t *)calloc(1, sizeof(model_t));
+    if (!m) return PyErr_NoMemory();
+    m->ne = ne;
+    m->nv = nv;
+    m->nw = ne <= 64 ? 1 : (ne <= 128 ? 2 : 4);
+    m->row_off = (int *)calloc((size_t)ne + 1, sizeof(int));
+    m->col = (w64 *)calloc((size_t)(nv > 0 ? nv : 1) * NWMAX, sizeof(w64));
+    m->eqfault = (w64 *)calloc((size_t)ne, sizeof(w64));
+    size_t total = 0;
+    for (int e = 0; e < ne; e++) {
+        PyObject *r = PyList_GET_ITEM(rows, e);
+        if (!PyList_Check(r)) {
+            model_free(m);
+            PyErr_SetString(PyExc_TypeError, "each row must be a list of unknown indices");
+            return NULL;
+        }
+        total += (size_t)PyList_GET_SIZE(r);
+    }
+    m->row_var = (int16_t *)calloc(total + 1, sizeof(int16_t));
+    if (!m->row_off || !m->col || !m->eqfault || !m->row_var) {
+        model_free(m);
+        return PyErr_NoMemory();
+    }
+    int pos = 0;
+    for (int e = 0; e < ne; e++) {
+        PyObject *r = PyList_GET_ITEM(rows, e);
+        m->row_off[e] = pos;
+        for (Py_ssize_t k = 0; k < PyList_GET_SIZE(r); k++) {
+            long x = PyLong_AsLong(PyList_GET_ITEM(r, k));
+            if (x < 0 || x >= nv) {
+                model_free(m);
+                if (!PyErr_Occurred()) PyErr_SetString(PyExc_ValueError, "unknown index out of range");
+                return NULL;
+            }
+            m->row_var[pos++] = (int16_t)x;
+            m->col[(size_t)x * NWMAX + (size_t)(e >> 6)] |= (w64)1 << (e & 63);
+        }
+        m->eqfault[e] = (w64)PyLong_AsUnsignedLongLongMask(PyList_GET_ITEM(faults, e));
+        if (PyErr_Occurred()) {
+            model_free(m);
+            return NULL;
+        }
+    }
+    m->row_off[ne] = pos;
+    PyObject *cap = PyCapsule_New(m, "fdi_mso.model", model_capsule_destructor);
+    if (!cap) model_free(m);
+    return cap;
+}
+
+static PyObject *py_mplus(PyObject *self, PyObject *args) {
+    (void)self;
+    PyObject *mc, *so;
+    if (!PyArg_ParseTuple(args, "OO", &mc, &so)) return NULL;
+    model_t *m = get_model(mc);
+    if (!m) return NULL;
+    w64 s[NWMAX], r[NWMAX];
+    if (py_to_words(so, s, m->nw) != 0) return NULL;
+    int rc = m->nw == 1 ? mplus_1(m, s, r) : (m->nw == 2 ? mplus_2(m, s, r) : mplus_4(m, s, r));
+    if (rc != 0) return PyErr_NoMemory();
+    return words_to_py(r, m->nw);
+}
+
+/* ---- iterator capsule (also used internally by split and agg_run) ---------------------------------- */
+typedef struct {
+    int nw;
+    void *it;
+    PyObject *model; /* strong reference */
+} iterbox_t;
+
+static void iter_free_any(int nw, void *it) {
+    if (nw == 1)
+        iter_free_1((iter_1 *)it);
+    else if (nw == 2)
+        iter_free_2((iter_2 *)it);
+    else
+        iter_free_4((iter_4 *)it);
+}
+
+static void *iter_alloc_any(const model_t *m) {
+    int nf = m->ne + 2;
+    if (m->nw == 1) return iter_alloc_1(m, nf);
+    if (m->nw == 2) return iter_alloc_2(m, nf);
+    return iter_alloc_4(m, nf);
+}
+
+static void iterbox_destructor(PyObject *cap) {
+    iterbox_t *b = (iterbox_t *)PyCapsule_GetPointer(cap, "fdi_mso.iter");
+    if (b) {
+        iter_free_any(b->nw, b->it);
+        Py_XDECREF(b->model);
+        free(b);
+    }
+}
+
+static int start_any(const model_t *m, void *it, const w64 *s, const w64 *r, int mode, int emit_all) {
+    if (m->nw == 1) {
+        iter_1 *i = (iter_1 *)it;
+        i->mode = mode;
+        i->emit_all = emit_all;
+        return iter_start_1(i, bs_load_1(s), bs_load_1(r));
+    }
+    if (m->nw == 2) {
+        iter_2 *i = (iter_2 *)it;
+        i->mode = mode;
+        i->emit_all = emit_all;
+        return iter_start_2(i, bs_load_2(s), bs_load_2(r));
+    }
+    iter_4 *i = (iter_4 *)it;
+    i->mode = mode;
+    i->emit_all = emit_all;
+    return iter_start_4(i, bs_load_4(s), bs_load_4(r));
+}
+
+static int iter_error_any(int nw, void *it) {
+    return nw == 1 ? ((iter_1 *)it)->error : (nw == 2 ? ((iter_2 *)it)->error : ((iter_4 *)it)->error);
+}
+
+/* run with either an aggregator or a buffer; returns 1 finished, 0 buffer full, -1 interrupted/error */
+static int run_any(int nw, void *it, agg_t *agg, w64 *buf, w64 *sigbuf, size_t *n, size_t limit, int check, int *interrupted) {
+    int rc;
+    if (nw == 1) {
+        sink_1 sk = {agg, buf, sigbuf, 0, 0, check, 0};
+        rc = iter_run_1((iter_1 *)it, &sk, limit);
+        *n = sk.n;
+        *interrupted = sk.interrupted;
+    } else if (nw == 2) {
+        sink_2 sk = {agg, buf, sigbuf, 0, 0, check, 0};
+        rc = iter_run_2((iter_2 *)it, &sk, limit);
+        *n = sk.n;
+        *interrupted = sk.interrupted;
+    } else {
+        sink_4 sk = {agg, buf, sigbuf, 0, 0, check, 0};
+        rc = iter_run_4((iter_4 *)it, &sk, limit);
+        *n = sk.n;
+        *interrupted = sk.interrupted;
+    }
+    return rc;
+}
+
+static PyObject *py_iter_new(PyObject *self, PyObject *args) {
+    (void)self;
+    PyObject *mc, *so, *ro;
+    int mode = 0, emit_all = 0;
+    if (!PyArg_ParseTuple(args, "OOO|ii", &mc, &so, &ro, &mode, &emit_all)) return NULL;
+    model_t *m = get_model(mc);
+    if (!m) return NULL;
+    if (mode != 0 && mode != 1) {
+        PyErr_SetString(PyExc_ValueError, "mode must be 0 (MSO) or 1 (MTES)");
+        return NULL;
+    }
+    w64 s[NWMAX], r[NWMAX];
+    if (py_to_words(so, s, m->nw) != 0 || py_to_words(ro, r, m->nw) != 0) return NULL;
+    iterbox_t *b = (iterbox_t *)calloc(1, sizeof(iterbox_t));
+    if (!b) return PyErr_NoMemory();
+    b->nw = m->nw;
+    b->it = iter_alloc_any(m);
+    if (!b->it) {
+        free(b);
+        return PyErr_NoMemory();
+    }
+    int phi = start_any(m, b->it, s, r, mode, emit_all);
+    if (phi < 0) {
+        iter_free_any(b->nw, b->it);
+        free(b);
+        PyErr_SetString(PyExc_ValueError, "start set is not a proper structurally overdetermined (PSO) set");
+        return NULL;
+    }
+    Py_INCREF(mc);
+    b->model = mc;
+    PyObject *cap = PyCapsule_New(b, "fdi_mso.iter", iterbox_destructor);
+    if (!cap) {
+        Py_DECREF(mc);
+        iter_free_any(b->nw, b->it);
+        free(b);
+    }
+    return cap;
+}
+
+static PyObject *py_iter_next(PyObject *self, PyObject *args) {
+    (void)self;
+    PyObject *ic;
+    Py_ssize_t limit;
+    int with_faults = 0;
+    if (!PyArg_ParseTuple(args, "On|i", &ic, &limit, &with_faults)) return NULL;
+    iterbox_t *b = (iterbox_t *)PyCapsule_GetPointer(ic, "fdi_mso.iter");
+    if (!b) return NULL;
+    if (limit < 1) limit = 1;
+    const model_t *m = get_model(b->model);
+    if (!m) return NULL;
+    /* slack: one node can emit up to ne results at once */
+    size_t cap = (size_t)limit + (size_t)m->ne + 1;
+    w64 *buf = (w64 *)malloc(cap * ((size_t)b->nw + 1) * sizeof(w64));
+    if (!buf) return PyErr_NoMemory();
+    w64 *sigbuf = with_faults ? buf + cap * (size_t)b->nw : NULL;
+    size_t n = 0;
+    int interrupted = 0;
+    int rc = run_any(b->nw, b->it, NULL, buf, sigbuf, &n, (size_t)limit, 0, &interrupted);
+    if (rc < 0 && iter_error_any(b->nw, b->it)) {
+        free(buf);
+        PyErr_Format(PyExc_RuntimeError, "MSO engine internal error %d", iter_error_any(b->nw, b->it));
+        return NULL;
+    }
+    PyObject *out = PyList_New((Py_ssize_t)n);
+    if (!out) {
+        free(buf);
+        return NULL;
+    }
+    for (size_t i = 0; i < n; i++) {
+        PyObject *v = words_to_py(buf + i * (size_t)b->nw, b->nw);
+        if (v && sigbuf) {
+            PyObject *f = PyLong_FromUnsignedLongLong(sigbuf[i]);
+            PyObject *t = f ? PyTuple_Pack(2, v, f) : NULL;
+            Py_XDECREF(f);
+            Py_DECREF(v);
+            v = t;
+        }
+        if (!v) {
+            free(buf);
+            Py_DECREF(out);
+            return NULL;
+        }
+        PyList_SET_ITEM(out, (Py_ssize_t)i, v);
+    }
+    free(buf);
+    return out;
+}
+
+static PyObject *py_split(PyObject *self, PyObject *args) {
+    (void)self;
+    PyObject *mc, *so, *ro;
+    if (!PyArg_ParseTuple(args, "OOO", &mc, &so, &ro)) return NULL;
+    model_t *m = get_model(mc);
+    if (!m) return NULL;
+    w64 s[NWMAX], r[NWMAX];
+    if (py_to_words(so, s, m->nw) != 0 || py_to_words(ro, r, m->nw) != 0) return NULL;
+    void *it = iter_alloc_any(m);
+    w64 *out = (w64 *)calloc((size_t)m->ne * 2 * NWMAX, sizeof(w64));
+    if (!it || !out) {
+        free(out);
+        if (it) iter_free_any(m->nw, it);
+        return PyErr_NoMemory();
+    }
+    int nout = 0, phi;
+    if (m->nw == 1)
+        phi = split_1((iter_1 *)it, bs_load_1(s), bs_load_1(r), out, &nout);
+    else if (m->nw == 2)
+        phi = split_2((iter_2 *)it, bs_load_2(s), bs_load_2(r), out, &nout);
+    else
+        phi = split_4((iter_4 *)it, bs_load_4(s), bs_load_4(r), out, &nout);
+    iter_free_any(m->nw, it);
+    if (phi < 0) {
+        free(out);
+        PyErr_SetString(PyExc_ValueError, "node set is not a proper structurally overdetermined (PSO) set");
+        return NULL;
+    }
+    PyObject *lst = PyList_New(nout);
+    for (int i = 0; lst && i < nout; i++) {
+        PyObject *a = words_to_py(out + (size_t)i * 2 * (size_t)m->nw, m->nw);
+        PyObject *c = words_to_py(out + (size_t)i * 2 * (size_t)m->nw + m->nw, m->nw);
+        PyObject *t = (a && c) ? PyTuple_Pack(2, a, c) : NULL;
+        Py_XDECREF(a);
+        Py_XDECREF(c);
+        if (!t) {
+            Py_CLEAR(lst);
+            break;
+        }
+        PyList_SET_ITEM(lst, i, t);
+    }
+    free(out);
+    if (!lst) return NULL;
+    return Py_BuildValue("(iN)", phi, lst);
+}
+
+/* ---- aggregator -------------------------------------------------------------------------------------- */
+static void agg_capsule_destructor(PyObject *cap) { agg_free((agg_t *)PyCapsule_GetPointer(cap, "fdi_mso.agg")); }
+
+static PyObject *py_agg_new(PyObject *self, PyObject *args) {
+    (void)self;
+    PyObject *mc;
+    if (!PyArg_ParseTuple(args, "O", &mc)) return NULL;
+    model_t *m = get_model(mc);
+    if (!m) return NULL;
+    agg_t *a = agg_create(m->ne, m->nw);
+    if (!a) return PyErr_NoMemory();
+    PyObject *cap = PyCapsule_New(a, "fdi_mso.agg", agg_capsule_destructor);
+    if (!cap) agg_free(a);
+    return cap;
+}
+
+static PyObject *py_agg_run(PyObject *self, PyObject *args) {
+    (void)self;
+    PyObject *mc, *ac, *so, *ro;
+    int check = 0, mode = 0;
+    if (!PyArg_ParseTuple(args, "OOOO|ii", &mc, &ac, &so, &ro, &check, &mode)) return NULL;
+    model_t *m = get_model(mc);
+    agg_t *a = (agg_t *)PyCapsule_GetPointer(ac, "fdi_mso.agg");
+    if (!m || !a) return NULL;
+    if (a->ne != m->ne) {
+        PyErr_SetString(PyExc_ValueError, "aggregator belongs to another model");
+        return NULL;
+    }
+    w64 s[NWMAX], r[NWMAX];
+    if (py_to_words(so, s, m->nw) != 0 || py_to_words(ro, r, m->nw) != 0) return NULL;
+    void *it = iter_alloc_any(m);
+    if (!it) return PyErr_NoMemory();
+    if (start_any(m, it, s, r, mode, 0) < 0) {
+        iter_free_any(m->nw, it);
+        PyErr_SetString(PyExc_ValueError, "node set is not a proper structurally overdetermined (PSO) set");
+        return NULL;
+    }
+    size_t n = 0;
+    int interrupted = 0;
+    agg_oom = 0;
+    int rc = run_any(m->nw, it, a, NULL, NULL, &n, 0, check, &interrupted);
+    int err = iter_error_any(m->nw, it);
+    iter_free_any(m->nw, it);
+    if (interrupted) {
+        PyErr_Clear(); /* KeyboardInterrupt raised by the handler: reported as a partial result */
+        Py_RETURN_TRUE;
+    }
+    if (agg_oom) return PyErr_NoMemory();
+    if (rc < 0 || err) {
+        PyErr_Format(PyExc_RuntimeError, "MSO engine internal error %d", err);
+        return NULL;
+    }
+    Py_RETURN_FALSE;
+}
+
+static PyObject *py_agg_result(PyObject *self, PyObject *args) {
+    (void)self;
+    PyObject *ac;
+    if (!PyArg_ParseTuple(args, "O", &ac)) return NULL;
+    agg_t *a = (agg_t *)PyCapsule_GetPointer(ac, "fdi_mso.agg");
+    if (!a) return NULL;
+    PyObject *hist = PyList_New(a->ne + 1);
+    PyObject *sigs = PyList_New((Py_ssize_t)a->n);
+    if (!hist || !sigs) {
+        Py_XDECREF(hist);
+        Py_XDECREF(sigs);
+        return NULL;
+    }
+    for (int i = 0; i <= a->ne; i++) PyList_SET_ITEM(hist, i, PyLong_FromUnsignedLongLong(a->hist[i]));
+    Py_ssize_t j = 0;
+    for (size_t i = 0; i < a->cap; i++) {
+        const sigent_t *e = &a->tab[i];
+        if (!e->used) continue;
+        PyObject *t = Py_BuildValue("(KKiN)", (unsigned long long)e->key, (unsigned long long)e->count, (int)e->size,
+                                    words_to_py(e->best, a->nw));
+        if (!t) {
+            Py_DECREF(hist);
+            Py_DECREF(sigs);
+            return NULL;
+        }
+        PyList_SET_ITEM(sigs, j++, t);
+    }
+    return Py_BuildValue("(KNN)", (unsigned long long)a->count, hist, sigs);
+}
+
+static PyMethodDef methods[] = {
+    {"model_new", py_model_new, METH_VARARGS, "model_new(ne, nv, rows, eqfault) -> model"},
+    {"mplus", py_mplus, METH_VARARGS, "mplus(model, S) -> overdetermined part of S"},
+    {"split", py_split, METH_VARARGS, "split(model, S, R) -> (phi, [(S', R'), ...])"},
+    {"iter_new", py_iter_new, METH_VARARGS, "iter_new(model, S, R, mode=0, emit_all=0) -> iterator"},
+    {"iter_next", py_iter_next, METH_VARARGS, "iter_next(it, limit, with_faults=0) -> list of equation sets or (set, faults) (empty: done)"},
+    {"agg_new", py_agg_new, METH_VARARGS, "agg_new(model) -> aggregator"},
+    {"agg_run", py_agg_run, METH_VARARGS, "agg_run(model, agg, S, R, check_signals=0, mode=0) -> interrupted"},
+    {"agg_result", py_agg_result, METH_VARARGS, "agg_result(agg) -> (count, hist, [(faults, count, size, best)])"},
+    {NULL, NULL, 0, NULL},
+};
+
+static struct PyModuleDef moddef = {PyModuleDef_HEAD_INIT, "_core", "Native MSO/MTES search engine.", -1, methods,
+                                    NULL, NULL, NULL, NULL};
+
+PyMODINIT_FUNC PyInit__core(void) { return PyModule_Create(&moddef); }

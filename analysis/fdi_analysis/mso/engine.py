@@ -1,0 +1,295 @@
+"""MSO enumeration on the native engine: streaming iteration, aggregation, multi-process search.
+
+The search tree of the Krysander-Aslund-Nyberg algorithm is split at its top levels into independent
+subproblems (node S, removable set R). The no-repeated-removal rule makes the subtrees disjoint, so every
+MSO set is found in exactly one of them. Workers aggregate in C (count, size histogram, signature table)
+and send one table each at the end; memory does not grow with the number of MSO sets.
+"""
+
+from __future__ import annotations
+
+import heapq
+import multiprocessing as mp
+import os
+import queue
+import signal
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from types import FrameType
+from typing import Any
+
+from tqdm import tqdm
+
+from ..structure import Structure
+from . import _core
+from .results import MsoSummary, SignatureEntry, lex_before
+
+MAX_EQUATIONS = 256
+MAX_FAULTS = 64
+
+ModelArgs = tuple[int, int, list[list[int]], list[int]]
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """A structure in the engine's form: rows of unknown indices and a fault mask per equation."""
+
+    args: ModelArgs
+    model: _core.Model
+    root: int  # overdetermined part M+ of the whole model (bitset over equations)
+
+    @property
+    def ne(self) -> int:
+        return self.args[0]
+
+    def faults_of(self, eqs: int) -> int:
+        f = 0
+        masks = self.args[3]
+        while eqs:
+            low = eqs & -eqs
+            f |= masks[low.bit_length() - 1]
+            eqs ^= low
+        return f
+
+
+def model_args(structure: Structure) -> ModelArgs:
+    if structure.ne > MAX_EQUATIONS:
+        raise ValueError(f"{structure.ne} equations: the engine handles at most {MAX_EQUATIONS}")
+    if structure.nf > MAX_FAULTS:
+        raise ValueError(f"{structure.nf} faults: the engine handles at most {MAX_FAULTS}")
+    inc = structure.incidence
+    rows = [[int(v) for v in row.nonzero()[0]] for row in inc]
+    faults = []
+    for e in range(structure.ne):
+        m = 0
+        for f in structure.F[e].nonzero()[0]:
+            m |= 1 << int(f)
+        faults.append(m)
+    return structure.ne, structure.nx, rows, faults
+
+
+def prepare(structure: Structure) -> Prepared:
+    args = model_args(structure)
+    model = _core.model_new(*args)
+    root = _core.mplus(model, (1 << structure.ne) - 1)
+    return Prepared(args=args, model=model, root=root)
+
+
+def mplus(structure: Structure | Prepared, eqs: int) -> int:
+    """Overdetermined part (DM M+) of an equation set given as a bitset."""
+    p = structure if isinstance(structure, Prepared) else prepare(structure)
+    return _core.mplus(p.model, eqs)
+
+
+def iter_msos(structure: Structure | Prepared, *, batch: int = 8192) -> Iterator[int]:
+    """Every MSO set of the structure once, as an int bitset over equations (streaming, constant memory)."""
+    p = structure if isinstance(structure, Prepared) else prepare(structure)
+    if p.root == 0:
+        return
+    it = _core.iter_new(p.model, p.root, p.root)
+    while True:
+        chunk = _core.iter_next(it, batch)
+        if not chunk:
+            return
+        yield from chunk
+
+
+def split_tasks(p: Prepared, target: int) -> list[tuple[int, int]]:
+    """Disjoint subproblems (S, R) covering the whole search tree, at least `target` when possible."""
+    if p.root == 0:
+        return []
+    heap: list[tuple[int, int, int, int, int]] = []  # (-phi, -|R|, seq, S, R)
+    done: list[tuple[int, int]] = []
+    seq = 0
+
+    def push(s: int, r: int) -> None:
+        nonlocal seq
+        phi = s.bit_count() - _n_unknowns(p, s)
+        if phi <= 2:
+            done.append((s, r))
+        else:
+            heapq.heappush(heap, (-phi, -r.bit_count(), seq, s, r))
+        seq += 1
+
+    push(p.root, p.root)
+    while heap and len(heap) + len(done) < target:
+        _, _, _, s, r = heapq.heappop(heap)
+        _, children = _core.split(p.model, s, r)
+        for cs, cr in children:
+            push(cs, cr)
+    tasks = [(s, r) for _, _, _, s, r in sorted(heap)] + done
+    return tasks
+
+
+def _n_unknowns(p: Prepared, eqs: int) -> int:
+    rows = p.args[2]
+    vs: set[int] = set()
+    while eqs:
+        low = eqs & -eqs
+        vs.update(rows[low.bit_length() - 1])
+        eqs ^= low
+    return len(vs)
+
+
+class _Acc:
+    """Merges aggregates coming from tasks or workers."""
+
+    def __init__(self, ne: int) -> None:
+        self.count = 0
+        self.hist = [0] * (ne + 1)
+        self.sigs: dict[int, list[int]] = {}
+
+    def add(self, res: tuple[int, list[int], list[tuple[int, int, int, int]]]) -> None:
+        count, hist, sigs = res
+        self.count += count
+        for i, h in enumerate(hist):
+            self.hist[i] += h
+        for key, c, size, best in sigs:
+            cur = self.sigs.get(key)
+            if cur is None:
+                self.sigs[key] = [c, size, best]
+            else:
+                cur[0] += c
+                if size < cur[1] or (size == cur[1] and lex_before(best, cur[2])):
+                    cur[1] = size
+                    cur[2] = best
+
+    def summary(self, complete: bool, elapsed: float, workers: int, tasks: int) -> MsoSummary:
+        sigs = tuple(
+            sorted(
+                (SignatureEntry(faults=k, count=v[0], smallest=v[2], smallest_size=v[1]) for k, v in self.sigs.items()),
+                key=lambda s: (s.smallest_size, s.faults),
+            )
+        )
+        return MsoSummary(
+            count=self.count,
+            by_equations={i: h for i, h in enumerate(self.hist) if h},
+            signatures=sigs,
+            complete=complete,
+            elapsed_s=elapsed,
+            workers=workers,
+            tasks=tasks,
+        )
+
+
+class _WorkerStop:
+    stopping = False
+
+
+def _worker_sigint(signum: int, frame: FrameType | None) -> None:
+    # first Ctrl-C stops the C loop (it sees KeyboardInterrupt and returns a partial aggregate); later ones
+    # (the terminal's and the parent's) are ignored so the partial result can still be sent
+    if not _WorkerStop.stopping:
+        _WorkerStop.stopping = True
+        raise KeyboardInterrupt
+
+
+def _worker(args: ModelArgs, tasks: Any, results: Any) -> None:
+    signal.signal(signal.SIGINT, _worker_sigint)
+    model = _core.model_new(*args)
+    agg = _core.agg_new(model)
+    interrupted = False
+    try:
+        while not interrupted:
+            item = tasks.get()
+            if item is None:
+                break
+            idx, s, r = item
+            interrupted = _core.agg_run(model, agg, s, r, 1)
+            if not interrupted:
+                results.put(("done", idx))
+    except KeyboardInterrupt:
+        interrupted = True
+    _WorkerStop.stopping = True
+    results.put(("result", _core.agg_result(agg), interrupted))
+
+
+def find_msos(
+    structure: Structure | Prepared,
+    *,
+    workers: int = 2,
+    progress: bool = True,
+    tasks_per_worker: int = 64,
+) -> MsoSummary:
+    """Count all MSO sets with their size histogram and fault-signature table, without storing them.
+
+    ``workers`` > 1 splits the search over processes. Ctrl-C stops the search; the summary then has
+    ``complete=False`` and covers what was finished.
+    """
+    t0 = time.perf_counter()
+    p = structure if isinstance(structure, Prepared) else prepare(structure)
+    workers = max(1, int(workers))
+    acc = _Acc(p.ne)
+    if p.root == 0:
+        return acc.summary(True, time.perf_counter() - t0, workers, 0)
+    tasks = split_tasks(p, 1 if (workers == 1 and not progress) else workers * tasks_per_worker)
+    bar = tqdm(total=len(tasks), unit="task", disable=not progress, desc="MSO search", leave=False)
+    try:
+        run = _run_serial if workers == 1 else _run_parallel
+        complete = run(p, tasks, acc, bar, workers)
+    finally:
+        bar.close()
+    return acc.summary(complete, time.perf_counter() - t0, workers, len(tasks))
+
+
+def _run_serial(p: Prepared, tasks: list[tuple[int, int]], acc: _Acc, bar: tqdm[Any], workers: int) -> bool:
+    agg = _core.agg_new(p.model)
+    complete = True
+    try:
+        for s, r in tasks:
+            if _core.agg_run(p.model, agg, s, r, 1):
+                complete = False
+                break
+            bar.update(1)
+    except KeyboardInterrupt:
+        complete = False
+    acc.add(_core.agg_result(agg))
+    return complete
+
+
+def _run_parallel(p: Prepared, tasks: list[tuple[int, int]], acc: _Acc, bar: tqdm[Any], workers: int) -> bool:
+    ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else mp.get_context("spawn")
+    task_q = ctx.Queue()
+    result_q = ctx.Queue()
+    for i, (s, r) in enumerate(tasks):
+        task_q.put((i, s, r))
+    for _ in range(workers):
+        task_q.put(None)
+    procs = [ctx.Process(target=_worker, args=(p.args, task_q, result_q), daemon=True) for _ in range(workers)]
+    for proc in procs:
+        proc.start()
+    complete = True
+    pending = workers
+    try:
+        while pending:
+            msg = result_q.get()
+            if msg[0] == "done":
+                bar.update(1)
+            else:
+                acc.add(msg[1])
+                complete = complete and not msg[2]
+                pending -= 1
+    except KeyboardInterrupt:
+        complete = False
+        for proc in procs:
+            if proc.is_alive() and proc.pid is not None:
+                os.kill(proc.pid, signal.SIGINT)
+        deadline = time.monotonic() + 10.0
+        while pending and time.monotonic() < deadline:
+            try:
+                msg = result_q.get(timeout=max(0.05, deadline - time.monotonic()))
+            except queue.Empty:
+                break
+            except KeyboardInterrupt:
+                break
+            if msg[0] == "result":
+                acc.add(msg[1])
+                pending -= 1
+    finally:
+        for proc in procs:
+            proc.join(timeout=1.0)
+            if proc.is_alive():
+                proc.terminate()
+                proc.join()
+    return complete

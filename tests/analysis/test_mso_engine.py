@@ -1,0 +1,224 @@
+"""MSO engine: C core == pure-Python reference == Fault Diagnosis Toolbox, streaming, parallel, Ctrl-C."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fdi_analysis.mso import bits, find_msos, iter_msos, load_reference, prepare, reference
+from fdi_analysis.mso.engine import split_tasks
+from fdi_analysis.structure import Structure
+
+REF = Path(os.environ.get("ROMO_REFERENCE_DIR", "/work/shared/reference/romo_model"))
+
+try:
+    import faultdiagnosistoolbox as fdt
+    from faultdiagnosistoolbox import dmperm
+
+    HAVE_FDT = True
+except ImportError:  # pragma: no cover - depends on the environment
+    HAVE_FDT = False
+needs_fdt = pytest.mark.skipif(not HAVE_FDT, reason="faultdiagnosistoolbox not importable (pip install '.[dev]')")
+
+
+def random_structure(seed: int, ne: int, phi: int, maxdeg: int = 3, nf: int = 12, mindeg: int = 1) -> Structure:
+    rng = np.random.default_rng(seed)
+    nx = ne - phi
+    X = np.zeros((ne, nx), dtype=np.int8)
+    for e in range(ne):
+        X[e, rng.choice(nx, size=int(rng.integers(mindeg, maxdeg + 1)), replace=False)] = 1
+    for x in range(nx):
+        if not X[:, x].any():
+            X[rng.integers(ne), x] = 1
+    F = np.zeros((ne, nf), dtype=np.int8)
+    for f in range(nf):
+        F[rng.integers(ne), f] = 1
+    if nf > 2:
+        F[rng.integers(ne), 0] = 1  # one fault in two equations
+    return Structure.from_fdt_dict({"X": X.tolist(), "F": F.tolist(), "name": f"random-{seed}"})
+
+
+def fdt_msos(s: Structure) -> set[int]:
+    return {sum(1 << int(e) for e in m) for m in dmperm.MSO(s.X)}
+
+
+def fdt_example_structures() -> list[Structure]:
+    from faultdiagnosistoolbox import models
+
+    out = []
+    for m in (models.three_tank, models.electric_motor, models.induction_motor):
+        out.append(Structure.from_fdt_dict({"X": m.X.tolist(), "F": m.F.tolist(), "Z": m.Z.tolist(), "name": m.name}))
+    return out
+
+
+SMALL = [(seed, 14 + seed % 7, 2 + seed % 4) for seed in range(12)]
+# (seed, equations, nominal redundancy); the redundancy of the overdetermined part is 3 to 14
+MEDIUM = [(100, 40, 3), (101, 60, 5), (102, 80, 6), (105, 70, 8)]
+
+
+@needs_fdt
+def test_fdt_example_models_match() -> None:
+    for s in fdt_example_structures():
+        ours = list(iter_msos(s))
+        assert len(ours) == len(set(ours)), s.name
+        assert set(ours) == reference.msos(s) == fdt_msos(s), s.name
+        assert len(ours) > 0
+
+
+@pytest.mark.parametrize(("seed", "ne", "phi"), SMALL)
+def test_small_random_matches_reference(seed: int, ne: int, phi: int) -> None:
+    s = random_structure(seed, ne, phi)
+    ours = list(iter_msos(s))
+    assert len(ours) == len(set(ours))
+    assert set(ours) == reference.msos(s)
+    if HAVE_FDT:
+        assert set(ours) == fdt_msos(s)
+
+
+@needs_fdt
+@pytest.mark.parametrize(("seed", "ne", "phi"), MEDIUM)
+def test_medium_random_matches_fdt(seed: int, ne: int, phi: int) -> None:
+    s = random_structure(seed, ne, phi, maxdeg=3)
+    ours = list(iter_msos(s))
+    theirs = fdt_msos(s)
+    assert len(ours) == len(set(ours)) == len(theirs)
+    assert set(ours) == theirs
+
+
+@pytest.mark.parametrize("width", [130, 250])
+def test_wide_bitsets_same_msos_after_padding(width: int) -> None:
+    """More than 128 equations (4-word bitsets): pad a structure with non-redundant equations at random
+    positions; the MSO sets are the original ones under the index map."""
+    base = random_structure(102, 80, 6)
+    rng = np.random.default_rng(width)
+    npad = width - base.ne
+    X = np.zeros((width, base.nx + npad), dtype=np.int8)
+    F = np.zeros((width, base.nf), dtype=np.int8)
+    order = rng.permutation(width)
+    pos_base = np.sort(order[: base.ne])
+    pos_pad = np.sort(order[base.ne :])
+    X[pos_base, : base.nx] = base.X
+    F[pos_base] = base.F
+    for k, e in enumerate(pos_pad):
+        X[e, base.nx + k] = 1  # private unknown: never overdetermined
+        X[e, rng.integers(base.nx)] = 1
+    wide = Structure.from_fdt_dict({"X": X.tolist(), "F": F.tolist()})
+    expected = {sum(1 << int(pos_base[e]) for e in bits(m)) for m in iter_msos(base)}
+    got = list(iter_msos(wide))
+    assert len(got) == len(set(got)) == len(expected) > 100
+    assert set(got) == expected
+    assert max(m.bit_length() for m in got) > 128 or width < 200
+    if HAVE_FDT:
+        assert set(got) == fdt_msos(wide)
+
+
+def test_each_mso_has_redundancy_one_and_is_minimal() -> None:
+    s = random_structure(7, 30, 4)
+    p = prepare(s)
+    inc = s.incidence
+    for m in iter_msos(p):
+        eqs = bits(m)
+        nvars = int(inc[eqs].any(axis=0).sum())
+        assert len(eqs) - nvars == 1
+        for e in eqs:  # removing any equation leaves nothing overdetermined
+            from fdi_analysis.mso import mplus
+
+            assert mplus(p, m & ~(1 << e)) == 0
+
+
+def _aggregate_python(s: Structure, sets: list[int]) -> tuple[int, dict[int, int], dict[int, tuple[int, int, int]]]:
+    hist: dict[int, int] = {}
+    sigs: dict[int, tuple[int, int, int]] = {}
+    for m in sets:
+        k = m.bit_count()
+        hist[k] = hist.get(k, 0) + 1
+        f = reference.signature(s, m)
+        c, size, best = sigs.get(f, (0, 10**9, 0))
+        key_new = (k, bits(m))
+        if key_new < (size, bits(best)):
+            size, best = k, m
+        sigs[f] = (c + 1, size, best)
+    return len(sets), hist, sigs
+
+
+@pytest.mark.parametrize("seed", [3, 11, 12])
+def test_streaming_aggregation_equals_aggregation_of_yielded_sets(seed: int) -> None:
+    s = random_structure(seed, 40, 5)
+    sets = list(iter_msos(s))
+    count, hist, sigs = _aggregate_python(s, sets)
+    summary = find_msos(s, workers=1, progress=False)
+    assert summary.complete
+    assert summary.count == count
+    assert summary.by_equations == hist
+    assert {e.faults: (e.count, e.smallest_size, e.smallest) for e in summary.signatures} == sigs
+
+
+def test_task_split_is_an_exact_partition() -> None:
+    s = random_structure(5, 50, 6)
+    p = prepare(s)
+    from fdi_analysis.mso import _core
+
+    tasks = split_tasks(p, 40)
+    assert len(tasks) > 4
+    seen: list[int] = []
+    for t_s, t_r in tasks:
+        it = _core.iter_new(p.model, t_s, t_r)
+        while chunk := _core.iter_next(it, 1000):
+            seen.extend(chunk)
+    assert len(seen) == len(set(seen))
+    assert set(seen) == set(iter_msos(p))
+
+
+def test_parallel_equals_serial() -> None:
+    s = random_structure(21, 70, 7)
+    a = find_msos(s, workers=1, progress=False)
+    b = find_msos(s, workers=2, progress=False, tasks_per_worker=16)
+    assert a.count > 1000
+    assert b.tasks > 2
+    assert (a.count, a.by_equations, a.signatures) == (b.count, b.by_equations, b.signatures)
+
+
+@pytest.mark.skipif(not (REF / "romo_dual_track_grouped.json").exists(), reason="ROMO reference JSON not found")
+def test_grouped_romo_parallel_equals_serial_and_reduction_free() -> None:
+    g = load_reference(REF / "romo_dual_track_grouped.json")
+    a = find_msos(g, workers=2, progress=False)
+    b = find_msos(g, workers=1, progress=False)
+    assert a.complete and b.complete
+    assert (a.count, a.by_equations, a.signatures) == (b.count, b.by_equations, b.signatures)
+    assert sum(a.by_equations.values()) == a.count == sum(e.count for e in a.signatures)
+
+
+@pytest.mark.skipif(not (REF / "romo_dual_track_grouped.json").exists(), reason="ROMO reference JSON not found")
+@pytest.mark.parametrize("workers", [1, 2])
+def test_ctrl_c_gives_partial_result(workers: int) -> None:
+    g = load_reference(REF / "romo_dual_track_grouped.json")
+    full = find_msos(g, workers=1, progress=False).count
+    # like Ctrl-C: SIGINT from outside (a thread could not run while the C loop holds the GIL)
+    killer = subprocess.Popen(["sh", "-c", f"sleep 0.5; kill -INT {os.getpid()}"])
+    try:
+        part = find_msos(g, workers=workers, progress=False, tasks_per_worker=8)
+    finally:
+        killer.wait()
+    assert not part.complete
+    assert 0 <= part.count < full
+
+
+def test_rejects_too_many_equations() -> None:
+    s = Structure.from_fdt_dict({"X": np.eye(300, 10, dtype=int).tolist()})
+    with pytest.raises(ValueError, match="at most 256"):
+        find_msos(s, progress=False)
+
+
+def test_no_redundancy_gives_no_mso() -> None:
+    s = Structure.from_fdt_dict({"X": np.eye(5, dtype=int).tolist()})
+    assert find_msos(s, progress=False).count == 0
+    assert list(iter_msos(s)) == []
+
+
+@needs_fdt
+def test_fdt_version_is_the_measured_one() -> None:
+    assert fdt.__version__.startswith("0.12")
