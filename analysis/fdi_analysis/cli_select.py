@@ -51,6 +51,16 @@ def selection_rows(model: Model, sel: Selection) -> list[dict[str, Any]]:
     ]
 
 
+def optimality(sel: Selection) -> str:
+    if sel.kind != "optimal":
+        return "-"
+    if sel.proven:
+        return "count and cost proven"
+    if sel.lower_bound == len(sel.tests):
+        return "count proven, cost not proven (time limit)"
+    return f"not proven: count >= {sel.lower_bound} (time limit)"
+
+
 def run(args: argparse.Namespace) -> int:
     model = load_model(args.model)
     st = model.structure()
@@ -65,9 +75,9 @@ def run(args: argparse.Namespace) -> int:
             t0 = time.perf_counter()
             selections[f"{kind} {method}"] = fn(cands, st.nf, method)
             timing[f"{kind} {method}"] = time.perf_counter() - t0
-    print("selection     tests  unknowns  time")
+    print("selection     tests  unknowns    time  optimality")
     for key, sel in selections.items():
-        print(f"{key:<12} {len(sel.tests):>6} {sel.total_cost:>9} {timing[key]:>6.2f} s")
+        print(f"{key:<12} {len(sel.tests):>6} {sel.total_cost:>9} {timing[key]:>6.2f} s  {optimality(sel)}")
     best = selections["optimal B"]
     print("optimal selection, method B:")
     for row in selection_rows(model, best):
@@ -96,15 +106,15 @@ def write_outputs(out: Path, model: Model, n_msos: int, cands: list[Any], select
         "distinct_fault_signatures": len(cands),
         "selections": {
             key: {"tests": len(sel.tests), "unknowns": sel.total_cost, "seconds": round(timing[key], 3),
-                  "msos": selection_rows(model, sel)}
+                  "optimality": optimality(sel), "msos": selection_rows(model, sel)}
             for key, sel in selections.items()
         },
     }
     (out / "selection.json").write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
     lines = [f"# MSO selection: {model.name}", "",
              f"{n_msos:,} MSO sets, {len(cands):,} distinct fault signatures.", "",
-             "| selection | tests | unknowns in total |", "|---|---|---|"]
-    lines += [f"| {k} | {len(s.tests)} | {s.total_cost} |" for k, s in selections.items()]
+             "| selection | tests | unknowns in total | optimality |", "|---|---|---|---|"]
+    lines += [f"| {k} | {len(s.tests)} | {s.total_cost} | {optimality(s)} |" for k, s in selections.items()]
     for key, sel in selections.items():
         lines += ["", f"## {key}", "", "| # | MSO | unknowns | faults | interpretation |", "|---|---|---|---|---|"]
         lines += [f"| {i + 1} | {r['mso']} | {r['unknowns']} | {', '.join(f.lstrip('f') for f in r['faults'])} | "

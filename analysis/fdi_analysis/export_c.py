@@ -114,9 +114,6 @@ def render(model: Model, tests: Sequence[Candidate], thresholds: Thresholds, nam
 
 #include "fdi_table.h"
 
-#define {name.upper()}_N_TESTS {len(tests)}U
-#define {name.upper()}_N_FAULTS {st.nf}U
-
 extern const fdi_table_t {name};
 /* Per test: the equations and the unknowns of its MSO set (space separated). */
 extern const char *const {name}_equations[{len(tests)}];

@@ -360,7 +360,7 @@ def _make_derivatives_explicit(equations: list[Equation], variables: dict[str, V
             subs[der(sympy.Symbol(x))] = sympy.Symbol(dname)
             new_diff.append(Equation(id=f"D.{x}", unknowns=(dname, x), knowns=(), faults=(),
                                      lhs=sympy.Symbol(dname), rhs=der(sympy.Symbol(x)), differential=(dname, x),
-                                     desc=f"{dname} = d/dt {x} (made explicit from {eq.id})"))
+                                     desc=f"{dname} = d/dt {x} (made explicit from {eq.id})", group=eq.group))
         out.append(_with_expression(eq, eq.lhs.xreplace(subs), eq.rhs.xreplace(subs), variables, file))
         out.extend(new_diff)
     return out, variables

@@ -3,8 +3,8 @@
 - `greedy`: the paper's method. Tests sorted by cost (number of unknowns, then equations for a stable
   order); a test is kept when adding it clears at least one element of the fault matrix.
 - `optimal`: the fewest tests that reach the same fault matrix as all candidates together, ties broken by
-  the smallest total cost; a set-cover problem solved exactly as a MILP (scipy/HiGHS) in two stages
-  (minimum count, then minimum cost at that count).
+  the smallest total cost, solved exactly in two stages (minimum count, then minimum cost at that count)
+  by bounds, local-search incumbents and an exact code-assignment search (`selection_exact`).
 
 Both only need one candidate per distinct fault set: tests with the same fault set clear the same fault
 matrix elements, so the cheapest represents them all (`cheapest_per_signature`).
@@ -12,21 +12,41 @@ matrix elements, so the cheapest represents them all (`cheapest_per_signature`).
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import Bounds, LinearConstraint, milp
-from scipy.sparse import csc_matrix
 
 from fdi_analysis.fault_matrix import Candidate, Method, distinguished_pairs, fault_matrix
+from fdi_analysis.selection_exact import (
+    BoolMatrix,
+    CodeSearch,
+    IntArray,
+    Problem,
+    SearchTimeoutError,
+    cheaper_swaps,
+    cover_matrix,
+    local_search,
+    reduce_problem,
+    root_lower_bound,
+)
+
+LOCAL_SEARCH_ITERATIONS = 1000  # per local-search run in the cost stage
+COUNT_SEARCH_ITERATIONS = 300  # per k in the count stage; a failure there is settled by the exact search
+COST_SEEDS = 6
 
 
 @dataclass(frozen=True)
 class Selection:
+    """Selected tests. For "optimal", `proven` says the count and then the cost are proven minimal and
+    `lower_bound` is the proven lower bound on the count (equal to len(tests) when the count is proven)."""
+
     method: Method
     kind: str  # "greedy" or "optimal"
     tests: tuple[Candidate, ...]
+    proven: bool = False
+    lower_bound: int = 0
 
     @property
     def total_cost(self) -> int:
@@ -69,41 +89,99 @@ def greedy(tests: Sequence[Candidate], nf: int, method: Method) -> Selection:
     return Selection(method=method, kind="greedy", tests=tuple(kept))
 
 
-def optimal(tests: Sequence[Candidate], nf: int, method: Method, time_limit_s: float = 120.0) -> Selection:
-    """Exact minimum-cardinality (then minimum-cost) test set reaching the fault matrix of all `tests`."""
+def optimal(tests: Sequence[Candidate], nf: int, method: Method, time_limit_s: float = 60.0) -> Selection:
+    """Fewest tests reaching the fault matrix of all `tests`, then the cheapest such set (exact).
+
+    Stage 1 (count): lower bound from `root_lower_bound`, incumbents from greedy and a weighted local
+    search, then the exact code search decides k = LB, LB+1, ... until one is feasible; each infeasible k
+    raises the proven bound. Stage 2 (cost): branch and bound at the optimal count. See
+    `selection_exact` for the algorithm and why it is exact. If `time_limit_s` runs out the best
+    selection found is returned with `proven=False` and the proven `lower_bound` on the count.
+    """
+    deadline = time.monotonic() + time_limit_s
     cands = cheapest_per_signature(tests)
-    masks = [_pair_mask(t.faults, nf, method) for t in cands]
-    universe = 0
-    for m in masks:
-        universe |= m
-    if not cands or universe == 0:
-        return Selection(method=method, kind="optimal", tests=())
-    n = nf + 1
-    elements = [k for k in range(n * n) if universe >> k & 1]
-    row_of = {k: r for r, k in enumerate(elements)}
-    rows, cols = [], []
-    for c, m in enumerate(masks):
-        while m:
-            low = m & -m
-            rows.append(row_of[low.bit_length() - 1])
-            cols.append(c)
-            m ^= low
-    A = csc_matrix((np.ones(len(rows)), (rows, cols)), shape=(len(elements), len(cands)))
-    cover = LinearConstraint(A, lb=np.ones(len(elements)), ub=np.inf)
-    integrality = np.ones(len(cands))
-    bounds = Bounds(0, 1)
-    opts = {"time_limit": time_limit_s, "disp": False}
-    first = milp(np.ones(len(cands)), constraints=[cover], integrality=integrality, bounds=bounds, options=opts)
-    if first.x is None or first.status != 0:
-        raise RuntimeError(f"test selection MILP did not solve to optimality: {first.message}")
-    k = round(float(first.fun))
-    count = LinearConstraint(np.ones((1, len(cands))), lb=k, ub=k)
-    costs = np.array([t.cost for t in cands], dtype=float)
-    second = milp(costs, constraints=[cover, count], integrality=integrality, bounds=bounds, options=opts)
-    if second.x is None or second.status != 0:
-        raise RuntimeError(f"test selection MILP (cost stage) did not solve to optimality: {second.message}")
-    chosen = [cands[c] for c in range(len(cands)) if second.x[c] > 0.5]
-    return Selection(method=method, kind="optimal", tests=tuple(sorted(chosen, key=_order_key)))
+    problem = reduce_problem([t.faults for t in cands], [t.cost for t in cands], nf, method)
+    if not problem.has_requirements:
+        return Selection(method=method, kind="optimal", tests=(), proven=True, lower_bound=0)
+    by_mask = _candidate_by_mask(cands, problem)
+    cover = cover_matrix(problem)
+    costs = np.array(problem.costs, dtype=np.int64)
+    best = _greedy_columns(problem, cands, nf, method)
+    lb = root_lower_bound(problem)
+    best, lb = _count_stage(problem, cover, best, lb, deadline)
+    count_proven = lb == len(best)
+    best, cost_proven = _cost_stage(problem, cover, costs, best, count_proven, deadline)
+    chosen = sorted((by_mask[problem.columns[c]] for c in best), key=_order_key)
+    return Selection(method=method, kind="optimal", tests=tuple(chosen), proven=count_proven and cost_proven,
+                     lower_bound=lb)
+
+
+def _candidate_by_mask(cands: Sequence[Candidate], problem: Problem) -> dict[int, Candidate]:
+    """The cheapest candidate behind each reduced column (same tie order as `cheapest_per_signature`)."""
+    out: dict[int, Candidate] = {}
+    for t in cands:  # sorted cheapest first
+        mask = 0
+        for k, item in enumerate(problem.item_of_fault):
+            if t.faults >> k & 1:
+                mask |= 1 << item
+        out.setdefault(mask, t)
+    return out
+
+
+def _greedy_columns(problem: Problem, cands: Sequence[Candidate], nf: int, method: Method) -> list[int]:
+    index = {c: i for i, c in enumerate(problem.columns)}
+    cols = []
+    for t in greedy(cands, nf, method).tests:
+        mask = 0
+        for k, item in enumerate(problem.item_of_fault):
+            if t.faults >> k & 1:
+                mask |= 1 << item
+        cols.append(index[mask])
+    return sorted(set(cols))
+
+
+def _count_stage(problem: Problem, cover: BoolMatrix, best: list[int], lb: int,
+                 deadline: float) -> tuple[list[int], int]:
+    """For k = lb, lb+1, ...: a short local search may find a selection with k columns (then k is optimal,
+    all smaller k being refuted); otherwise the exact search finds one or proves none exists (lb = k+1)."""
+    search: CodeSearch | None = None
+    iterations = min(COUNT_SEARCH_ITERATIONS, 20 * len(problem.columns))
+    while lb < len(best):
+        found = local_search(cover, lb, iterations=iterations, seed=lb)
+        try:
+            if found is None:
+                search = search or CodeSearch(problem, deadline)
+                found = search.feasible(lb)
+        except SearchTimeoutError:
+            break
+        if found is None:
+            lb += 1
+        else:
+            best = sorted(found)
+    return best, lb
+
+
+def _cost_stage(problem: Problem, cover: BoolMatrix, costs: IntArray, best: list[int], count_proven: bool,
+                deadline: float) -> tuple[list[int], bool]:
+    """Cheapest selection with len(best) columns: local-search incumbents, then branch and bound."""
+    k = len(best)
+    iterations = min(LOCAL_SEARCH_ITERATIONS, 20 * len(problem.columns))
+    best = cheaper_swaps(cover, costs, best)
+    for seed in range(COST_SEEDS):
+        if time.monotonic() > deadline:
+            break
+        found = local_search(cover, k, iterations=iterations, seed=100 + seed)
+        if found is not None:
+            found = cheaper_swaps(cover, costs, found)
+            if costs[found].sum() < costs[best].sum():
+                best = found
+    if not count_proven:
+        return sorted(best), False
+    try:
+        better = CodeSearch(problem, deadline, with_costs=True).cheapest(k, int(costs[best].sum()))
+    except SearchTimeoutError:
+        return sorted(best), False
+    return sorted(better if better is not None else best), True
 
 
 def reaches_same_matrix(selection: Selection, tests: Sequence[Candidate], nf: int) -> bool:

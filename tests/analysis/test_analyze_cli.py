@@ -46,3 +46,39 @@ def test_bad_model_is_a_clear_error(tmp_path: Path, capsys: pytest.CaptureFixtur
     assert main(["report", str(bad)]) == 2
     err = capsys.readouterr().err
     assert "bad.toml: equation 'e1': undeclared symbol 'y'" in err
+
+
+def small_structure_file(tmp_path: Path) -> Path:
+    from fdi_analysis.random_structures import random_structure
+
+    st = random_structure(3, ne=18, redundancy=3, nf=6)
+    path = tmp_path / "small.json"
+    st.to_fdt_json(path)
+    return path
+
+
+def test_mso_subcommand_counts_what_brute_force_finds(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from msos_bruteforce import all_msos
+
+    from fdi_analysis.structure import Structure
+
+    path = small_structure_file(tmp_path)
+    assert main(["mso", str(path), "-o", str(tmp_path / "m"), "--workers", "1", "--no-progress"]) == 0
+    data = json.loads((tmp_path / "m" / "mso.json").read_text())
+    msos = all_msos(Structure.from_fdt_json(path))
+    assert data["complete"] and data["count"] == len(msos) > 0
+    assert sum(data["by_unknowns"].values()) == len(msos)
+    assert f"{len(msos):,} MSO sets (complete)" in capsys.readouterr().out
+
+
+def test_select_subcommand_writes_selections_and_figures(tmp_path: Path) -> None:
+    path = small_structure_file(tmp_path)
+    out = tmp_path / "s"
+    assert main(["select", str(path), "-o", str(out), "--workers", "1", "--no-progress"]) == 0
+    data = json.loads((out / "selection.json").read_text())
+    sel = data["selections"]
+    for method in "AB":
+        assert sel[f"optimal {method}"]["tests"] <= sel[f"greedy {method}"]["tests"]
+        assert sel[f"optimal {method}"]["optimality"] == "count and cost proven"
+    for png in ("fault_matrix.png", "selected_faults.png"):
+        assert (out / png).read_bytes()[:4] == b"\x89PNG"

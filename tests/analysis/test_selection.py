@@ -1,17 +1,30 @@
-"""Fault matrices (methods A and B) and test selection: greedy as in the paper, optimal by MILP."""
+"""Fault matrices (methods A and B) and test selection: greedy as in the paper, exact optimal selection."""
 
 from __future__ import annotations
 
 import itertools
+import pathlib
+import time
 
 import numpy as np
 import pytest
 from msos_bruteforce import all_msos
 
+from fdi_analysis.candidates import mso_candidates
 from fdi_analysis.fault_matrix import Candidate, fault_matrix
 from fdi_analysis.isolability import isolability
+from fdi_analysis.model_loader import load_model
 from fdi_analysis.random_structures import random_structure
 from fdi_analysis.selection import cheapest_per_signature, greedy, optimal, reaches_same_matrix
+from fdi_analysis.selection_exact import (
+    CodeSearch,
+    Problem,
+    automorphisms,
+    reduce_problem,
+    required_pairs,
+    root_lower_bound,
+    search_order,
+)
 
 
 def random_tests(seed: int, n: int, nf: int) -> list[Candidate]:
@@ -69,6 +82,7 @@ def test_optimal_is_minimal_by_brute_force_and_never_larger_than_greedy(method: 
         if best is not None:
             break
     assert best == (len(o.tests), o.total_cost)
+    assert o.proven and o.lower_bound == len(o.tests)
 
 
 def test_greedy_keeps_cheapest_first() -> None:
@@ -77,3 +91,120 @@ def test_greedy_keeps_cheapest_first() -> None:
     g = greedy(tests, 2, "B")
     assert [t.cost for t in g.tests] == [3, 5]
     assert [t.cost for t in cheapest_per_signature(tests)] == [3, 5]
+
+
+# ----------------------------------------------------------------------------------------------------
+# Exact machinery (selection_exact): the search itself against brute force, bounds, reduction, symmetry
+
+
+def brute_force(tests: list[Candidate], nf: int, method: str) -> tuple[int, int]:
+    """(fewest tests, cheapest cost at that count) reaching the full fault matrix."""
+    target = fault_matrix([t.faults for t in tests], nf, method)  # type: ignore[arg-type]
+    for k in range(len(tests) + 1):
+        costs = [sum(t.cost for t in combo) for combo in itertools.combinations(tests, k)
+                 if np.array_equal(fault_matrix([t.faults for t in combo], nf, method), target)]  # type: ignore[arg-type]
+        if costs:
+            return k, min(costs)
+    raise AssertionError("unreachable")
+
+
+def symmetric_tests(seed: int) -> tuple[list[Candidate], int]:
+    """Candidates closed under swapping faults f1<->f2 and f3<->f4 (so the automorphism search finds
+    symmetries), costs invariant, plus faults f5 = f6 never separated (merged into one item)."""
+    rng = np.random.default_rng(seed)
+    nf = 6
+    swap = [1, 0, 3, 2, 4, 5]
+    out: dict[int, int] = {}
+    for _ in range(6):
+        fs = int(rng.integers(1, 1 << 4)) | (0b110000 if rng.random() < 0.5 else 0)
+        image = sum(1 << swap[k] for k in range(nf) if fs >> k & 1)
+        cost = int(rng.integers(2, 20))
+        out.setdefault(fs, cost)
+        out.setdefault(image, out[fs])
+    tests = [Candidate(equations=1 << t, faults=fs, cost=c) for t, (fs, c) in enumerate(sorted(out.items()))]
+    return tests, nf
+
+
+@pytest.mark.parametrize("method", ["A", "B"])
+@pytest.mark.parametrize("seed", range(8))
+def test_code_search_decides_every_k_like_brute_force(method: str, seed: int) -> None:
+    # the exact search alone (no local search in front of it), for every k around the optimum
+    tests = random_tests(100 + seed, n=9, nf=5)
+    k_opt, cost_opt = brute_force(tests, 5, method)
+    problem = reduce_problem([t.faults for t in tests], [t.cost for t in tests], 5, method)  # type: ignore[arg-type]
+    assert root_lower_bound(problem) <= k_opt
+    for k in range(k_opt + 2):
+        found = CodeSearch(problem, time.monotonic() + 30).feasible(k)
+        assert (found is not None) == (k >= k_opt)
+        if found is not None:
+            faults = [problem.columns[c] for c in found]
+            assert len(found) <= k and covers_all(problem, faults)
+    cheapest = CodeSearch(problem, time.monotonic() + 30, with_costs=True).cheapest(k_opt, 1 << 30)
+    assert cheapest is not None and sum(problem.costs[c] for c in cheapest) == cost_opt
+
+
+def covers_all(problem: Problem, columns: list[int]) -> bool:
+    for j, i in required_pairs(problem):
+        if problem.method == "A" and not any(c >> j & 1 and not c >> i & 1 for c in columns):
+            return False
+        if problem.method == "B" and not any((c >> j ^ c >> i) & 1 for c in columns):
+            return False
+    return True
+
+
+@pytest.mark.parametrize("method", ["A", "B"])
+@pytest.mark.parametrize("seed", range(6))
+def test_symmetry_breaking_and_merged_faults_keep_optimality(method: str, seed: int) -> None:
+    tests, nf = symmetric_tests(seed)
+    problem = reduce_problem([t.faults for t in tests], [t.cost for t in tests], nf, method)  # type: ignore[arg-type]
+    assert problem.item_of_fault[4] == problem.item_of_fault[5]
+    order = search_order(problem)
+    assert automorphisms(problem, order, with_costs=True)  # the f1<->f2, f3<->f4 swap is found
+    o = optimal(tests, nf, method)  # type: ignore[arg-type]
+    assert o.proven and reaches_same_matrix(o, tests, nf)
+    assert (len(o.tests), o.total_cost) == brute_force(tests, nf, method)
+
+
+def test_merged_non_isolable_faults() -> None:
+    # f2 and f3 appear in exactly the same candidates: one item; f4 is in none: merged with "no fault"
+    tests = [Candidate(equations=1, faults=0b0111, cost=3), Candidate(equations=2, faults=0b0001, cost=2),
+             Candidate(equations=4, faults=0b0110, cost=4)]
+    problem = reduce_problem([t.faults for t in tests], [t.cost for t in tests], 4, "B")
+    assert problem.n_items == 3 and problem.item_of_fault == (1, 2, 2, 0)
+    for method in ("A", "B"):
+        o = optimal(tests, 4, method)  # type: ignore[arg-type]
+        assert o.proven and reaches_same_matrix(o, tests, 4)
+        assert (len(o.tests), o.total_cost) == brute_force(tests, 4, method)
+
+
+def test_lower_bounds_information_and_sperner() -> None:
+    # every singleton fault set: B needs 2^k >= 8 items (7 faults + no fault) -> 3, but singletons can only
+    # give 7 tests; A needs 7 pairwise incomparable codes -> C(4, 2) = 6 < 7 <= C(5, 2) -> 5
+    nf = 7
+    singles = [Candidate(equations=1 << k, faults=1 << k, cost=1) for k in range(nf)]
+    pairs = [Candidate(equations=1 << (nf + t), faults=fs, cost=1)
+             for t, fs in enumerate(a | b for a, b in itertools.combinations([1 << k for k in range(nf)], 2))]
+    big = [Candidate(equations=1 << 40, faults=0b1111111 ^ (1 << k), cost=1) for k in range(nf)]
+    everything = singles + pairs + big
+    assert root_lower_bound(reduce_problem([t.faults for t in everything], [1] * len(everything), nf, "B")) == 3
+    assert root_lower_bound(reduce_problem([t.faults for t in everything], [1] * len(everything), nf, "A")) == 5
+    # with only singletons the bound is not reached; the search proves the true optimum (nf tests)
+    for method in ("A", "B"):
+        o = optimal(singles, nf, method)  # type: ignore[arg-type]
+        assert o.proven and len(o.tests) == nf and o.lower_bound == nf
+
+
+def test_time_limit_returns_unproven_but_valid_selection() -> None:
+    tests = random_tests(7, n=40, nf=9)
+    o = optimal(tests, 9, "A", time_limit_s=0.0)
+    assert reaches_same_matrix(o, tests, 9) and o.lower_bound <= len(o.tests)
+
+
+def test_grouped_romo_optimal_not_worse_than_greedy(models_dir: pathlib.Path) -> None:
+    st = load_model(models_dir / "romo_grouped.toml").structure()
+    _, cands = mso_candidates(st, workers=1, progress=False)
+    nf = st.nf
+    o = optimal(cands, nf, "A", time_limit_s=15.0)
+    g = greedy(cands, nf, "A")
+    assert len(o.tests) <= len(g.tests) and 6 <= o.lower_bound <= len(o.tests)
+    assert reaches_same_matrix(o, cands, nf)
