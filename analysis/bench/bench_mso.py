@@ -20,7 +20,7 @@ import numpy as np
 from fdi_analysis.mso import find_msos, isolability, iter_msos, load_reference, mtes, prepare
 from fdi_analysis.structure import Structure
 
-REF = Path("/work/shared/reference/romo_model")
+REF = Path(__file__).resolve().parents[2].parent / "shared" / "reference" / "romo_model"
 
 
 def random_structure(seed: int, ne: int, phi: int, maxdeg: int = 3, nf: int = 12) -> Structure:

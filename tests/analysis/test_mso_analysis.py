@@ -22,7 +22,8 @@ from fdi_analysis.mso import (
 )
 from fdi_analysis.structure import Structure
 
-REF = Path(os.environ.get("ROMO_REFERENCE_DIR", "/work/shared/reference/romo_model"))
+SHARED_REF = Path(__file__).resolve().parents[2].parent / "shared" / "reference" / "romo_model"
+REF = Path(os.environ.get("ROMO_REFERENCE_DIR", SHARED_REF))
 needs_ref = pytest.mark.skipif(
     not (REF / "romo_dual_track_grouped.json").exists(), reason="ROMO reference JSON not found"
 )

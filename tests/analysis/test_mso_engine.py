@@ -13,7 +13,8 @@ from fdi_analysis.mso import bits, find_msos, iter_msos, load_reference, prepare
 from fdi_analysis.mso.engine import split_tasks
 from fdi_analysis.structure import Structure
 
-REF = Path(os.environ.get("ROMO_REFERENCE_DIR", "/work/shared/reference/romo_model"))
+SHARED_REF = Path(__file__).resolve().parents[2].parent / "shared" / "reference" / "romo_model"
+REF = Path(os.environ.get("ROMO_REFERENCE_DIR", SHARED_REF))
 
 try:
     import faultdiagnosistoolbox as fdt
