@@ -15,30 +15,16 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 from fdi_analysis.mso import find_msos, isolability, iter_msos, load_reference, mtes, prepare
+from fdi_analysis.random_structures import sparse_random_structure
 from fdi_analysis.structure import Structure
 
 REF = Path(__file__).resolve().parents[2].parent / "shared" / "reference" / "romo_model"
 
 
-def random_structure(seed: int, ne: int, phi: int, maxdeg: int = 3, nf: int = 12) -> Structure:
-    """Same generator as tests/analysis/test_mso_engine.py."""
-    rng = np.random.default_rng(seed)
-    nx = ne - phi
-    X = np.zeros((ne, nx), dtype=np.int8)
-    for e in range(ne):
-        X[e, rng.choice(nx, size=int(rng.integers(1, maxdeg + 1)), replace=False)] = 1
-    for x in range(nx):
-        if not X[:, x].any():
-            X[rng.integers(ne), x] = 1
-    F = np.zeros((ne, nf), dtype=np.int8)
-    for f in range(nf):
-        F[rng.integers(ne), f] = 1
-    if nf > 2:
-        F[rng.integers(ne), 0] = 1
-    return Structure.from_fdt_dict({"X": X.tolist(), "F": F.tolist(), "name": f"random-{seed}"})
+def random_structure(seed: int, ne: int, phi: int) -> Structure:
+    return sparse_random_structure(seed, ne, phi)
+
 
 
 def redundancy(s: Structure) -> tuple[int, int]:

@@ -33,3 +33,38 @@ def random_structure(seed: int, ne: int, redundancy: int, nf: int, density: floa
         Z=Z,
         name=f"random-{seed}",
     )
+
+
+def sparse_random_structure(
+    seed: int,
+    ne: int,
+    phi: int,
+    *,
+    nf: int = 12,
+    maxdeg: int = 3,
+    mindeg: int = 1,
+    one_fault_per_equation: bool = False,
+) -> Structure:
+    """ne equations over ne - phi unknowns, each equation holding mindeg..maxdeg unknowns (MSO benchmarks).
+
+    Faults: either each on a random equation with fault 0 also on a second one (a fault in two equations),
+    or, with `one_fault_per_equation`, on distinct equations (what FDT's MTES assumes).
+    """
+    rng = np.random.default_rng(seed)
+    nx = ne - phi
+    X = np.zeros((ne, nx), dtype=np.int8)
+    for e in range(ne):
+        X[e, rng.choice(nx, size=int(rng.integers(mindeg, maxdeg + 1)), replace=False)] = 1
+    for x in range(nx):
+        if not X[:, x].any():
+            X[rng.integers(ne), x] = 1
+    F = np.zeros((ne, nf), dtype=np.int8)
+    if one_fault_per_equation:
+        for f, e in enumerate(rng.choice(ne, size=nf, replace=False)):
+            F[e, f] = 1
+    else:
+        for f in range(nf):
+            F[rng.integers(ne), f] = 1
+        if nf > 2:
+            F[rng.integers(ne), 0] = 1
+    return Structure.from_fdt_dict({"X": X.tolist(), "F": F.tolist(), "name": f"random-{seed}"})

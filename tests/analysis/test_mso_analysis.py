@@ -20,6 +20,7 @@ from fdi_analysis.mso import (
     reduce_intermediate,
     reference,
 )
+from fdi_analysis.random_structures import sparse_random_structure
 from fdi_analysis.structure import Structure
 
 SHARED_REF = Path(__file__).resolve().parents[2].parent / "shared" / "reference" / "romo_model"
@@ -37,18 +38,7 @@ except ImportError:  # pragma: no cover
 
 
 def random_structure(seed: int, ne: int, phi: int, nf: int = 8, maxdeg: int = 3) -> Structure:
-    rng = np.random.default_rng(seed)
-    nx = ne - phi
-    X = np.zeros((ne, nx), dtype=np.int8)
-    for e in range(ne):
-        X[e, rng.choice(nx, size=int(rng.integers(1, maxdeg + 1)), replace=False)] = 1
-    for x in range(nx):
-        if not X[:, x].any():
-            X[rng.integers(ne), x] = 1
-    F = np.zeros((ne, nf), dtype=np.int8)
-    for f, e in enumerate(rng.choice(ne, size=nf, replace=False)):
-        F[e, f] = 1  # one fault per equation (FDT's MTES assumes it)
-    return Structure.from_fdt_dict({"X": X.tolist(), "F": F.tolist()})
+    return sparse_random_structure(seed, ne, phi, nf=nf, maxdeg=maxdeg, one_fault_per_equation=True)
 
 
 SEEDS = range(10)

@@ -11,6 +11,7 @@ import pytest
 
 from fdi_analysis.mso import bits, find_msos, iter_msos, load_reference, prepare, reference
 from fdi_analysis.mso.engine import split_tasks
+from fdi_analysis.random_structures import sparse_random_structure
 from fdi_analysis.structure import Structure
 
 SHARED_REF = Path(__file__).resolve().parents[2].parent / "shared" / "reference" / "romo_model"
@@ -27,20 +28,7 @@ needs_fdt = pytest.mark.skipif(not HAVE_FDT, reason="faultdiagnosistoolbox not i
 
 
 def random_structure(seed: int, ne: int, phi: int, maxdeg: int = 3, nf: int = 12, mindeg: int = 1) -> Structure:
-    rng = np.random.default_rng(seed)
-    nx = ne - phi
-    X = np.zeros((ne, nx), dtype=np.int8)
-    for e in range(ne):
-        X[e, rng.choice(nx, size=int(rng.integers(mindeg, maxdeg + 1)), replace=False)] = 1
-    for x in range(nx):
-        if not X[:, x].any():
-            X[rng.integers(ne), x] = 1
-    F = np.zeros((ne, nf), dtype=np.int8)
-    for f in range(nf):
-        F[rng.integers(ne), f] = 1
-    if nf > 2:
-        F[rng.integers(ne), 0] = 1  # one fault in two equations
-    return Structure.from_fdt_dict({"X": X.tolist(), "F": F.tolist(), "name": f"random-{seed}"})
+    return sparse_random_structure(seed, ne, phi, nf=nf, maxdeg=maxdeg, mindeg=mindeg)
 
 
 def fdt_msos(s: Structure) -> set[int]:
