@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from fdi_analysis.candidates import mso_candidates
+from fdi_analysis.candidates_mtes import full_isolability_reached, mtes_candidates
 from fdi_analysis.fault_matrix import Method, fault_matrix, signature_matrix
 from fdi_analysis.interpretation import interpret
 from fdi_analysis.model import Model
@@ -17,7 +18,10 @@ from fdi_analysis.mso import bits
 from fdi_analysis.plots import plot_fault_matrix, plot_selected_faults
 from fdi_analysis.selection import Selection, greedy, optimal
 
-EXAMPLE = "example: fdi-analyze select analysis/models/romo_grouped.toml -o out/grouped"
+EXAMPLE = (
+    "examples:\n  fdi-analyze select analysis/models/romo_grouped.toml -o out/grouped\n"
+    "  fdi-analyze select analysis/models/romo_full_vertical.toml --candidates mtes -o out/full_vertical"
+)
 
 
 def register(sub: Any) -> None:
@@ -29,9 +33,16 @@ def register(sub: Any) -> None:
         "(fewest tests, then fewest unknowns). Writes selection.json, selection.md and the plots "
         "fault_matrix.png (Fig. 4) and selected_faults.png (Fig. 5).",
         epilog=EXAMPLE,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("model", type=Path, help="model file (.toml) or FDT structure (.json)")
     p.add_argument("-o", "--out", type=Path, default=None, help="output folder (default: print only)")
+    p.add_argument("--candidates", choices=("mso", "mtes"), default="mso",
+                   help="candidate tests: every MSO set (enumerated, one per fault signature; default) or the "
+                   "MTES (minimal test equation supports) for models too large to enumerate, e.g. the full "
+                   "vertical-dynamics model")
+    p.add_argument("--time-limit", type=float, default=60.0,
+                   help="seconds per optimal selection before the best found is reported unproven (default 60)")
     p.add_argument("--workers", type=int, default=2, help="worker processes of the MSO search (default 2)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
@@ -64,17 +75,28 @@ def optimality(sel: Selection) -> str:
 def run(args: argparse.Namespace) -> int:
     model = load_model(args.model)
     st = model.structure()
-    summary, cands = mso_candidates(st, workers=args.workers, progress=not args.no_progress)
-    print(f"{model.name}: {summary.count:,} MSO sets, {len(cands):,} distinct fault signatures "
-          f"({summary.elapsed_s:.2f} s)")
+    if args.candidates == "mso":
+        summary, cands = mso_candidates(st, workers=args.workers, progress=not args.no_progress)
+        n_sets, kind = summary.count, "MSO sets"
+        print(f"{model.name}: {summary.count:,} MSO sets, {len(cands):,} distinct fault signatures "
+              f"({summary.elapsed_s:.2f} s)")
+    else:
+        if not args.no_progress:
+            print(f"{model.name}: MTES search ...", flush=True)
+        result, cands = mtes_candidates(st)
+        n_sets, kind = len(result.mtes), "MTES"
+        reached = "reach" if full_isolability_reached(st, cands) else "do NOT reach"
+        print(f"{model.name}: {len(result.mtes):,} MTES, {len(cands):,} distinct fault supports "
+              f"({result.elapsed_s:.2f} s); they {reached} the structural isolability of the model")
     selections: dict[str, Selection] = {}
     timing: dict[str, float] = {}
     methods: tuple[Method, ...] = ("A", "B")
     for method in methods:
-        for kind, fn in (("greedy", greedy), ("optimal", optimal)):
+        for how in ("greedy", "optimal"):
             t0 = time.perf_counter()
-            selections[f"{kind} {method}"] = fn(cands, st.nf, method)
-            timing[f"{kind} {method}"] = time.perf_counter() - t0
+            sel = greedy(cands, st.nf, method) if how == "greedy" else optimal(cands, st.nf, method, args.time_limit)
+            selections[f"{how} {method}"] = sel
+            timing[f"{how} {method}"] = time.perf_counter() - t0
     print("selection     tests  unknowns    time  optimality")
     for key, sel in selections.items():
         print(f"{key:<12} {len(sel.tests):>6} {sel.total_cost:>9} {timing[key]:>6.2f} s  {optimality(sel)}")
@@ -84,17 +106,17 @@ def run(args: argparse.Namespace) -> int:
         faults = " ".join(f.lstrip("f") for f in row["faults"])
         print(f"  {row['mso']:<9} {row['unknowns']:>3} unknowns  faults {faults}")
     if args.out is not None:
-        write_outputs(args.out, model, summary.count, cands, selections, timing)
+        write_outputs(args.out, model, n_sets, kind, cands, selections, timing)
     return 0
 
 
-def write_outputs(out: Path, model: Model, n_msos: int, cands: list[Any], selections: dict[str, Selection],
-                  timing: dict[str, float]) -> None:
+def write_outputs(out: Path, model: Model, n_sets: int, kind: str, cands: list[Any],
+                  selections: dict[str, Selection], timing: dict[str, float]) -> None:
     st = model.structure()
     out.mkdir(parents=True, exist_ok=True)
     all_sets = [t.faults for t in cands]
     plot_fault_matrix(fault_matrix(all_sets, st.nf, "A"), fault_matrix(all_sets, st.nf, "B"), st.faults,
-                      f"{model.name}: fault matrix of all {n_msos:,} MSO sets", out / "fault_matrix.png")
+                      f"{model.name}: fault matrix of all {n_sets:,} {kind}", out / "fault_matrix.png")
     best = selections["optimal B"]
     plot_selected_faults(signature_matrix(best.tests, st.nf), st.faults,
                          [f"{k + 1}: {t.label}" for k, t in enumerate(best.tests)],
@@ -102,7 +124,8 @@ def write_outputs(out: Path, model: Model, n_msos: int, cands: list[Any], select
                          out / "selected_faults.png")
     data = {
         "model": model.name,
-        "mso_sets": n_msos,
+        "candidate_source": kind,
+        "candidate_sets": n_sets,
         "distinct_fault_signatures": len(cands),
         "selections": {
             key: {"tests": len(sel.tests), "unknowns": sel.total_cost, "seconds": round(timing[key], 3),
@@ -112,7 +135,7 @@ def write_outputs(out: Path, model: Model, n_msos: int, cands: list[Any], select
     }
     (out / "selection.json").write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
     lines = [f"# MSO selection: {model.name}", "",
-             f"{n_msos:,} MSO sets, {len(cands):,} distinct fault signatures.", "",
+             f"{n_sets:,} {kind}, {len(cands):,} distinct fault signatures.", "",
              "| selection | tests | unknowns in total | optimality |", "|---|---|---|---|"]
     lines += [f"| {k} | {len(s.tests)} | {s.total_cost} | {optimality(s)} |" for k, s in selections.items()]
     for key, sel in selections.items():

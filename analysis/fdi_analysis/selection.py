@@ -26,6 +26,7 @@ from fdi_analysis.selection_exact import (
     Problem,
     SearchTimeoutError,
     cheaper_swaps,
+    cover_greedy,
     cover_matrix,
     local_search,
     reduce_problem,
@@ -106,7 +107,7 @@ def optimal(tests: Sequence[Candidate], nf: int, method: Method, time_limit_s: f
     by_mask = _candidate_by_mask(cands, problem)
     cover = cover_matrix(problem)
     costs = np.array(problem.costs, dtype=np.int64)
-    best = _greedy_columns(problem, cands, nf, method)
+    best = min(_greedy_columns(problem, cands, nf, method), cover_greedy(cover), key=len)
     lb = root_lower_bound(problem)
     best, lb = _count_stage(problem, cover, best, lb, deadline)
     count_proven = lb == len(best)
@@ -142,12 +143,18 @@ def _greedy_columns(problem: Problem, cands: Sequence[Candidate], nf: int, metho
 
 def _count_stage(problem: Problem, cover: BoolMatrix, best: list[int], lb: int,
                  deadline: float) -> tuple[list[int], int]:
-    """For k = lb, lb+1, ...: a short local search may find a selection with k columns (then k is optimal,
-    all smaller k being refuted); otherwise the exact search finds one or proves none exists (lb = k+1)."""
+    """First shrink the incumbent from above by local search (k = |best| - 1, ...). Then for k = lb, lb+1,
+    ...: a short local search may find a selection with k columns (then k is optimal, all smaller k being
+    refuted); otherwise the exact search finds one or proves none exists (lb = k+1)."""
     search: CodeSearch | None = None
     iterations = min(COUNT_SEARCH_ITERATIONS, 20 * len(problem.columns))
+    while lb < len(best) - 1 and time.monotonic() < deadline:  # shrink the incumbent from above first
+        found = local_search(cover, len(best) - 1, iterations=iterations, seed=len(best), deadline=deadline)
+        if found is None:
+            break
+        best = sorted(found)
     while lb < len(best):
-        found = local_search(cover, lb, iterations=iterations, seed=lb)
+        found = local_search(cover, lb, iterations=iterations, seed=lb, deadline=deadline)
         try:
             if found is None:
                 search = search or CodeSearch(problem, deadline)
@@ -170,7 +177,7 @@ def _cost_stage(problem: Problem, cover: BoolMatrix, costs: IntArray, best: list
     for seed in range(COST_SEEDS):
         if time.monotonic() > deadline:
             break
-        found = local_search(cover, k, iterations=iterations, seed=100 + seed)
+        found = local_search(cover, k, iterations=iterations, seed=100 + seed, deadline=deadline)
         if found is not None:
             found = cheaper_swaps(cover, costs, found)
             if costs[found].sum() < costs[best].sum():

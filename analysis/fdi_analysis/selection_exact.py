@@ -467,9 +467,27 @@ class CodeSearch:
 # Incumbents
 
 
-def local_search(cover: BoolMatrix, k: int, iterations: int, seed: int) -> list[int] | None:
+def cover_greedy(cover: BoolMatrix) -> list[int]:
+    """Classic set-cover greedy: repeatedly the column covering most uncovered elements (an incumbent for
+    the count; the paper's greedy orders by size instead and can need several times more columns)."""
+    mat = csc_matrix(cover, dtype=np.float32)
+    uncovered = np.asarray(cover.any(axis=0), dtype=bool)
+    sel: list[int] = []
+    while uncovered.any():
+        gain = mat @ uncovered.astype(np.float32)
+        c = int(np.argmax(gain))
+        if gain[c] <= 0:
+            break
+        sel.append(c)
+        uncovered &= ~cover[c]
+    return sorted(sel)
+
+
+def local_search(cover: BoolMatrix, k: int, iterations: int, seed: int,
+                 deadline: float = float("inf")) -> list[int] | None:
     """Weighted tabu swap search for k columns covering every element (a heuristic: only finds, never
-    proves). Uncovered elements gain weight each step, which steers the search out of local minima."""
+    proves). Uncovered elements gain weight each step, which steers the search out of local minima. Gives
+    up (None) after `iterations` steps or at `deadline` (time.monotonic())."""
     n, m = cover.shape
     if k <= 0 or n < k or m == 0:
         return None
@@ -483,6 +501,8 @@ def local_search(cover: BoolMatrix, k: int, iterations: int, seed: int) -> list[
         uncovered = count == 0
         if not uncovered.any():
             return sel
+        if time.monotonic() > deadline:
+            return None
         gain_new = mat @ (weight * uncovered)
         best: tuple[float, int, int] | None = None
         for p in range(k):

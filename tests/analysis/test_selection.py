@@ -208,3 +208,16 @@ def test_grouped_romo_optimal_not_worse_than_greedy(models_dir: pathlib.Path) ->
     g = greedy(cands, nf, "A")
     assert len(o.tests) <= len(g.tests) and 6 <= o.lower_bound <= len(o.tests)
     assert reaches_same_matrix(o, cands, nf)
+
+
+@pytest.mark.parametrize("method", ["A", "B"])
+@pytest.mark.parametrize("seed", range(4))
+def test_cover_greedy_covers_every_required_pair(method: str, seed: int) -> None:
+    from fdi_analysis.selection_exact import cover_greedy, cover_matrix
+
+    tests = random_tests(seed, n=60, nf=8)
+    problem = reduce_problem([t.faults for t in tests], [t.cost for t in tests], 8, method)
+    cover = cover_matrix(problem)
+    sel = cover_greedy(cover)
+    assert np.array_equal(cover[sel].any(axis=0), cover.any(axis=0))
+    assert len(sel) == len(set(sel))

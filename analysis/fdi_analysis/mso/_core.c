@@ -7,6 +7,7 @@
  *
  * Functions (all internal; the typed API is fdi_analysis.mso):
  *   model_new(ne, nv, rows, eqfault)        rows[e] = unknown indices of equation e, eqfault[e] = fault mask
+ *   model_dense(ne, nv, nf, inc, fmat)      the same from dense 0/1 byte matrices (ne x nv, ne x nf)
  *   mplus(model, S) -> int                  overdetermined part S+ of equation set S
  *   split(model, S, R) -> (phi, [(S', R')]) children of search node (S, R)
  *   agg_new(model) / agg_run(model, agg, S, R, check_signals) -> interrupted / agg_result(agg)
@@ -281,6 +282,68 @@ static PyObject *py_model_new(PyObject *self, PyObject *args) {
     m->row_off[ne] = pos;
     PyObject *cap = PyCapsule_New(m, "fdi_mso.model", model_capsule_destructor);
     if (!cap) model_free(m);
+    return cap;
+}
+
+/* model_dense(ne, nv, nf, inc, fmat): inc = ne*nv bytes (row-major, nonzero = incidence), fmat = ne*nf bytes.
+ * The same model as model_new without building Python lists (the lists cost more than small searches). */
+static PyObject *py_model_dense(PyObject *self, PyObject *args) {
+    (void)self;
+    int ne, nv, nf;
+    Py_buffer inc, fm;
+    if (!PyArg_ParseTuple(args, "iiiy*y*", &ne, &nv, &nf, &inc, &fm)) return NULL;
+    PyObject *cap = NULL;
+    model_t *m = NULL;
+    if (ne < 1 || ne > 64 * NWMAX || nv < 0 || nv > 32000 || nf < 0 || nf > 64) {
+        PyErr_SetString(PyExc_ValueError, "need 1 <= equations <= 256, unknowns <= 32000, faults <= 64");
+        goto done;
+    }
+    if (inc.len != (Py_ssize_t)ne * nv || fm.len != (Py_ssize_t)ne * nf) {
+        PyErr_SetString(PyExc_ValueError, "inc must have ne*nv bytes and fmat ne*nf bytes");
+        goto done;
+    }
+    const unsigned char *ip = (const unsigned char *)inc.buf;
+    const unsigned char *fp = (const unsigned char *)fm.buf;
+    size_t total = 0;
+    for (Py_ssize_t k = 0; k < inc.len; k++) total += ip[k] != 0;
+    m = (model_t *)calloc(1, sizeof(model_t));
+    if (!m) {
+        PyErr_NoMemory();
+        goto done;
+    }
+    m->ne = ne;
+    m->nv = nv;
+    m->nw = ne <= 64 ? 1 : (ne <= 128 ? 2 : 4);
+    m->row_off = (int *)calloc((size_t)ne + 1, sizeof(int));
+    m->col = (w64 *)calloc((size_t)(nv > 0 ? nv : 1) * NWMAX, sizeof(w64));
+    m->eqfault = (w64 *)calloc((size_t)ne, sizeof(w64));
+    m->row_var = (int16_t *)calloc(total + 1, sizeof(int16_t));
+    if (!m->row_off || !m->col || !m->eqfault || !m->row_var) {
+        model_free(m);
+        m = NULL;
+        PyErr_NoMemory();
+        goto done;
+    }
+    int pos = 0;
+    for (int e = 0; e < ne; e++) {
+        m->row_off[e] = pos;
+        for (int x = 0; x < nv; x++) {
+            if (ip[(size_t)e * (size_t)nv + (size_t)x]) {
+                m->row_var[pos++] = (int16_t)x;
+                m->col[(size_t)x * NWMAX + (size_t)(e >> 6)] |= (w64)1 << (e & 63);
+            }
+        }
+        w64 f = 0;
+        for (int j = 0; j < nf; j++)
+            if (fp[(size_t)e * (size_t)nf + (size_t)j]) f |= (w64)1 << j;
+        m->eqfault[e] = f;
+    }
+    m->row_off[ne] = pos;
+    cap = PyCapsule_New(m, "fdi_mso.model", model_capsule_destructor);
+    if (!cap) model_free(m);
+done:
+    PyBuffer_Release(&inc);
+    PyBuffer_Release(&fm);
     return cap;
 }
 
@@ -595,6 +658,7 @@ static PyObject *py_agg_result(PyObject *self, PyObject *args) {
 
 static PyMethodDef methods[] = {
     {"model_new", py_model_new, METH_VARARGS, "model_new(ne, nv, rows, eqfault) -> model"},
+    {"model_dense", py_model_dense, METH_VARARGS, "model_dense(ne, nv, nf, inc_bytes, fault_bytes) -> model"},
     {"mplus", py_mplus, METH_VARARGS, "mplus(model, S) -> overdetermined part of S"},
     {"split", py_split, METH_VARARGS, "split(model, S, R) -> (phi, [(S', R'), ...])"},
     {"iter_new", py_iter_new, METH_VARARGS, "iter_new(model, S, R, mode=0, emit_all=0) -> iterator"},

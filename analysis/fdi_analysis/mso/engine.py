@@ -16,6 +16,7 @@ import signal
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
+from functools import cached_property
 from types import FrameType
 from typing import Any
 
@@ -28,12 +29,13 @@ from .results import MsoSummary, SignatureEntry, lex_before
 MAX_EQUATIONS = 256
 MAX_FAULTS = 64
 
-ModelArgs = tuple[int, int, list[list[int]], list[int]]
+# (equations, unknowns, faults, incidence bytes ne x nv, fault bytes ne x nf): picklable, cheap to build
+ModelArgs = tuple[int, int, int, bytes, bytes]
 
 
 @dataclass(frozen=True)
 class Prepared:
-    """A structure in the engine's form: rows of unknown indices and a fault mask per equation."""
+    """A structure in the engine's form: the native model, its dense source and the overdetermined part."""
 
     args: ModelArgs
     model: _core.Model
@@ -43,9 +45,21 @@ class Prepared:
     def ne(self) -> int:
         return self.args[0]
 
+    @cached_property
+    def rows(self) -> list[list[int]]:
+        """Unknown indices of each equation."""
+        ne, nv, _, inc, _ = self.args
+        return [[x for x in range(nv) if inc[e * nv + x]] for e in range(ne)]
+
+    @cached_property
+    def fault_masks(self) -> list[int]:
+        """Fault bitmask of each equation."""
+        ne, _, nf, _, fm = self.args
+        return [sum(1 << j for j in range(nf) if fm[e * nf + j]) for e in range(ne)]
+
     def faults_of(self, eqs: int) -> int:
         f = 0
-        masks = self.args[3]
+        masks = self.fault_masks
         while eqs:
             low = eqs & -eqs
             f |= masks[low.bit_length() - 1]
@@ -58,20 +72,19 @@ def model_args(structure: Structure) -> ModelArgs:
         raise ValueError(f"{structure.ne} equations: the engine handles at most {MAX_EQUATIONS}")
     if structure.nf > MAX_FAULTS:
         raise ValueError(f"{structure.nf} faults: the engine handles at most {MAX_FAULTS}")
-    inc = structure.incidence
-    rows = [[int(v) for v in row.nonzero()[0]] for row in inc]
-    faults = []
-    for e in range(structure.ne):
-        m = 0
-        for f in structure.F[e].nonzero()[0]:
-            m |= 1 << int(f)
-        faults.append(m)
-    return structure.ne, structure.nx, rows, faults
+    # dense bytes: per-row Python or numpy work costs more than the whole search on small models
+    inc = (structure.X != 0).tobytes()
+    fm = (structure.F != 0).tobytes()
+    return structure.ne, structure.nx, structure.nf, inc, fm
+
+
+def _model(args: ModelArgs) -> _core.Model:
+    return _core.model_dense(*args)
 
 
 def prepare(structure: Structure) -> Prepared:
     args = model_args(structure)
-    model = _core.model_new(*args)
+    model = _model(args)
     root = _core.mplus(model, (1 << structure.ne) - 1)
     return Prepared(args=args, model=model, root=root)
 
@@ -84,15 +97,19 @@ def mplus(structure: Structure | Prepared, eqs: int) -> int:
 
 def iter_msos(structure: Structure | Prepared, *, batch: int = 8192) -> Iterator[int]:
     """Every MSO set of the structure once, as an int bitset over equations (streaming, constant memory)."""
-    p = structure if isinstance(structure, Prepared) else prepare(structure)
-    if p.root == 0:
+    if isinstance(structure, Prepared):
+        model, root = structure.model, structure.root
+    else:  # the short path: on small models the Python around the search costs more than the search
+        model = _model(model_args(structure))
+        root = _core.mplus(model, (1 << structure.ne) - 1)
+    if root == 0:
         return
-    it = _core.iter_new(p.model, p.root, p.root)
+    it = _core.iter_new(model, root, root)
     while True:
         chunk = _core.iter_next(it, batch)
-        if not chunk:
-            return
         yield from chunk
+        if len(chunk) < batch:
+            return
 
 
 def split_tasks(p: Prepared, target: int) -> list[tuple[int, int]]:
@@ -123,7 +140,7 @@ def split_tasks(p: Prepared, target: int) -> list[tuple[int, int]]:
 
 
 def _n_unknowns(p: Prepared, eqs: int) -> int:
-    rows = p.args[2]
+    rows = p.rows
     vs: set[int] = set()
     while eqs:
         low = eqs & -eqs
@@ -187,7 +204,7 @@ def _worker_sigint(signum: int, frame: FrameType | None) -> None:
 
 def _worker(args: ModelArgs, tasks: Any, results: Any) -> None:
     signal.signal(signal.SIGINT, _worker_sigint)
-    model = _core.model_new(*args)
+    model = _model(args)
     agg = _core.agg_new(model)
     interrupted = False
     try:
