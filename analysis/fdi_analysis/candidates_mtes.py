@@ -19,11 +19,16 @@ from fdi_analysis.structure import Structure
 
 
 def candidates_from_mtes(st: Structure, result: MtesResult) -> list[Candidate]:
-    inc = st.incidence
+    if not result.mtes:
+        return []
+    nbytes = (st.ne + 7) // 8
+    packed = np.frombuffer(b"".join(t.equations.to_bytes(nbytes, "little") for t in result.mtes), dtype=np.uint8)
+    member = np.unpackbits(packed.reshape(len(result.mtes), nbytes), axis=1, bitorder="little")[:, :st.ne]
+    n_eqs = member.sum(axis=1)
+    n_unknowns = ((member.astype(np.float32) @ st.incidence.astype(np.float32)) > 0).sum(axis=1)
     best: dict[int, tuple[int, int, int]] = {}  # faults -> (unknowns, equations, equation set)
-    for t in result.mtes:
-        eqs = bits(t.equations)
-        key = (int(inc[eqs].any(axis=0).sum()), len(eqs), t.equations)
+    for t, unk, neq in zip(result.mtes, n_unknowns.tolist(), n_eqs.tolist(), strict=True):
+        key = (unk, neq, t.equations)
         cur = best.get(t.faults)
         if cur is None or key < cur:
             best[t.faults] = key
