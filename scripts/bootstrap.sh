@@ -7,7 +7,8 @@ top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$top"
 
 debs=(build-essential cmake python3-venv libcmocka-dev cppcheck clang clang-tidy valgrind
-      gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm iproute2)
+      gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm iproute2
+      qemu-system-x86 busybox-static)  # the last two: the SocketCAN/vcan guest of tests/vm
 missing=()
 for p in "${debs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -6,11 +6,11 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from fdi_analysis import cli_convert, cli_export, cli_mso, cli_report, cli_select
+from fdi_analysis import cli_calibrate, cli_convert, cli_export, cli_mso, cli_report, cli_select
 from fdi_analysis.model import ModelError
 from fdi_analysis.structure import StructureError
 
-SUBCOMMANDS = (cli_report, cli_mso, cli_select, cli_export, cli_convert)
+SUBCOMMANDS = (cli_report, cli_mso, cli_select, cli_export, cli_convert, cli_calibrate)
 
 EPILOG = """examples:
   fdi-analyze report analysis/models/romo_quasistatic.toml -o out/romo

@@ -6,10 +6,9 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from fdi_analysis.candidates import mso_candidates
-from fdi_analysis.export_c import Thresholds, render, write
+from fdi_analysis.export_c import Thresholds, render
 from fdi_analysis.model_loader import load_model
-from fdi_analysis.selection import optimal
+from fdi_analysis.residuals import emit_c
 
 EXAMPLE = ("example: fdi-analyze export-c analysis/models/romo_grouped.toml "
            "--thresholds analysis/models/romo_thresholds.toml --out fw/generated")
@@ -40,17 +39,33 @@ def command_line(model: Path, thresholds: Path, out: Path, name: str) -> str:
 
 def generate(model_path: Path, thresholds_path: Path, out: Path, name: str, workers: int = 2,
              progress: bool = False) -> tuple[str, str]:
+    files = generate_all(model_path, thresholds_path, out, name, workers, progress)
+    return files[f"{name}.h"], files[f"{name}.c"]
+
+
+def generate_all(model_path: Path, thresholds_path: Path, out: Path, name: str, workers: int = 2,
+                 progress: bool = False) -> dict[str, str]:
+    """The table and the generated residual generators of the optimal selection among realizable MSOs."""
+    from fdi_analysis.residuals.export import selected_generators
+
     model = load_model(model_path)
-    st = model.structure()
-    _, cands = mso_candidates(st, workers=workers, progress=progress)
-    sel = optimal(cands, st.nf, "B")
-    return render(model, sel.tests, Thresholds.load(thresholds_path), name,
-                  command_line(model_path, thresholds_path, out, name))
+    command = command_line(model_path, thresholds_path, out, name)
+    tests, gens = selected_generators(model, workers=workers, progress=progress)
+    header, source = render(model, tests, Thresholds.load(thresholds_path), name, command,
+                            generated=[True] * len(tests))
+    gname = generators_name(name)
+    gh, gc = emit_c.render(gens, gname, command)
+    return {f"{name}.h": header, f"{name}.c": source, f"{gname}.h": gh, f"{gname}.c": gc}
+
+
+def generators_name(table_name: str) -> str:
+    return table_name.replace("_table", "") + "_generators"
 
 
 def run(args: argparse.Namespace) -> int:
-    header, source = generate(args.model, args.thresholds, args.out, args.name, args.workers,
-                              not args.no_progress)
-    for path in write(args.out, args.name, header, source):
-        print(f"wrote {path}")
+    files = generate_all(args.model, args.thresholds, args.out, args.name, args.workers, not args.no_progress)
+    args.out.mkdir(parents=True, exist_ok=True)
+    for fname, text in files.items():
+        (args.out / fname).write_text(text, encoding="utf-8")
+        print(f"wrote {args.out / fname}")
     return 0

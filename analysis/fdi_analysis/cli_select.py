@@ -8,6 +8,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from fdi_analysis.candidates import mso_candidates
 from fdi_analysis.candidates_mtes import full_isolability_reached, mtes_candidates
 from fdi_analysis.fault_matrix import Method, fault_matrix, signature_matrix
@@ -41,6 +43,9 @@ def register(sub: Any) -> None:
                    help="candidate tests: every MSO set (enumerated, one per fault signature; default) or the "
                    "MTES (minimal test equation supports) for models too large to enumerate, e.g. the full "
                    "vertical-dynamics model")
+    p.add_argument("--realizable", action="store_true",
+                   help="keep only candidates that have a sequential residual generator (derivative causality, "
+                   "no open-loop integration, solvable equations): the tests `export-c` can put on board")
     p.add_argument("--time-limit", type=float, default=60.0,
                    help="seconds per optimal selection before the best found is reported unproven (default 60)")
     p.add_argument("--workers", type=int, default=2, help="worker processes of the MSO search (default 2)")
@@ -60,6 +65,37 @@ def selection_rows(model: Model, sel: Selection) -> list[dict[str, Any]]:
         }
         for t in sel.tests
     ]
+
+
+REJECTION_KINDS = (
+    ("integrating", "need open-loop integration"),
+    ("division by a signal", "divide by a signal inside a non-rational law"),
+    ("cannot be solved", "need a non-invertible equation solved"),
+    ("algebraic loop", "contain an algebraic loop"),
+)
+
+
+def rejection_summary(reasons: dict[str, int]) -> str:
+    """Rejection reasons grouped into a few kinds, largest first."""
+    counts: dict[str, int] = {}
+    for why, n in reasons.items():
+        kind = next((label for key, label in REJECTION_KINDS if key in why), why)
+        counts[kind] = counts.get(kind, 0) + n
+    return ", ".join(f"{n:,} {kind}" for kind, n in sorted(counts.items(), key=lambda kv: -kv[1]))
+
+
+def isolability_loss(kept: list[Any], everything: list[Any], faults: tuple[str, ...], method: Method) -> str:
+    """Which fault-matrix elements the kept candidates lose against all candidates (method A or B)."""
+    nf = len(faults)
+    full = fault_matrix([t.faults for t in everything], nf, method)
+    reached = fault_matrix([t.faults for t in kept], nf, method)
+    lost = np.argwhere(reached & ~full)  # element set = "cannot be told apart"
+    if lost.size == 0:
+        return "the realizable candidates reach the fault matrix of all candidates"
+    names = ("no fault", *faults)
+    pairs = ", ".join(f"{names[i]}/{names[j]}" for i, j in lost[:12])
+    more = f" and {len(lost) - 12} more" if len(lost) > 12 else ""
+    return f"{len(lost)} fault-matrix elements lost against all candidates: {pairs}{more}"
 
 
 def optimality(sel: Selection) -> str:
@@ -88,6 +124,17 @@ def run(args: argparse.Namespace) -> int:
         reached = "reach" if full_isolability_reached(st, cands) else "do NOT reach"
         print(f"{model.name}: {len(result.mtes):,} MTES, {len(cands):,} distinct fault supports "
               f"({result.elapsed_s:.2f} s); they {reached} the structural isolability of the model")
+    if args.realizable:
+        from fdi_analysis.residuals.realizability import realizable_candidates
+
+        all_cands = cands
+        cands, reasons = realizable_candidates(model, cands)
+        print(f"realizable: {len(cands):,} of {len(all_cands):,} candidates; rejected: {rejection_summary(reasons)}")
+        if not cands:
+            print("no realizable candidate: nothing to select")
+            return 1
+        for method in ("A", "B"):
+            print(f"  method {method}: " + isolability_loss(cands, all_cands, st.faults, method))
     selections: dict[str, Selection] = {}
     timing: dict[str, float] = {}
     methods: tuple[Method, ...] = ("A", "B")

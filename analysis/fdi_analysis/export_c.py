@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import tomllib
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from fdi_analysis.fault_matrix import Candidate
@@ -42,6 +42,7 @@ class Thresholds:
     gate: float
     variance: dict[str, float]
     source: str
+    generated: dict[str, float] = field(default_factory=dict)  # by MSO equation set (space separated)
 
     @staticmethod
     def load(path: Path) -> Thresholds:
@@ -52,6 +53,7 @@ class Thresholds:
             gate=float(doc["gate"]),
             variance={str(k): float(v) for k, v in doc["variance"].items()},
             source=str(path),
+            generated={str(k): float(v) for k, v in doc.get("generated", {}).items()},
         )
 
 
@@ -71,8 +73,11 @@ def _signal_macro(known: str) -> str:
 
 
 def render(model: Model, tests: Sequence[Candidate], thresholds: Thresholds, name: str,
-           command: str) -> tuple[str, str]:
-    """The header and source text of the table `name` (e.g. "fdi_romo_table")."""
+           command: str, generated: Sequence[bool] | None = None) -> tuple[str, str]:
+    """The header and source text of the table `name` (e.g. "fdi_romo_table").
+
+    `generated[k]` true: test k runs generated generator slot (number of generated tests before it), kind
+    FDI_GEN_GENERATED_<slot+1>, with the variance of its equation set from thresholds.generated."""
     st = model.structure()
     if not 0 < len(tests) <= MAX_TESTS:
         raise ExportError(f"{len(tests)} tests selected; the firmware table holds 1..{MAX_TESTS}")
@@ -88,8 +93,12 @@ def render(model: Model, tests: Sequence[Candidate], thresholds: Thresholds, nam
                         key=[v.name for v in model.knowns].index)
         unknowns = sorted({x for e in bits(t.equations) for x in model.equations[e].unknowns},
                           key=[v.name for v in model.unknowns].index)
-        kind = KNOWN_GENERATORS.get(frozenset(eqs), NO_GENERATOR)
-        variance = thresholds.variance.get(kind, 1.0)
+        if generated is not None and generated[k]:
+            kind = f"FDI_GEN_GENERATED_{sum(generated[:k]) + 1}"
+            variance = thresholds.generated.get(" ".join(eqs), 1.0)
+        else:
+            kind = KNOWN_GENERATORS.get(frozenset(eqs), NO_GENERATOR)
+            variance = thresholds.variance.get(kind, 1.0)
         mask = " | ".join(_signal_macro(z) for z in knowns) or "0U"
         rows.append(
             f"    {{{k + 1}U, {kind}, 0x{t.faults:08X}U, {mask},\n"

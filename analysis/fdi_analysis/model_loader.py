@@ -32,6 +32,7 @@ A structural-only equation gives ``unknowns``, ``knowns`` and ``faults`` lists i
 
 from __future__ import annotations
 
+import math
 import tomllib
 from collections.abc import Iterable, Mapping
 from dataclasses import replace
@@ -64,14 +65,20 @@ def _load(path: Path, chain: tuple[Path, ...]) -> Model:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as exc:
         raise ModelError(f"not valid TOML: {exc}", file=str(path)) from exc
+    except UnicodeDecodeError as exc:
+        raise ModelError(f"not a UTF-8 text file (byte {exc.start}): expected a TOML model", file=str(path)) from exc
     return _ModelBuilder(path, doc, (*chain, path)).build()
 
 
 def _from_fdt_json(path: Path) -> Model:
     try:
         st = Structure.from_fdt_json(path)
+    except UnicodeDecodeError as exc:
+        raise ModelError(f"not a UTF-8 text file (byte {exc.start}): expected FDT JSON", file=str(path)) from exc
     except StructureError as exc:
-        raise ModelError(str(exc), file=str(path)) from exc
+        msg = str(exc)
+        msg = msg.removeprefix(f"{path}: ")  # ModelError names the file once
+        raise ModelError(msg, file=str(path)) from exc
     return model_from_structure(st, source=path)
 
 
@@ -148,6 +155,11 @@ class _ModelBuilder:
         self.meta: dict[str, Any] = doc.get("model", {})
         if not isinstance(self.meta, dict):
             raise ModelError("[model] must be a table", file=self.file)
+        known_meta = {"name", "description", "extends", "remove_equations", "explicit_derivatives"}
+        for key in self.meta:
+            if key not in known_meta:
+                raise ModelError(f"unknown key {key!r} in [model] (expected one of {sorted(known_meta)})",
+                                 file=self.file)
         known_top = {"model", "parameters", "unknown", "known", "fault", "equation", "eliminate"}
         for key in doc:
             if key not in known_top:
@@ -229,9 +241,12 @@ class _ModelBuilder:
                 raise ModelError(f"parameter {name!r} needs exactly one of 'value' or 'expr'",
                                  file=self.file, symbol=name)
             if "value" in spec:
-                values[name] = float(spec["value"])
-                out[name] = Parameter(name, float(spec["value"]), str(spec.get("unit", "")),
-                                      str(spec.get("desc", "")))
+                value = spec["value"]
+                if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+                    raise ModelError(f"parameter {name!r}: 'value' must be a finite number, got {value!r}",
+                                     file=self.file, symbol=name)
+                values[name] = float(value)
+                out[name] = Parameter(name, float(value), str(spec.get("unit", "")), str(spec.get("desc", "")))
             else:
                 pending[name] = (str(spec["expr"]), spec)
         while pending:
@@ -244,7 +259,14 @@ class _ModelBuilder:
                     raise ModelError(f"parameter {name!r}: {exc}", file=self.file, symbol=exc.symbol) from exc
                 if any(str(s) in pending for s in expr.free_symbols):
                     continue
-                val = float(expr.subs({sympy.Symbol(n): v for n, v in values.items()}))
+                try:
+                    val = float(expr.subs({sympy.Symbol(n): v for n, v in values.items()}))
+                except (TypeError, ValueError) as exc:
+                    raise ModelError(f"parameter {name!r}: {text!r} does not evaluate to a real number",
+                                     file=self.file, symbol=name) from exc
+                if not math.isfinite(val):
+                    raise ModelError(f"parameter {name!r}: {text!r} evaluates to {val}, not a finite number",
+                                     file=self.file, symbol=name)
                 values[name] = val
                 out[name] = Parameter(name, val, str(spec.get("unit", "")), str(spec.get("desc", "")))
                 del pending[name]
@@ -289,7 +311,11 @@ class _ModelBuilder:
         if has_lists:
             lists: dict[str, tuple[str, ...]] = {}
             for key, role in (("unknowns", "unknown"), ("knowns", "known"), ("faults", "fault")):
-                names = tuple(str(n) for n in raw.get(key, []))
+                listed = raw.get(key, [])
+                if not isinstance(listed, list) or not all(isinstance(n, str) for n in listed):
+                    raise ModelError(f"'{key}' must be a list of names, got {listed!r}", file=self.file,
+                                     equation=eid)
+                names = tuple(listed)
                 for n in names:
                     var = variables.get(n)
                     if var is None:
@@ -301,8 +327,11 @@ class _ModelBuilder:
             eq = Equation(id=eid, unknowns=lists["unknowns"], knowns=lists["knowns"], faults=lists["faults"],
                           desc=desc, group=group)
         else:
+            if not isinstance(raw["expr"], str):
+                raise ModelError(f"'expr' must be a string such as \"y = x + f\", got {raw['expr']!r}",
+                                 file=self.file, equation=eid)
             try:
-                lhs, rhs = parse_equation(str(raw["expr"]), symbols)
+                lhs, rhs = parse_equation(raw["expr"], symbols)
             except ExpressionError as exc:
                 raise ModelError(str(exc), file=self.file, equation=eid, symbol=exc.symbol) from exc
             eq = _with_expression(Equation(id=eid, unknowns=(), knowns=(), faults=(), desc=desc, group=group),
@@ -412,13 +441,26 @@ def _eliminate(equations: list[Equation], variables: dict[str, Variable], var: s
                 return tuple(dict.fromkeys([*a, *b]))
             ne = replace(e, unknowns=tuple(n for n in merge(e.unknowns, src.unknowns) if n != var),
                          knowns=merge(e.knowns, src.knowns), faults=merge(e.faults, src.faults))
-        out.append(replace(ne, merged_from=merged,
-                           not_solvable_for=tuple(n for n in ne.not_solvable_for if n != var)))
+        out.append(replace(ne, merged_from=merged, not_solvable_for=_merged_not_solvable(ne, e, src, var)))
     variables = {n: v for n, v in variables.items() if n != var}
     return out, variables
 
 
+def _merged_not_solvable(merged: Equation, receiving: Equation, src: Equation, var: str) -> tuple[str, ...]:
+    """not_solvable_for of `receiving` after `var` (from `src`) was substituted into it: its own pairs, the
+    pairs of `src` (var is a non-invertible function of them, so the merged equation is too), and, when
+    `receiving` cannot be solved for `var`, every unknown that enters through var. Restricted to the merged
+    equation's unknowns, in their order."""
+    blocked = set(receiving.not_solvable_for) | set(src.not_solvable_for)
+    if var in receiving.not_solvable_for:
+        blocked |= set(src.unknowns)
+    blocked.discard(var)
+    return tuple(u for u in merged.unknowns if u in blocked)
+
+
 def _check_usage(model: Model, file: str) -> None:
+    if not model.equations:
+        raise ModelError("the model has no equations (expected [[equation]] entries)", file=file)
     used: set[str] = set()
     for e in model.equations:
         used.update(e.unknowns, e.knowns, e.faults)

@@ -173,13 +173,13 @@ def _cost_stage(problem: Problem, cover: BoolMatrix, costs: IntArray, best: list
     """Cheapest selection with len(best) columns: local-search incumbents, then branch and bound."""
     k = len(best)
     iterations = min(LOCAL_SEARCH_ITERATIONS, 20 * len(problem.columns))
-    best = cheaper_swaps(cover, costs, best)
+    best = cheaper_swaps(cover, costs, best, deadline)
     for seed in range(COST_SEEDS):
         if time.monotonic() > deadline:
             break
         found = local_search(cover, k, iterations=iterations, seed=100 + seed, deadline=deadline)
         if found is not None:
-            found = cheaper_swaps(cover, costs, found)
+            found = cheaper_swaps(cover, costs, found, deadline)
             if costs[found].sum() < costs[best].sum():
                 best = found
     if not count_proven:

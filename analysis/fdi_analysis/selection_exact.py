@@ -523,11 +523,12 @@ def local_search(cover: BoolMatrix, k: int, iterations: int, seed: int,
     return None
 
 
-def cheaper_swaps(cover: BoolMatrix, costs: IntArray, sel: list[int]) -> list[int]:
-    """Replace columns by cheaper ones while the selection still covers every element."""
+def cheaper_swaps(cover: BoolMatrix, costs: IntArray, sel: list[int],
+                  deadline: float = float("inf")) -> list[int]:
+    """Replace columns by cheaper ones while the selection still covers every element (until `deadline`)."""
     sel = list(sel)
     improved = True
-    while improved:
+    while improved and time.monotonic() < deadline:
         improved = False
         for p in range(len(sel)):
             others = [sel[q] for q in range(len(sel)) if q != p]

@@ -26,6 +26,10 @@ class Summary:
     def redundancy(self) -> int:
         return self.dm.redundancy
 
+    def problems(self) -> list[str]:
+        """What keeps the model from a complete diagnosis, each naming the equations, unknowns or faults."""
+        return structural_problems(self.structure, self.dm, self.isolability)
+
     def to_dict(self) -> dict[str, Any]:
         st = self.structure
         eq = st.equations
@@ -38,6 +42,7 @@ class Summary:
             "symbolic": self.model.symbolic,
             "counts": self.model.counts(),
             "structural_redundancy": self.redundancy,
+            "problems": self.problems(),
             "dm": {
                 "overdetermined": {"equations": [eq[i] for i in self.dm.plus_eqs],
                                    "unknowns": [var[i] for i in self.dm.plus_vars]},
@@ -60,6 +65,25 @@ class Summary:
                 },
             },
         }
+
+
+def structural_problems(st: Structure, dm: DMResult, iso: IsolabilityResult) -> list[str]:
+    """Clear messages for a structurally singular model (an underdetermined part), a model without
+    redundancy (no residual can be built) and faults no residual can see; empty when none applies."""
+    out: list[str] = []
+    if dm.minus_eqs or dm.minus_vars:
+        unknowns = ", ".join(st.unknowns[v] for v in dm.minus_vars)
+        eqs = ", ".join(st.equations[e] for e in dm.minus_eqs) or "none"
+        out.append(f"structurally singular: the unknowns {unknowns} cannot all be determined "
+                   f"({len(dm.minus_vars)} unknowns in {len(dm.minus_eqs)} equations: {eqs}); "
+                   "add equations or measurements that determine them")
+    if dm.redundancy == 0:
+        out.append("no structural redundancy: no equation is left over to build a residual, so no fault is "
+                   "detectable; add measurements (equations of known signals)")
+    nd = [st.faults[i] for i in range(st.nf) if not iso.detectable[i]]
+    if nd and dm.redundancy > 0:
+        out.append(f"not detectable (no equation in the overdetermined part): {', '.join(nd)}")
+    return out
 
 
 def summarize(model: Model) -> Summary:

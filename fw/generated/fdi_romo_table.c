@@ -32,47 +32,47 @@ static const char *const fault_names[25] = {
 };
 
 static const fdi_test_desc_t tests[6] = {
-    {1U, FDI_GEN_NONE, 0x0044445FU, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA2_M | FDI_SIGM_ITM2_M | FDI_SIGM_P_F_M | FDI_SIGM_OMEGA2_M,
-     5.0f, 1.0f, "wheel 2 (tyre, spin); measured ax_m, ay_m, psidot_m, vx_m, vy_m, delta2_m, iTM2_m, P_f_m, omega2_m"},
-    {2U, FDI_GEN_NONE, 0x0088889FU, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA3_M | FDI_SIGM_ITM3_M | FDI_SIGM_P_R_M | FDI_SIGM_OMEGA3_M,
-     5.0f, 1.0f, "wheel 3 (tyre, spin); measured ax_m, ay_m, psidot_m, vx_m, vy_m, delta3_m, iTM3_m, P_r_m, omega3_m"},
-    {3U, FDI_GEN_NONE, 0x0111111FU, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA4_M | FDI_SIGM_ITM4_M | FDI_SIGM_P_R_M | FDI_SIGM_OMEGA4_M,
-     5.0f, 1.0f, "wheel 4 (tyre, spin); measured ax_m, ay_m, psidot_m, vx_m, vy_m, delta4_m, iTM4_m, P_r_m, omega4_m"},
-    {4U, FDI_GEN_NONE, 0x001FFFF7U, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA1_M | FDI_SIGM_DELTA2_M | FDI_SIGM_DELTA3_M | FDI_SIGM_DELTA4_M | FDI_SIGM_ITM1_M | FDI_SIGM_ITM2_M | FDI_SIGM_ITM3_M | FDI_SIGM_ITM4_M | FDI_SIGM_P_F_M | FDI_SIGM_P_R_M,
-     5.0f, 1.0f, "body dynamics; kinematics; wheel 1 (tyre, spin); wheel 2 (tyre, spin); wheel 3 (tyre, spin); wheel 4 (tyre, spin); measured ax_m, ay_m, psidot_m, vy_m, delta1_m, delta2_m, delta3_m, delta4_m, iTM1_m, iTM2_m, iTM3_m, iTM4_m, P_f_m, P_r_m"},
-    {5U, FDI_GEN_NONE, 0x01E799FAU, FDI_SIGM_AY_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA1_M | FDI_SIGM_DELTA2_M | FDI_SIGM_DELTA3_M | FDI_SIGM_DELTA4_M | FDI_SIGM_ITM3_M | FDI_SIGM_ITM4_M | FDI_SIGM_P_R_M | FDI_SIGM_OMEGA1_M | FDI_SIGM_OMEGA2_M | FDI_SIGM_OMEGA3_M | FDI_SIGM_OMEGA4_M,
-     5.0f, 1.0f, "body dynamics; kinematics; wheel 1 (tyre); wheel 2 (tyre); wheel 3 (tyre, spin); wheel 4 (tyre, spin); measured ay_m, vx_m, vy_m, delta1_m, delta2_m, delta3_m, delta4_m, iTM3_m, iTM4_m, P_r_m, omega1_m, omega2_m, omega3_m, omega4_m"},
-    {6U, FDI_GEN_NONE, 0x01F867FCU, FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA1_M | FDI_SIGM_DELTA2_M | FDI_SIGM_DELTA3_M | FDI_SIGM_DELTA4_M | FDI_SIGM_ITM1_M | FDI_SIGM_ITM2_M | FDI_SIGM_P_F_M | FDI_SIGM_OMEGA1_M | FDI_SIGM_OMEGA2_M | FDI_SIGM_OMEGA3_M | FDI_SIGM_OMEGA4_M,
-     5.0f, 1.0f, "body dynamics; kinematics; wheel 3 (tyre); wheel 4 (tyre); wheel 1 (tyre, spin); wheel 2 (tyre, spin); measured psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta3_m, delta4_m, iTM1_m, iTM2_m, P_f_m, omega1_m, omega2_m, omega3_m, omega4_m"},
+    {1U, FDI_GEN_GENERATED_1, 0x0000000FU, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M,
+     5.0f, 0.0001638f, "kinematics; measured ax_m, ay_m, psidot_m, vx_m"},
+    {2U, FDI_GEN_GENERATED_2, 0x00000017U, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VY_M,
+     5.0f, 0.000102f, "kinematics; measured ax_m, ay_m, psidot_m, vy_m"},
+    {3U, FDI_GEN_GENERATED_3, 0x0022223FU, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA1_M | FDI_SIGM_ITM1_M | FDI_SIGM_P_F_M | FDI_SIGM_OMEGA1_M,
+     5.0f, 349.7f, "wheel 1 (tyre, spin); measured ax_m, ay_m, psidot_m, vx_m, vy_m, delta1_m, iTM1_m, P_f_m, omega1_m"},
+    {4U, FDI_GEN_GENERATED_4, 0x01FE45FEU, FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA1_M | FDI_SIGM_DELTA2_M | FDI_SIGM_DELTA3_M | FDI_SIGM_DELTA4_M | FDI_SIGM_ITM2_M | FDI_SIGM_P_F_M | FDI_SIGM_OMEGA1_M | FDI_SIGM_OMEGA2_M | FDI_SIGM_OMEGA3_M | FDI_SIGM_OMEGA4_M,
+     5.0f, 11240.0f, "body dynamics; kinematics; wheel 1 (tyre); wheel 3 (tyre); wheel 4 (tyre); wheel 2 (tyre, spin); measured ay_m, psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta3_m, delta4_m, iTM2_m, P_f_m, omega1_m, omega2_m, omega3_m, omega4_m"},
+    {5U, FDI_GEN_GENERATED_5, 0x00EE88FCU, FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA1_M | FDI_SIGM_DELTA2_M | FDI_SIGM_DELTA3_M | FDI_SIGM_ITM3_M | FDI_SIGM_P_R_M | FDI_SIGM_OMEGA1_M | FDI_SIGM_OMEGA2_M | FDI_SIGM_OMEGA3_M,
+     5.0f, 7174.0f, "body dynamics; kinematics; wheel 1 (tyre); wheel 2 (tyre); wheel 3 (tyre, spin); measured psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta3_m, iTM3_m, P_r_m, omega1_m, omega2_m, omega3_m"},
+    {6U, FDI_GEN_GENERATED_6, 0x0177117CU, FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA1_M | FDI_SIGM_DELTA2_M | FDI_SIGM_DELTA4_M | FDI_SIGM_ITM4_M | FDI_SIGM_P_R_M | FDI_SIGM_OMEGA1_M | FDI_SIGM_OMEGA2_M | FDI_SIGM_OMEGA4_M,
+     5.0f, 8987.0f, "body dynamics; kinematics; wheel 1 (tyre); wheel 2 (tyre); wheel 4 (tyre, spin); measured psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta4_m, iTM4_m, P_r_m, omega1_m, omega2_m, omega4_m"},
 };
 
 /* Row j: bit i set when test i is sensitive to fault j. */
 static const uint32_t fault_signature[25] = {
-    0x0000000FU, /* f1 */
-    0x0000001FU, /* f2 */
-    0x0000002FU, /* f3 */
-    0x00000037U, /* f4 */
-    0x0000003FU, /* f5 */
-    0x00000038U, /* f6 */
-    0x00000039U, /* f7 */
-    0x0000003AU, /* f8 */
-    0x0000003CU, /* f9 */
-    0x00000028U, /* f10 */
-    0x00000029U, /* f11 */
-    0x0000001AU, /* f12 */
-    0x0000001CU, /* f13 */
-    0x00000028U, /* f14 */
-    0x00000029U, /* f15 */
-    0x0000001AU, /* f16 */
-    0x0000001CU, /* f17 */
-    0x00000018U, /* f18 */
-    0x00000019U, /* f19 */
-    0x0000002AU, /* f20 */
-    0x0000002CU, /* f21 */
-    0x00000030U, /* f22 */
-    0x00000031U, /* f23 */
-    0x00000032U, /* f24 */
-    0x00000034U, /* f25 */
+    0x00000007U, /* f1 */
+    0x0000000FU, /* f2 */
+    0x0000003FU, /* f3 */
+    0x0000003DU, /* f4 */
+    0x0000003EU, /* f5 */
+    0x0000003CU, /* f6 */
+    0x00000038U, /* f7 */
+    0x00000018U, /* f8 */
+    0x00000028U, /* f9 */
+    0x00000004U, /* f10 */
+    0x00000008U, /* f11 */
+    0x00000010U, /* f12 */
+    0x00000020U, /* f13 */
+    0x00000004U, /* f14 */
+    0x00000008U, /* f15 */
+    0x00000010U, /* f16 */
+    0x00000020U, /* f17 */
+    0x0000003CU, /* f18 */
+    0x00000038U, /* f19 */
+    0x00000018U, /* f20 */
+    0x00000028U, /* f21 */
+    0x0000003CU, /* f22 */
+    0x00000038U, /* f23 */
+    0x00000018U, /* f24 */
+    0x00000028U, /* f25 */
 };
 
 /* Row j: the faults whose signature equals fault j's (not isolable from it by these tests). */
@@ -82,10 +82,10 @@ static const uint32_t iso_class[25] = {
     0x00000004U, /* f3 */
     0x00000008U, /* f4 */
     0x00000010U, /* f5 */
-    0x00000020U, /* f6 */
-    0x00000040U, /* f7 */
-    0x00000080U, /* f8 */
-    0x00000100U, /* f9 */
+    0x00220020U, /* f6 */
+    0x00440040U, /* f7 */
+    0x00880080U, /* f8 */
+    0x01100100U, /* f9 */
     0x00002200U, /* f10 */
     0x00004400U, /* f11 */
     0x00008800U, /* f12 */
@@ -94,32 +94,32 @@ static const uint32_t iso_class[25] = {
     0x00004400U, /* f15 */
     0x00008800U, /* f16 */
     0x00011000U, /* f17 */
-    0x00020000U, /* f18 */
-    0x00040000U, /* f19 */
-    0x00080000U, /* f20 */
-    0x00100000U, /* f21 */
-    0x00200000U, /* f22 */
-    0x00400000U, /* f23 */
-    0x00800000U, /* f24 */
-    0x01000000U, /* f25 */
+    0x00220020U, /* f18 */
+    0x00440040U, /* f19 */
+    0x00880080U, /* f20 */
+    0x01100100U, /* f21 */
+    0x00220020U, /* f22 */
+    0x00440040U, /* f23 */
+    0x00880080U, /* f24 */
+    0x01100100U, /* f25 */
 };
 
 const char *const fdi_romo_table_equations[6] = {
-    "W2.FL W2.dyn W2.D S1 S2 S3 S4 S5 S.omega2",
-    "W3.FL W3.dyn W3.D S1 S2 S3 S4 S5 S.omega3",
-    "W4.FL W4.dyn W4.D S1 S2 S3 S4 S5 S.omega4",
-    "B1 K1 D1 W1.FL W2.FL W3.FL W4.FL W1.FS W2.FS W3.FS W4.FS W1.Fx W2.Fx W3.Fx W4.Fx W1.dyn W2.dyn W3.dyn W4.dyn W1.D W2.D W3.D W4.D S1 S2 S3 S5",
-    "B1 B2 B3 D.psidot K1 K2 D1 D2 W1.FL W2.FL W1.FS W2.FS W1.Fx W2.Fx W3.Fx W4.Fx W1.Fy W2.Fy W3.Fy W4.Fy W3.dyn W4.dyn W3.D W4.D S2 S4 S5 S.omega1 S.omega2 S.omega3 S.omega4",
-    "B1 B2 B3 D.psidot K1 K2 D1 D2 W3.FL W4.FL W3.FS W4.FS W1.Fx W2.Fx W3.Fx W4.Fx W1.Fy W2.Fy W3.Fy W4.Fy W1.dyn W2.dyn W1.D W2.D S3 S4 S5 S.omega1 S.omega2 S.omega3 S.omega4",
+    "K1 K2 D1 D2 S1 S2 S3 S4",
+    "K1 K2 D1 D2 S1 S2 S3 S5",
+    "W1.FL W1.dyn W1.D S1 S2 S3 S4 S5 S.omega1",
+    "B1 K1 D1 W1.FL W3.FL W4.FL W1.FS W2.FS W3.FS W4.FS W1.Fx W2.Fx W3.Fx W4.Fx W2.dyn W2.D S2 S3 S4 S5 S.omega1 S.omega2 S.omega3 S.omega4",
+    "B1 B2 B3 D.psidot K1 K2 D1 D2 W1.FL W2.FL W1.FS W2.FS W3.FS W1.Fx W2.Fx W3.Fx W1.Fy W2.Fy W3.Fy W3.dyn W3.D S3 S4 S5 S.omega1 S.omega2 S.omega3",
+    "B1 B2 B3 D.psidot K1 K2 D1 D2 W1.FL W2.FL W1.FS W2.FS W4.FS W1.Fx W2.Fx W4.Fx W1.Fy W2.Fy W4.Fy W4.dyn W4.D S3 S4 S5 S.omega1 S.omega2 S.omega4",
 };
 
 const char *const fdi_romo_table_unknowns[6] = {
-    "vx vy psidot ax ay FL2 omega2 domega2",
-    "vx vy psidot ax ay FL3 omega3 domega3",
-    "vx vy psidot ax ay FL4 omega4 domega4",
-    "vx vy psidot dvx ax ay FL1 FL2 FL3 FL4 FS1 FS2 FS3 FS4 Fx1 Fx2 Fx3 Fx4 omega1 omega2 omega3 omega4 domega1 domega2 domega3 domega4",
-    "vx vy psidot dvx dvy ax ay FL1 FL2 FL3 FL4 FS1 FS2 FS3 FS4 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega1 omega2 omega3 omega4 domega3 domega4 dpsidot",
-    "vx vy psidot dvx dvy ax ay FL1 FL2 FL3 FL4 FS1 FS2 FS3 FS4 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega1 omega2 omega3 omega4 domega1 domega2 dpsidot",
+    "vx vy psidot dvx dvy ax ay",
+    "vx vy psidot dvx dvy ax ay",
+    "vx vy psidot ax ay FL1 omega1 domega1",
+    "vx vy psidot dvx ax ay FL1 FL2 FL3 FL4 FS1 FS2 FS3 FS4 Fx1 Fx2 Fx3 Fx4 omega1 omega2 omega3 omega4 domega2",
+    "vx vy psidot dvx dvy ax ay FL1 FL2 FL3 FS1 FS2 FS3 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega1 omega2 omega3 domega3 dpsidot",
+    "vx vy psidot dvx dvy ax ay FL1 FL2 FL4 FS1 FS2 FS4 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega1 omega2 omega4 domega4 dpsidot",
 };
 
 const fdi_table_t fdi_romo_table = {

@@ -4,7 +4,9 @@
  * One fdi_diag_t owns, per test of the table, a generator (fdi_gen), an evaluator (fdi_eval) and a warm-up
  * counter, and runs the isolation (fdi_iso) after every step. Per step k, for each test i:
  *   usable  = validity & finite(inputs)                      (stale, invalid or NaN/Inf signals drop out)
- *   if kind == NONE or (usable & input_mask_i) != input_mask_i:  status_i = NOT_EVALUABLE, re-arm warm-up
+ *   if kind == NONE or (usable & input_mask_i) != input_mask_i
+ *      or the frame is outside the generator's operating domain (fdi_gen_in_domain, e.g. a tyre-law
+ *      residual near standstill):  status_i = NOT_EVALUABLE, re-arm warm-up
  *   else if first usable step since then: reset the generator at the current inputs, restart the evaluator
  *        and count warmup_steps steps with status NOT_EVALUABLE (the filters settle), then
  *   status_i = fdi_eval(r_i)  (OK or ALARM); a non-finite residual is rejected (NOT_EVALUABLE, re-arm)

@@ -20,11 +20,18 @@
  * Note r3, r4 scale with w^2: they lose sensitivity when driving straight (w -> 0).
  *
  * Cost per step: r1, r2 4 filters (~70 flops); r3, r4 8 filters (~140 flops); observer ~12 flops.
- * Memory: fdi_gen_t 4 + 8 filters * 12 + 8 = 108 bytes; fdi_gen_param_t 32 bytes (shared by all tests).
+ * Generated generators (kinds FDI_GEN_GENERATED_<n>): synthesised by fdi_analysis.residuals from the
+ * selected MSO sets and emitted into fw/generated/fdi_romo_generators.c, which defines the two functions
+ * below (a switch on the slot); they use up to FDI_GEN_MAX_FILTERS filters of the instance and the shared
+ * filter coefficients of fdi_gen_param_t; model parameters (including d_x, d_y) are compiled in from the
+ * model file, so fdi_gen_param_t.d_x/d_y only apply to the hand-written kinematic kinds.
+ *
+ * Memory: fdi_gen_t 4 + 16 filters * 12 + 8 = 204 bytes; fdi_gen_param_t 32 bytes (shared by all tests).
  */
 #ifndef FDI_GEN_H
 #define FDI_GEN_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "fdi_obs.h"
@@ -33,7 +40,7 @@
 #include "fdi_svf.h"
 #include "fdi_table.h"
 
-#define FDI_GEN_MAX_FILTERS 8U
+#define FDI_GEN_MAX_FILTERS 16U
 
 typedef struct
 {
@@ -77,5 +84,22 @@ fdi_status_t fdi_gen_step(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi
 
 /* Signals (FDI_SIGM_*) read by a kind; 0 for FDI_GEN_NONE and unknown kinds. Cannot fail. */
 uint32_t fdi_gen_inputs(fdi_gen_kind_t kind);
+
+/*
+ * Operating domain: true when the residual of `kind` is meaningful at the frame `in` (e.g. a tyre-law
+ * residual only above a minimum speed, derived from the model's slip regularisation by the generator
+ * synthesis). Hand-written kinds are always in their domain. false for a NULL frame or a non-finite domain
+ * signal. Outside the domain the diagnoser reports the test "not evaluable" and restarts it on re-entry.
+ * Cannot fail.
+ */
+bool fdi_gen_in_domain(fdi_gen_kind_t kind, const fdi_inputs_t *in);
+
+/* Implemented by the generated generator file. Arguments non-NULL and inputs checked (as fdi_gen_run_checked). */
+fdi_status_t fdi_gen_generated_step(uint32_t slot, fdi_gen_t *self, const fdi_gen_param_t *par,
+                                    const fdi_inputs_t *in, bool reset, float *r);
+/* Signals read by generated slot `slot`; 0 for a slot without a generator. Cannot fail. */
+uint32_t fdi_gen_generated_inputs(uint32_t slot);
+/* Operating domain of generated slot `slot` (true for a slot without a condition); `in` non-NULL. */
+bool fdi_gen_generated_in_domain(uint32_t slot, const fdi_inputs_t *in);
 
 #endif /* FDI_GEN_H */

@@ -25,6 +25,12 @@
  *    generator of tests[i].kind reads (it may contain more).
  *  - Residual evaluation: alarm when r^2 > gate^2 * variance (|r| > gate * sigma); variance is the
  *    fault-free residual variance of the generator at the configured filters, in (units of r)^2.
+ *  - kinds FDI_GEN_GENERATED_<n> run the generated generator of slot n-1 (fw/generated/, written by the
+ *    exporter with the table); a kind whose generator is not linked (no inputs) fails the check. The
+ *    generated file also carries each generator's operating domain (fdi_gen_in_domain(), e.g. a minimum
+ *    speed for tyre-law residuals); the variance is calibrated inside that domain only, and outside it the
+ *    diagnoser reports the test "not evaluable". The domain is code, not table data: the table format is
+ *    unchanged.
  *  - kind FDI_GEN_NONE marks a selected test without an on-board generator yet: it is always reported
  *    "not evaluable" and therefore neither accuses nor exonerates any fault.
  *
@@ -37,7 +43,7 @@
 
 #include "fdi_status.h"
 
-#define FDI_TABLE_FORMAT_VERSION 1U /* bump on any change of these types; checked by fdi_table_check() */
+#define FDI_TABLE_FORMAT_VERSION 2U /* bump on any change of these types; checked by fdi_table_check() */
 #define FDI_TABLE_MAX_FAULTS 32U    /* fault bitmasks are uint32_t */
 #define FDI_TABLE_MAX_TESTS 32U     /* test bitmasks are uint32_t */
 
@@ -50,10 +56,28 @@ typedef enum
     FDI_GEN_KIN_ARR3 = 3,     /* MSO3 {K1,K2,D1,D2,S1..S4}, eq. 8-10, no vy_m, [m/s^2 * rad^2/s^2] */
     FDI_GEN_KIN_ARR4 = 4,     /* MSO4 {K1,K2,D1,D2,S1,S2,S3,S5}, no vx_m, [m/s^2 * rad^2/s^2] */
     FDI_GEN_KIN_X_OBS = 5,    /* MSO1 by an observer on vx' = ax_m + vy w: r = y - xh, [m/s] */
-    FDI_GEN_KIN_Y_OBS = 6     /* MSO2 by an observer on vy' = ay_m - vx w: r = y - xh, [m/s] */
+    FDI_GEN_KIN_Y_OBS = 6,    /* MSO2 by an observer on vy' = ay_m - vx w: r = y - xh, [m/s] */
+    /* Generated generators (fw/generated/fdi_romo_generators.c, slot = kind - FDI_GEN_GENERATED_1). */
+    FDI_GEN_GENERATED_1 = 7,
+    FDI_GEN_GENERATED_2 = 8,
+    FDI_GEN_GENERATED_3 = 9,
+    FDI_GEN_GENERATED_4 = 10,
+    FDI_GEN_GENERATED_5 = 11,
+    FDI_GEN_GENERATED_6 = 12,
+    FDI_GEN_GENERATED_7 = 13,
+    FDI_GEN_GENERATED_8 = 14,
+    FDI_GEN_GENERATED_9 = 15,
+    FDI_GEN_GENERATED_10 = 16,
+    FDI_GEN_GENERATED_11 = 17,
+    FDI_GEN_GENERATED_12 = 18,
+    FDI_GEN_GENERATED_13 = 19,
+    FDI_GEN_GENERATED_14 = 20,
+    FDI_GEN_GENERATED_15 = 21,
+    FDI_GEN_GENERATED_16 = 22
 } fdi_gen_kind_t;
 
-#define FDI_GEN_KIND_COUNT 7U
+#define FDI_GEN_KIND_COUNT 23U
+#define FDI_GEN_GENERATED_MAX 16U /* slots for generated generators */
 
 /* One selected MSO set = one test. */
 typedef struct

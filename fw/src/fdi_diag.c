@@ -176,7 +176,8 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_inputs_t *inputs, uint32_
             const fdi_test_desc_t *d = &self->table->tests[i];
             const uint32_t bit = (uint32_t)1U << i;
             bool test_alarm = false;
-            if ((d->kind == FDI_GEN_NONE) || ((usable & d->input_mask) != d->input_mask))
+            if ((d->kind == FDI_GEN_NONE) || ((usable & d->input_mask) != d->input_mask) ||
+                !fdi_gen_in_domain(d->kind, inputs))
             {
                 self->rearm |= bit;
                 self->residual[i] = 0.0f;

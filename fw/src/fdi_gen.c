@@ -37,6 +37,29 @@ fdi_status_t fdi_gen_param_init(fdi_gen_param_t *par, const fdi_gen_config_t *cf
     return st;
 }
 
+/* Slot of a generated kind, FDI_GEN_GENERATED_MAX for any other kind. */
+static uint32_t generated_slot(fdi_gen_kind_t kind)
+{
+    const uint32_t k = (uint32_t)kind;
+    const uint32_t first = (uint32_t)FDI_GEN_GENERATED_1;
+    uint32_t slot = FDI_GEN_GENERATED_MAX;
+    if (k >= first)
+    {
+        const uint32_t d = k - first;
+        if (d < FDI_GEN_GENERATED_MAX)
+        {
+            slot = d;
+        }
+    }
+    return slot;
+}
+
+static uint32_t generated_slot_inputs(fdi_gen_kind_t kind)
+{
+    const uint32_t slot = generated_slot(kind);
+    return (slot < FDI_GEN_GENERATED_MAX) ? fdi_gen_generated_inputs(slot) : 0U;
+}
+
 uint32_t fdi_gen_inputs(fdi_gen_kind_t kind)
 {
     uint32_t m;
@@ -57,11 +80,24 @@ uint32_t fdi_gen_inputs(fdi_gen_kind_t kind)
         m = FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VY_M;
         break;
     case FDI_GEN_NONE:
-    default:
         m = 0U;
+        break;
+    default:
+        m = generated_slot_inputs(kind);
         break;
     }
     return m;
+}
+
+bool fdi_gen_in_domain(fdi_gen_kind_t kind, const fdi_inputs_t *in)
+{
+    bool ok = false;
+    if (in != NULL)
+    {
+        const uint32_t slot = generated_slot(kind);
+        ok = (slot < FDI_GEN_GENERATED_MAX) ? fdi_gen_generated_in_domain(slot, in) : true;
+    }
+    return ok;
 }
 
 fdi_status_t fdi_gen_init(fdi_gen_t *self, fdi_gen_kind_t kind)
@@ -109,9 +145,14 @@ fdi_status_t fdi_gen_run_checked(fdi_gen_t *self, const fdi_gen_param_t *par, co
         st = fdi_arr_kin_y_obs(self, par, in, reset, r);
         break;
     case FDI_GEN_NONE:
-    default:
         st = FDI_BAD_ARG;
         break;
+    default:
+    {
+        const uint32_t slot = generated_slot(self->kind);
+        st = (slot < FDI_GEN_GENERATED_MAX) ? fdi_gen_generated_step(slot, self, par, in, reset, r) : FDI_BAD_ARG;
+        break;
+    }
     }
     return st;
 }

@@ -35,7 +35,7 @@ static bool test_ok(const fdi_test_desc_t *d, uint32_t fault_universe)
     if (ok)
     {
         const uint32_t need = fdi_gen_inputs(d->kind);
-        ok = ((d->input_mask & need) == need);
+        ok = ((d->input_mask & need) == need) && ((d->kind == FDI_GEN_NONE) || (need != 0U));
     }
     return ok;
 }

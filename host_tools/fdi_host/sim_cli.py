@@ -17,8 +17,9 @@ from tqdm import tqdm
 from fdi_host import canlog, fig6
 from fdi_host.dbc import RomoDatabase
 from fdi_host.faults import FaultSpecError, ground_truth, parse_fault
+from fdi_host.plant import Plant
 from fdi_host.scenario import ScenarioError, available, load_scenario
-from fdi_host.vehicle_sim import SimConfig, default_plant, simulate
+from fdi_host.vehicle_sim import SimConfig, SimResult, default_plant, simulate
 
 EPILOG = """\
 examples:
@@ -28,6 +29,7 @@ examples:
   fdi-sim --scenario straight --no-scenario-faults --no-noise --out clean.blf
   fdi-sim --list
   fdi-sim fig6 --out-dir out/fig6        (the paper's Fig. 6, see fdi-sim fig6 --help)
+  fdi-sim live --scenario fig6 --fault f4@5s:0.5 --interface udp_multicast    (real time on a bus)
 
 fault syntax: fID@ONSET:MAGNITUDE[:ramp=T][:end=T][:for=T][:intermittent=PERIOD[/DUTY]]
   magnitude in the fault's unit (Table I): m/s^2, rad/s, m/s, rad, N m, N. Faults given here are added to
@@ -62,10 +64,33 @@ def build_parser() -> argparse.ArgumentParser:
     return ap
 
 
+def write_truth(result: SimResult, plant: Plant, duration: float, start_time: float, noise: bool,
+                path: Path) -> Path:
+    """Ground truth of a drive (fault specs, per fault: equations, unit, active intervals) as JSON."""
+    info = {
+        v.name: {
+            "unit": v.unit,
+            "desc": v.desc,
+            "equations": [e.id for e in plant.model.equations if v.name in e.faults],
+        }
+        for v in plant.model.faults
+    }
+    gt = ground_truth(result.faults, result.t, info)
+    gt |= {"scenario": result.scenario.name, "seed": result.seed, "duration": duration, "start_time": start_time,
+           "noise": noise}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(gt, indent=2) + "\n", encoding="utf-8")
+    return path
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args_list = list(sys.argv[1:] if argv is None else argv)
     if args_list and args_list[0] == "fig6":
         return fig6.main(args_list[1:])
+    if args_list and args_list[0] == "live":
+        from fdi_host import live_sim
+
+        return live_sim.main(args_list[1:])
     ap = build_parser()
     args = ap.parse_args(args_list)
     if args.list:
@@ -103,19 +128,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     truth_path = args.truth or (args.out[0].with_suffix(".truth.json") if args.out else None)
     if truth_path is not None:
-        info = {
-            v.name: {
-                "unit": v.unit,
-                "desc": v.desc,
-                "equations": [e.id for e in plant.model.equations if v.name in e.faults],
-            }
-            for v in plant.model.faults
-        }
-        gt = ground_truth(result.faults, result.t, info)
-        gt |= {"scenario": sc.name, "seed": result.seed, "duration": duration, "start_time": args.start_time,
-               "noise": not args.no_noise}
-        truth_path.parent.mkdir(parents=True, exist_ok=True)
-        truth_path.write_text(json.dumps(gt, indent=2) + "\n", encoding="utf-8")
+        write_truth(result, plant, duration, args.start_time, not args.no_noise, truth_path)
         print(f"wrote {truth_path}")
     if args.npz:
         args.npz.parent.mkdir(parents=True, exist_ok=True)

@@ -82,3 +82,23 @@ def test_select_subcommand_writes_selections_and_figures(tmp_path: Path) -> None
         assert sel[f"optimal {method}"]["optimality"] == "count and cost proven"
     for png in ("fault_matrix.png", "selected_faults.png"):
         assert (out / png).read_bytes()[:4] == b"\x89PNG"
+
+
+def test_select_realizable_keeps_only_tests_with_a_generator(models_dir: Path, tmp_path: Path,
+                                                             capsys: pytest.CaptureFixture[str]) -> None:
+    from fdi_analysis.model_loader import load_model
+    from fdi_analysis.residuals.realizability import why_not_realizable
+    from fdi_analysis.residuals.solvability import Solver
+
+    out = tmp_path / "r"
+    args = ["select", str(models_dir / "romo_grouped.toml"), "--realizable", "--no-progress", "-o", str(out),
+            "--time-limit", "20"]
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    assert "realizable: " in text and "need open-loop integration" in text
+    model = load_model(models_dir / "romo_grouped.toml")
+    solver = Solver(model)
+    data = json.loads((out / "selection.json").read_text())
+    for sel in data["selections"].values():
+        for row in sel["msos"]:
+            assert why_not_realizable(model, solver, row["equations"]) is None

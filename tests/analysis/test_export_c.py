@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from fdi_analysis.cli_export import generate
-from fdi_analysis.export_c import KNOWN_GENERATORS, Thresholds, render, write
+from fdi_analysis.cli_export import generate_all
+from fdi_analysis.export_c import Thresholds, render, write
 from fdi_analysis.fault_matrix import Candidate
 from fdi_analysis.model_loader import load_model
 
@@ -30,24 +30,32 @@ int main(void) {
 """
 
 
+GENERATORS = "fdi_romo_generators"
+
+
 @pytest.fixture(scope="module")
-def generated(repo: Path) -> tuple[str, str]:
+def generated_files(repo: Path) -> dict[str, str]:
     import os
 
     cwd = os.getcwd()
     os.chdir(repo)
     try:
-        return generate(MODEL, THRESHOLDS, OUT, NAME, workers=2, progress=False)
+        return generate_all(MODEL, THRESHOLDS, OUT, NAME, workers=2, progress=False)
     finally:
         os.chdir(cwd)
 
 
-def test_committed_table_is_up_to_date(repo: Path, generated: tuple[str, str]) -> None:
-    header, source = generated
-    h, c = repo / OUT / f"{NAME}.h", repo / OUT / f"{NAME}.c"
-    assert h.is_file() and c.is_file(), "fw/generated is missing: run scripts/generate.sh"
-    assert h.read_text() == header, "fw/generated/fdi_romo_table.h is stale: run scripts/generate.sh"
-    assert c.read_text() == source, "fw/generated/fdi_romo_table.c is stale: run scripts/generate.sh"
+@pytest.fixture(scope="module")
+def generated(generated_files: dict[str, str]) -> tuple[str, str]:
+    return generated_files[f"{NAME}.h"], generated_files[f"{NAME}.c"]
+
+
+def test_committed_table_is_up_to_date(repo: Path, generated_files: dict[str, str]) -> None:
+    assert set(generated_files) == {f"{NAME}.h", f"{NAME}.c", f"{GENERATORS}.h", f"{GENERATORS}.c"}
+    for fname, text in generated_files.items():
+        path = repo / OUT / fname
+        assert path.is_file(), f"fw/generated/{fname} is missing: run scripts/generate.sh"
+        assert path.read_text() == text, f"fw/generated/{fname} is stale: run scripts/generate.sh"
 
 
 def compile_and_check(repo: Path, folder: Path) -> str:
@@ -58,27 +66,29 @@ def compile_and_check(repo: Path, folder: Path) -> str:
     main.write_text(CHECK_MAIN)
     exe = folder / "check"
     flags = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wdouble-promotion", "-Werror"]
-    subprocess.run([cc, *flags, f"-I{repo / 'fw/include'}", f"-I{folder}", str(main), str(folder / f"{NAME}.c"),
-                    *sorted(str(p) for p in (repo / "fw/src").glob("*.c")), "-lm", "-o", str(exe)], check=True)
+    gens = folder / f"{GENERATORS}.c"
+    if not gens.is_file():
+        gens = repo / OUT / f"{GENERATORS}.c"  # the table alone links against the committed generators
+    subprocess.run([cc, *flags, f"-I{repo / 'fw/include'}", f"-I{folder}", f"-I{gens.parent}", str(main),
+                    str(folder / f"{NAME}.c"), str(gens), *sorted(str(p) for p in (repo / "fw/src").glob("*.c")),
+                    "-lm", "-o", str(exe)], check=True)
     res = subprocess.run([str(exe)], capture_output=True, text=True)
     assert res.returncode == 0, f"fdi_table_check rejected the table: {res.stdout}"
     return res.stdout
 
 
 def test_generated_table_compiles_and_passes_the_firmware_check(
-    repo: Path, generated: tuple[str, str], tmp_path: Path
+    repo: Path, generated: tuple[str, str], generated_files: dict[str, str], tmp_path: Path
 ) -> None:
-    write(tmp_path, NAME, *generated)
+    for fname, text in generated_files.items():
+        (tmp_path / fname).write_text(text)
     status, n_tests, n_faults = compile_and_check(repo, tmp_path).split()
     assert status == "0" and int(n_faults) == 25 and 1 <= int(n_tests) <= 32
-    # every test whose MSO is one of the hand-written kinematic generators is exported with it, the others
-    # as FDI_GEN_NONE (generated generators come with the residual generation)
+    # every selected test runs its generated generator, slots in test order (fw/generated/fdi_romo_generators.c)
     kinds = re.findall(r"^    \{\d+U, (FDI_GEN_\w+),", generated[1], flags=re.M)
-    eq_block = generated[1].split(f"{NAME}_equations")[1].split("};")[0]
-    eq_sets = [frozenset(q.split()) for q in re.findall(r'"([^"]*)"', eq_block)]
-    assert len(kinds) == len(eq_sets) == int(n_tests)
-    for kind, eqs in zip(kinds, eq_sets, strict=True):
-        assert kind == KNOWN_GENERATORS.get(eqs, "FDI_GEN_NONE")
+    assert kinds == [f"FDI_GEN_GENERATED_{k + 1}" for k in range(int(n_tests))]
+    gens_c = generated_files[f"{GENERATORS}.c"]
+    assert len(re.findall(r"^static fdi_status_t gen_\d+\(", gens_c, flags=re.M)) == int(n_tests)
 
 
 def test_render_is_deterministic_and_rejects_bad_selections(repo: Path, tmp_path: Path) -> None:

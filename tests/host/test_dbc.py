@@ -37,7 +37,7 @@ def test_required_messages_and_cycle_times(db: RomoDatabase) -> None:
     ct = {m: db.cycle_time_ms(m) for m in (*SIMULATED_MESSAGES, "FDI_Diagnosis")}
     assert 5 <= ct["IMU_Motion"] <= 10
     assert all(5 <= ct[f"WheelRobot{i}"] <= 10 for i in (1, 2, 3, 4))
-    assert ct["BrakeByWire"] == 20 and ct["FDI_Diagnosis"] == 100
+    assert ct["BrakeByWire"] == 20 and ct["FDI_Diagnosis"] == 10  # one frame per diagnosis step
     diag = db.message("FDI_Diagnosis")
     assert diag.get_signal_by_name("FDI_CandidateFaults").length == 25
 

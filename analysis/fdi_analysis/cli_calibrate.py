@@ -1,0 +1,150 @@
+"""`fdi-analyze calibrate MODEL`: residual noise levels from fault-free simulated drives -> thresholds file."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+EXAMPLE = ("example: fdi-analyze calibrate analysis/models/romo_grouped.toml "
+           "--thresholds analysis/models/romo_thresholds.toml --scenarios cornering slalom straight")
+
+# All five scenarios of host_tools/scenarios; near standstill (low_speed) the tyre-law residuals are outside
+# their operating domain (Generator.min_speed) and not evaluated, as on the vehicle.
+DEFAULT_SCENARIOS = ("cornering", "fig6", "low_speed", "slalom", "straight")
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser(
+        "calibrate",
+        help="calibrate the variances of the generated residual generators on fault-free simulated drives",
+        description="Synthesise the residual generators of the selection (as export-c does), run them on "
+        "fault-free simulated drives of several scenarios and noise seeds, and write each residual's sigma (no "
+        "raw alarm of "
+        "the gate or the CUSUM in any drive inside each test's operating domain after the warm-up, times a "
+        "25 %% margin) into the [generated] table of the thresholds file (the rest of the file is kept).",
+        epilog=EXAMPLE,
+    )
+    p.add_argument("model", type=Path, help="model file (.toml)")
+    p.add_argument("--thresholds", type=Path, required=True, help="thresholds file to update")
+    p.add_argument("--scenarios", nargs="+", default=list(DEFAULT_SCENARIOS), help="fault-free drives")
+    p.add_argument("--duration", type=float, default=30.0, help="seconds per drive (default 30)")
+    p.add_argument("--seeds", type=int, nargs="*", default=[1001, 1002],
+                   help="noise seeds of further drives per scenario besides the scenario's own (default 1001 1002)")
+    p.add_argument("--warmup", type=float, default=3.0, help="seconds ignored at the start (default 3)")
+    p.add_argument("--workers", type=int, default=2, help="worker processes of the MSO search (default 2)")
+    p.set_defaults(func=run)
+
+    q = sub.add_parser(
+        "fault-sizes",
+        help="sweep step faults on a simulated drive: the stated fault size of every (fault, test) pair",
+        description="For every fault and every test of its signature, the smallest size on a 1-1.5-2-3-5-7 "
+        "grid at which the test raises a raw alarm (gate or CUSUM, inside its operating domain) within 3 s of "
+        "the step; the stated size is the next grid value. Written below a marker line of the fault-size "
+        "file as [per_test.<fault>] tables (the hand-written [sizes] and [limits] above are kept); pairs that "
+        "need more than the fault's [limits] value are written as 'not detectable by this test in practice'.",
+        epilog="example: fdi-analyze fault-sizes analysis/models/romo_grouped.toml --thresholds "
+        "analysis/models/romo_thresholds.toml --sizes host_tools/scenarios/fault_sizes.toml",
+    )
+    q.add_argument("model", type=Path, help="model file (.toml)")
+    q.add_argument("--thresholds", type=Path, required=True, help="thresholds file (gate, sigmas)")
+    q.add_argument("--sizes", type=Path, required=True, help="fault-size file with [sizes] and [limits]")
+    q.add_argument("--scenario", default="cornering", help="fault-free scenario the faults are injected in")
+    q.add_argument("--seeds", type=int, nargs="+", default=[777, 778],
+                   help="noise seeds of the sweep drives; an alarm counts when every seed alarms (default 777 778)")
+    q.add_argument("--faults", nargs="*", help="only these faults (default: all of the selection)")
+    q.add_argument("--workers", type=int, default=2, help="worker processes of the MSO search (default 2)")
+    q.set_defaults(func=run_sizes)
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from fdi_analysis.export_c import Thresholds
+    from fdi_analysis.model_loader import load_model
+    from fdi_analysis.residuals.calibrate import MARGIN, calibrate
+    from fdi_analysis.residuals.evaluate import FilterDesign, evaluable_segments
+    from fdi_analysis.residuals.export import selected_generators
+    from fdi_analysis.residuals.simulate import drive
+    from fdi_analysis.residuals.thresholds_file import write_generated
+
+    th = Thresholds.load(args.thresholds)
+    design = FilterDesign(th.design[0], th.design[1], th.design[2])
+    model = load_model(args.model)
+    print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
+    _, gens = selected_generators(model, workers=args.workers)
+    drives: list[list[np.ndarray]] = [[] for _ in gens]
+    skip = round(args.warmup / design.dt)
+    runs = [(sc, seed) for sc in args.scenarios for seed in [None, *args.seeds]]
+    for i, (sc, seed) in enumerate(runs):
+        print(f"[{i + 1}/{len(runs)}] fault-free drive {sc} seed {seed or 'of the scenario'} "
+              f"({args.duration:g} s) ...", file=sys.stderr)
+        _, sig = drive(sc, duration=args.duration, dt=design.dt, seed=seed)
+        for k, g in enumerate(gens):
+            drives[k].extend(r for _, r in evaluable_segments(g, sig, skip, design))
+    rows = []
+    for g, d in zip(gens, drives, strict=True):
+        c = calibrate(d, th.gate)
+        rows.append((" ".join(g.equations), c.variance, f"{g.name}: sigma {c.sigma:.3g} (fault-free RMS {c.rms:.3g}, "
+                                                         f"peak {c.peak:.3g})"))
+        print(f"{g.name}: sigma {c.sigma:.3g}  fault-free RMS {c.rms:.3g}  peak {c.peak:.3g}")
+    provenance = (f"fdi-analyze calibrate {args.model.as_posix()} --scenarios {' '.join(args.scenarios)} "
+                  f"--seeds {' '.join(map(str, args.seeds))} (and each scenario's own seed) --duration "
+                  f"{args.duration:g} --warmup {args.warmup:g}: in each test's operating domain, no raw "
+                  f"alarm (|r| > gate sigma or CUSUM k = 1.5, h = 150) in any fault-free drive, sigma times {MARGIN}")
+    write_generated(args.thresholds, rows, provenance)
+    print(f"wrote {args.thresholds}")
+    return 0
+
+
+def run_sizes(args: argparse.Namespace) -> int:
+    import tomllib
+
+    import numpy as np
+
+    from fdi_analysis.export_c import Thresholds
+    from fdi_analysis.model_loader import load_model
+    from fdi_analysis.residuals import sweep
+    from fdi_analysis.residuals.export import selected_generators
+    from fdi_analysis.residuals.simulate import drive
+
+    th = Thresholds.load(args.thresholds)
+    doc = tomllib.loads(args.sizes.read_text(encoding="utf-8"))
+    base, limits = doc.get("sizes", {}), doc.get("limits", {})
+    model = load_model(args.model)
+    print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
+    _, gens = selected_generators(model, workers=args.workers)
+    sigmas = [float(np.sqrt(th.generated[" ".join(g.equations)])) for g in gens]
+    faults = sorted({f for g in gens for f in g.faults}, key=lambda f: int(f[1:]))
+    if args.faults:
+        faults = [f for f in faults if f in set(args.faults)]
+    missing = [f for f in faults if f not in base or f not in limits]
+    if missing:
+        print(f"error: {args.sizes} lacks [sizes] or [limits] for {', '.join(missing)}", file=sys.stderr)
+        return 2
+
+    def run_drive(w: sweep.Windowed, seed: int) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        return drive(args.scenario, faults=list(w.faults), duration=w.duration, seed=seed)
+
+    pairs = []
+    for f in faults:
+        pairs.extend(sweep.sweep_fault(gens, sigmas, th.gate, f, float(base[f]) / 10.0, float(limits[f]),
+                                       run_drive, args.seeds, log=lambda s: print(s, file=sys.stderr)))
+    provenance = (f"fdi-analyze fault-sizes {args.model.as_posix()} --scenario {args.scenario} "
+                  f"--seeds {' '.join(map(str, args.seeds))}\nsteps of {sweep.ON:g} s (then {sweep.OFF:g} s off) "
+                  f"from {sweep.START:g} s, "
+                  "sizes from [sizes] / 10 up to [limits] on the grid 1, 1.5, 2, 3, 5, 7 x 10^k;\n"
+                  "raw alarm of the diagnoser with every seed (|r| > gate sigma or CUSUM k = 1.5, h = 150 from the "
+                  "onset, sigma of "
+                  f"{args.thresholds.as_posix()}) inside the test's operating domain;\n"
+                  "stated size = the grid value above the first alarm (tests/analysis/test_residual_faults.py "
+                  "checks every pair at it with another noise seed).")
+    section = sweep.render_section(pairs, provenance, [g.name for g in gens])
+    if args.faults:
+        print(section)
+        return 0
+    args.sizes.write_text(sweep.write_section(args.sizes.read_text(encoding="utf-8"), section), encoding="utf-8")
+    nd = sum(p.stated is None for p in pairs)
+    print(f"wrote {args.sizes}: {len(pairs) - nd} pairs with a stated size, {nd} not detectable in practice")
+    return 0

@@ -1,0 +1,61 @@
+"""sympy expression -> MISRA-style C99 float expression (every binary operation parenthesised, float
+literals with an f suffix, integer powers as products, single-precision math functions)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import sympy
+
+_FUNCS = {sympy.sin: "sinf", sympy.cos: "cosf", sympy.tanh: "tanhf", sympy.Abs: "fabsf", sympy.exp: "expf",
+          sympy.tan: "tanf", sympy.atan: "atanf"}
+
+
+class CExprError(ValueError):
+    """An expression with a construct the C emitter does not support."""
+
+
+def c_float(x: float) -> str:
+    s = repr(float(x))
+    if "e" not in s and "." not in s and "inf" not in s and "nan" not in s:
+        s += ".0"
+    return s + "f"
+
+
+def to_c(e: sympy.Basic, name: Callable[[sympy.Symbol], str]) -> str:
+    """C text of `e`; `name` maps each symbol to its C identifier or expression."""
+    if isinstance(e, sympy.Symbol):
+        return str(name(e))
+    if e.is_Number:
+        return c_float(float(e))
+    if isinstance(e, sympy.Add):
+        args = sorted(e.args, key=sympy.default_sort_key)
+        return "(" + " + ".join(to_c(a, name) for a in args) + ")"
+    if isinstance(e, sympy.Mul):
+        args = sorted(e.args, key=sympy.default_sort_key)
+        if args[0] == -1:
+            return "(-" + to_c(sympy.Mul(*args[1:]), name) + ")"
+        return "(" + " * ".join(to_c(a, name) for a in args) + ")"
+    if isinstance(e, sympy.Pow):
+        base, ex = e.args
+        b = to_c(base, name)
+        if ex.is_Integer and 1 <= int(ex) <= 4:
+            return "(" + " * ".join([b] * int(ex)) + ")"
+        if ex.is_Integer and -4 <= int(ex) <= -1:
+            return "(1.0f / (" + " * ".join([b] * -int(ex)) + "))"
+        if ex == sympy.Rational(1, 2):
+            return f"sqrtf({b})"
+        if ex == sympy.Rational(-1, 2):
+            return f"(1.0f / sqrtf({b}))"
+        return f"powf({b}, {to_c(ex, name)})"
+    if isinstance(e, (sympy.Max, sympy.Min)):
+        fn = "fmaxf" if isinstance(e, sympy.Max) else "fminf"
+        args = [to_c(a, name) for a in sorted(e.args, key=sympy.default_sort_key)]
+        out: str = args[-1]
+        for a in reversed(args[:-1]):
+            out = f"{fn}({a}, {out})"
+        return out
+    for f, cname in _FUNCS.items():
+        if isinstance(e, f):
+            return f"{cname}({to_c(e.args[0], name)})"
+    raise CExprError(f"no C translation for {type(e).__name__}: {sympy.sstr(e)[:80]}")

@@ -1,0 +1,104 @@
+"""Run a generator offline on sampled signals (logs, simulations): the same filter bank and residual as the
+emitted C (fdi_svf recurrences of fw/include/fdi_svf.h, reset at the first sample, residual 0 there), in
+double precision. C and Python agree to float rounding (tests/analysis/test_residual_c_vs_python.py)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import sympy
+from numpy.typing import NDArray
+
+from fdi_analysis.residuals.generator import DOMAIN_SIGNAL, Generator
+from fdi_analysis.residuals.signals import Node
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class FilterDesign:
+    """The generator design point of the table (fdi_table_design_t)."""
+
+    dt: float = 0.01
+    cutoff_hz: float = 1.0
+    zeta: float = 0.7071
+
+    def coefficients(self) -> tuple[float, float, float]:
+        w = (2.0 / self.dt) * math.tan(math.pi * self.cutoff_hz * self.dt)
+        h = 0.5 * self.dt
+        wh = w * h
+        two_zwh = 2.0 * self.zeta * wh
+        d = 1.0 + two_zwh + wh * wh
+        return h, (1.0 - two_zwh) / d, (w * wh) / d
+
+
+def svf(u: FloatArray, design: FilterDesign) -> tuple[FloatArray, FloatArray]:
+    """fdi_svf over a whole signal, reset at u[0]: (y, dy)."""
+    h, c1, c2 = design.coefficients()
+    n = u.size
+    y = np.empty(n)
+    dy = np.empty(n)
+    x1, x2, up = float(u[0]), 0.0, float(u[0])
+    y[0], dy[0] = x1, 0.0
+    for k in range(1, n):
+        uk = float(u[k])
+        e_sum = (up - x1) + (uk - x1)
+        x2n = c1 * x2 + c2 * (e_sum - h * x2)
+        x1 = x1 + h * (x2 + x2n)
+        x2 = x2n
+        up = uk
+        y[k], dy[k] = x1, x2
+    return y, dy
+
+
+def node_signals(g: Generator, signals: Mapping[str, FloatArray], design: FilterDesign) -> dict[Node, FloatArray]:
+    values: dict[Node, FloatArray] = {}
+    for k in g.knowns:
+        values[Node(k, 0, 0)] = np.asarray(signals[k], dtype=float)
+    for f in g.filters:
+        y, dy = svf(values[f], design)
+        values[Node(f.signal, f.level + 1, f.order)] = y
+        values[Node(f.signal, f.level + 1, f.order + 1)] = dy
+    return values
+
+
+def residual(g: Generator, signals: Mapping[str, FloatArray], design: FilterDesign | None = None) -> FloatArray:
+    """The residual at every sample of `signals` (measured signal name -> samples at design.dt)."""
+    design = design or FilterDesign()
+    values = node_signals(g, signals, design)
+    syms = [n.symbol for n in g.nodes]
+    fn = sympy.lambdify(syms, g.expr, modules="numpy")
+    r = np.asarray(fn(*[values[n] for n in g.nodes]), dtype=float)
+    if r.ndim == 0:
+        r = np.full(len(next(iter(values.values()))), float(r))
+    r = r.copy()
+    r[0] = 0.0
+    return r
+
+
+def in_domain(g: Generator, signals: Mapping[str, FloatArray]) -> NDArray[np.bool_]:
+    """Per sample: inside the generator's operating domain (fdi_gen_in_domain of the emitted C)."""
+    n = len(next(iter(signals.values())))
+    if g.min_speed <= 0.0:
+        return np.ones(n, dtype=bool)
+    v = np.asarray(signals[DOMAIN_SIGNAL], dtype=float).astype(np.float32)
+    return np.asarray(np.abs(v) >= np.float32(g.min_speed), dtype=bool)
+
+
+def evaluable_segments(g: Generator, signals: Mapping[str, FloatArray], warmup: int,
+                       design: FilterDesign | None = None) -> list[tuple[int, FloatArray]]:
+    """The residual where the diagnoser evaluates it: per maximal run of in-domain samples the generator is
+    restarted at the run's first sample (as fdi_diag re-arms it) and the first `warmup` samples are dropped.
+    Returns (index of the first evaluated sample, residual from there to the end of the run)."""
+    ok = in_domain(g, signals)
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], ok.astype(np.int8), [0]))))
+    out: list[tuple[int, FloatArray]] = []
+    for a, b in zip(edges[0::2].tolist(), edges[1::2].tolist(), strict=True):
+        if b - a <= warmup:
+            continue
+        r = residual(g, {k: np.asarray(v)[a:b] for k, v in signals.items()}, design)
+        out.append((a + warmup, r[warmup:]))
+    return out

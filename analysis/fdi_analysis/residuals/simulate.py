@@ -1,0 +1,25 @@
+"""Simulated measured signals for the generators (fdi_host simulator, resampled to the design dt)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+
+
+def drive(scenario: str, faults: Sequence[tuple[str, float, float] | tuple[str, float, float, float]] = (),
+          duration: float | None = None, dt: float = 0.01,
+          seed: int | None = None) -> tuple[FloatArray, dict[str, FloatArray]]:
+    """(t, measured signals at dt) of a scenario with step faults (fault, onset s, size[, end s]); no faults
+    given means fault-free (the scenario's own faults are not used)."""
+    from fdi_host.faults import FaultSpec
+    from fdi_host.scenario import load_scenario
+    from fdi_host.vehicle_sim import simulate
+
+    specs = [FaultSpec(f[0], f[1], f[2], end=f[3] if len(f) > 3 else None) for f in faults]
+    res = simulate(load_scenario(scenario), specs, duration=duration, seed=seed)
+    step = max(1, round(dt / res.config.dt))
+    return res.t[::step].copy(), {k: np.asarray(v[::step], dtype=float) for k, v in res.measured.items()}

@@ -1,0 +1,183 @@
+"""Stated fault sizes per (fault, test): a sweep of step faults on simulated drives.
+
+For each fault, step faults of increasing size (a grid 1, 1.5, 2, 3, 5, 7 x 10^k from `lo` up to the fault's
+physical limit) are injected one after the other into one fault-free scenario (each ON seconds, then OFF seconds
+to settle), and every test of the fault's signature is evaluated as the diagnoser does it: only inside its
+operating domain, restarted with a warm-up on entry (`evaluate.evaluable_segments`), raw alarm = |r| > gate
+sigma or the two-sided CUSUM (fdi_eval.h) started at the fault onset (CUSUM history before the onset ignored,
+which can only make detection later). A size counts as detected when it alarms in the drives of every one of
+several noise seeds. The smallest detected grid size is the detection limit of the pair (when the smallest
+swept size is already detected, smaller sizes are swept until one is not); the stated size is the next grid
+value above it (a margin of 1.3-1.7 against other noise realisations). A pair without alarm up to the limit,
+or whose stated size exceeds the limit, is "not detectable by this test in practice".
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fdi_analysis.residuals.calibrate import first_alarm
+from fdi_analysis.residuals.evaluate import FilterDesign, evaluable_segments
+from fdi_analysis.residuals.generator import Generator
+
+FloatArray = NDArray[np.float64]
+
+MANTISSAS = (1.0, 1.5, 2.0, 3.0, 5.0, 7.0)
+START = 6.0  # s, first fault onset (cornering is in steady state from 5 s)
+ON, OFF = 3.0, 2.0  # s per window
+CHUNK = 6  # windows per simulated drive
+MAX_DOWN = 3  # chunks swept below the smallest size at most (3 decades)
+
+
+@dataclass(frozen=True)
+class Windowed:
+    """One drive with faults (fault, onset, size, end)."""
+
+    faults: tuple[tuple[str, float, float, float], ...]
+    duration: float
+
+
+def grid(lo: float, hi: float) -> list[float]:
+    """Grid values v with lo <= v <= hi."""
+    out: list[float] = []
+    k = math.floor(math.log10(lo)) - 1
+    while True:
+        for m in MANTISSAS:
+            v = float(f"{m * 10.0**k:.6g}")
+            if v > hi * (1 + 1e-9):
+                return out
+            if v >= lo * (1 - 1e-9):
+                out.append(v)
+        k += 1
+
+
+def next_grid(v: float) -> float:
+    """The grid value above v."""
+    return grid(v * 1.0001, v * 10.0)[0]
+
+
+def windows(fault: str, sizes: Sequence[float]) -> Windowed:
+    plan = tuple((fault, START + i * (ON + OFF), s, START + i * (ON + OFF) + ON) for i, s in enumerate(sizes))
+    return Windowed(plan, START + len(sizes) * (ON + OFF))
+
+
+def alarms_in_windows(g: Generator, sigma: float, gate: float, signals: dict[str, FloatArray],
+                      onsets: Sequence[float], dt: float, warmup: int,
+                      design: FilterDesign | None = None) -> list[bool]:
+    """Per window starting at each onset: a raw alarm of `g` within ON seconds (inside its domain)."""
+    segs = evaluable_segments(g, signals, warmup, design)
+    out = []
+    for t0 in onsets:
+        i0, i1 = round(t0 / dt), round((t0 + ON) / dt)
+        hit = False
+        for a, r in segs:
+            b = a + len(r)
+            lo, hi = max(i0, a), min(i1, b)
+            if hi > lo and first_alarm(r[lo - a:hi - a], sigma, gate) >= 0:
+                hit = True
+                break
+        out.append(hit)
+    return out
+
+
+@dataclass(frozen=True)
+class PairLimit:
+    fault: str
+    test: str
+    detected_at: float | None  # smallest grid size with an alarm (None: none up to the limit)
+    stated: float | None  # next grid value above it (None when not detectable in practice)
+    limit: float
+
+
+Drive = Callable[[Windowed, int], tuple[FloatArray, dict[str, FloatArray]]]
+
+
+def _hits(tests: Sequence[tuple[Generator, float]], gate: float, fault: str, sizes: Sequence[float], drive: Drive,
+          seeds: Sequence[int], dt: float, warmup: int) -> dict[str, list[bool]]:
+    """Per test: per size, an alarm in the drives of every seed."""
+    w = windows(fault, sizes)
+    out = {g.name: [True] * len(sizes) for g, _ in tests}
+    for seed in seeds:
+        _, sig = drive(w, seed)
+        for g, s in tests:
+            hits = alarms_in_windows(g, s, gate, sig, [f[1] for f in w.faults], dt, warmup)
+            out[g.name] = [a and b for a, b in zip(out[g.name], hits, strict=True)]
+    return out
+
+
+def sweep_fault(gens: Sequence[Generator], sigmas: Sequence[float], gate: float, fault: str, lo: float,
+                limit: float, drive: Drive, seeds: Sequence[int], dt: float = 0.01, warmup: int = 300,
+                log: Callable[[str], None] | None = None) -> list[PairLimit]:
+    """Detection limits of `fault` for every test whose signature holds it (alarm with every noise seed)."""
+    tests = [(g, s) for g, s in zip(gens, sigmas, strict=True) if fault in g.faults]
+    levels = grid(lo, limit)
+    first: dict[str, float] = {}
+    for c in range(0, len(levels), CHUNK):
+        todo = [(g, s) for g, s in tests if g.name not in first]
+        if not todo:
+            break
+        chunk = levels[c:c + CHUNK]
+        hits = _hits(todo, gate, fault, chunk, drive, seeds, dt, warmup)
+        for g, _ in todo:
+            for size, hit in zip(chunk, hits[g.name], strict=True):
+                if hit:
+                    first[g.name] = size
+                    break
+        if log is not None:
+            log(f"{fault}: sizes {chunk[0]:g}..{chunk[-1]:g}: " +
+                ", ".join(f"{g.name} {first.get(g.name, '-')}" for g, _ in tests))
+    low = [(g, s) for g, s in tests if first.get(g.name) == levels[0]]
+    rounds = 0
+    while low and rounds < MAX_DOWN:  # alarm already at the smallest size: go down until a size without alarm
+        rounds += 1
+        below = grid(levels[0] / 20.0, levels[0] * 0.999)[-CHUNK:]
+        hits = _hits(low, gate, fault, below, drive, seeds, dt, warmup)
+        for g, _ in low:
+            k = len(below)
+            while k > 0 and hits[g.name][k - 1]:
+                k -= 1
+            if k < len(below):
+                first[g.name] = below[k]
+        levels = below
+        low = [(g, s) for g, s in low if first[g.name] == levels[0]]
+        if log is not None:
+            log(f"{fault}: sizes {below[0]:g}..{below[-1]:g}: " +
+                ", ".join(f"{g.name} {first.get(g.name, '-')}" for g, _ in tests))
+    out = []
+    for g, _ in tests:
+        d = first.get(g.name)
+        st = next_grid(d) if d is not None else None
+        out.append(PairLimit(fault, g.name, d, st if st is not None and st <= limit else None, limit))
+    return out
+
+
+MARKER = "# ---- per-test stated sizes: written by `fdi-analyze fault-sizes`, do not edit below ----"
+NOT_DETECTABLE = "not detectable by this test in practice"
+
+
+def render_section(pairs: Sequence[PairLimit], provenance: str, test_order: Sequence[str]) -> str:
+    """The generated [per_test.<fault>] tables: test = stated size, or a string saying why there is none."""
+    lines = [MARKER, *(f"# {p}" for p in provenance.splitlines())]
+    faults = sorted({p.fault for p in pairs}, key=lambda f: int(f[1:]))
+    for f in faults:
+        lines.append(f"[per_test.{f}]")
+        for p in sorted((p for p in pairs if p.fault == f), key=lambda p: test_order.index(p.test)):
+            if p.stated is not None:
+                lines.append(f"{p.test} = {p.stated:g}  # first alarm at {p.detected_at:g}")
+            elif p.detected_at is not None:
+                lines.append(f'{p.test} = "{NOT_DETECTABLE}: first alarm at {p.detected_at:g}, stated size '
+                             f'{next_grid(p.detected_at):g} above the limit {p.limit:g}"')
+            else:
+                lines.append(f'{p.test} = "{NOT_DETECTABLE}: no alarm up to the limit {p.limit:g}"')
+    return "\n".join(lines) + "\n"
+
+
+def write_section(text: str, section: str) -> str:
+    """`text` with everything from MARKER on replaced by `section` (the hand-written part kept)."""
+    head = text.split(MARKER)[0].rstrip("\n") + "\n\n"
+    return head + section

@@ -1,0 +1,218 @@
+/*
+ * fdi_ecu.h - the ECU process core: CAN frames in, fixed-step diagnosis, diagnosis frames out.
+ *
+ * Portable (no OS call, no heap, no clock): the front end (fw/ecu/linux/fdi_ecu_socketcan.c, the Python
+ * bindings host_tools/fdi_host/ecu_lib.py, or an ECU's CAN driver) hands every received frame with its
+ * receive time to fdi_ecu_rx() and calls fdi_ecu_poll() after every frame and on a timer.
+ *
+ * Reception (fdi_ecu_rx), per frame, in this order; the first failing check rejects the frame, which is
+ * counted by reason (fdi_ecu_reason_t) and ignored (its values are not used, the message's timeout keeps
+ * running, so a sender that only produces bad frames goes silent after its timeout):
+ *   FDI_Diagnosis (ID 512, our own frame echoed by the bus) -> OWN_FRAME; any other ID that is not one of the
+ *   8 input messages of dbc/romo.dbc (including extended/RTR/error flags in can_id) -> UNKNOWN_ID;
+ *   dlc != 8 -> BAD_DLC; E2E profile 11 CRC (CRC8 SAE-J1850 over the data ID low, high byte and bytes 1..7)
+ *   -> BAD_CRC; alive counter 15 or any raw signal outside its DBC range -> OUT_OF_RANGE; counter equal to
+ *   the last accepted one -> REPEATED_COUNTER; counter advanced by more than max_delta_counter (mod 15) ->
+ *   COUNTER_JUMP (the receiver re-synchronises on it); sender status nibble other than OK/DEGRADED ->
+ *   SENSOR_STATUS (the message's signals go invalid at once). Accepted frames are decoded with the
+ *   cantools-generated code (fw/generated/can/romo_can.c), converted to SI (bar -> Pa) and update
+ *   fdi_inputs_t; the message is then fresh.
+ *
+ * Scheduling: fixed steps of dt = table design dt (10 ms for the ROMO tables), step k at time
+ * T_k = t_first + k * dt where t_first is the time of the first rx/poll call. Step k runs at the first
+ * rx or poll call with a time t > T_k (fdi_ecu_rx runs it before taking its frame), so it sees exactly the
+ * frames received at t <= T_k, also when several frames carry the same time stamp: the result does not
+ * depend on when or how often poll is called. A front end polls after every frame and on a timer just
+ * after each step boundary (T_k + a few us) to bound the latency on a silent bus. At each step:
+ *   validity = union of the signal masks of the fresh messages, where a message is fresh when it was accepted
+ *   at least once, its last frame had sender status OK/DEGRADED and T_k - t_last <= its timeout (default 3x
+ *   the DBC cycle time); then fdi_diag_step(inputs, validity), so tests reading a silent or invalid signal
+ *   become "not evaluable" (and warm up again when it returns).
+ * If more than max_catchup_steps steps are due in one call (the host stalled or the clock jumped), the
+ * oldest are skipped (counted) and the schedule restarts at the current time.
+ * Time is uint32_t microseconds and may wrap (every ~71.6 min): all comparisons use modular differences,
+ * so calls must come at least every 35 minutes. A time going backwards is treated as "no time passed".
+ *
+ * Output (fdi_ecu_poll): the FDI_Diagnosis frame (ID 512, 8 bytes, E2E profile 11 with its own counter) of
+ * the newest step run since the previous poll, n_frames 0 or 1:
+ *   FDI_Status     FAULT_ISOLATED (3) detected and isolated to one class; FAULT_DETECTED (2) detected, not
+ *                  isolated (several classes or no single fault explains the alarms); else INPUT_INVALID (4)
+ *                  when a test with a generator lacks valid inputs; else INIT (0) when a test with a
+ *                  generator is still warming up or the table has no test with a generator; else NO_FAULT (1)
+ *   FDI_AlarmMask  alarm mask of tests 0..11;  FDI_CandidateFaults  candidate faults f1..f25 (bits 0..24)
+ *   FDI_IsolationClass  0 = nothing detected; 1..25 = isolated: the lowest fault number of the class
+ *                  (4 for {f4}, 10 for {f10, f14}); 255 = detected but not isolated.
+ *
+ * Cost: rx ~ 100 operations (CRC 8 table look-ups, unpack, range checks); a step = fdi_diag_step + 8
+ * timeout compares + frame packing. Memory: sizeof(fdi_ecu_t) = sizeof(fdi_diag_t) + ~900 bytes (counters
+ * 432, last result 232, inputs and message state); 4,976 bytes on x86-64 with FDI_DIAG_MAX_TESTS 16;
+ * caller-owned. Flash: 256 bytes of CRC table; libfdi_ecu.a ~9 kB text on Cortex-M4F with the frame code.
+ */
+#ifndef FDI_ECU_H
+#define FDI_ECU_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "fdi_diag.h"
+#include "fdi_signals.h"
+#include "fdi_status.h"
+#include "fdi_table.h"
+
+#define FDI_ECU_N_MSGS 8U          /* input messages of dbc/romo.dbc, in fdi_ecu_msg_t order */
+#define FDI_ECU_DIAG_ID 512U       /* FDI_Diagnosis */
+#define FDI_ECU_FRAME_LEN 8U       /* every ROMO frame is a classic CAN frame of 8 bytes */
+#define FDI_ECU_DEFAULT_D_X 1.0f   /* velocity sensor position of the ROMO model (romo_quasistatic.toml) */
+#define FDI_ECU_DEFAULT_D_Y 0.3f
+
+/* Input messages (index into per-message arrays). */
+typedef enum
+{
+    FDI_ECU_MSG_MOTION_DEMAND = 0, /* ID 80, no diagnosis signal (checked and counted only) */
+    FDI_ECU_MSG_IMU = 1,           /* ID 128: ax_m, ay_m, psidot_m */
+    FDI_ECU_MSG_VEL = 2,           /* ID 136: vx_m, vy_m */
+    FDI_ECU_MSG_WR1 = 3,           /* ID 256..259: delta_i, iTM_i, omega_i */
+    FDI_ECU_MSG_WR2 = 4,
+    FDI_ECU_MSG_WR3 = 5,
+    FDI_ECU_MSG_WR4 = 6,
+    FDI_ECU_MSG_BBW = 7            /* ID 272: P_f_m, P_r_m */
+} fdi_ecu_msg_t;
+
+/* Reasons a received frame is rejected (index into the reject counters). */
+typedef enum
+{
+    FDI_ECU_REJ_UNKNOWN_ID = 0,
+    FDI_ECU_REJ_OWN_FRAME = 1,
+    FDI_ECU_REJ_BAD_DLC = 2,
+    FDI_ECU_REJ_BAD_CRC = 3,
+    FDI_ECU_REJ_OUT_OF_RANGE = 4,
+    FDI_ECU_REJ_REPEATED_COUNTER = 5,
+    FDI_ECU_REJ_COUNTER_JUMP = 6,
+    FDI_ECU_REJ_SENSOR_STATUS = 7
+} fdi_ecu_reason_t;
+
+#define FDI_ECU_N_REASONS 8U
+
+/* FDI_Status values of the diagnosis frame (VAL_ table DiagStatus of the DBC). */
+typedef enum
+{
+    FDI_ECU_STATUS_INIT = 0,
+    FDI_ECU_STATUS_NO_FAULT = 1,
+    FDI_ECU_STATUS_FAULT_DETECTED = 2,
+    FDI_ECU_STATUS_FAULT_ISOLATED = 3,
+    FDI_ECU_STATUS_INPUT_INVALID = 4
+} fdi_ecu_status_t;
+
+#define FDI_ECU_CLASS_NOT_ISOLATED 255U
+
+typedef struct
+{
+    fdi_diag_config_t diag;               /* table (its design dt is the step), vehicle, CUSUM, hysteresis */
+    uint32_t timeout_us[FDI_ECU_N_MSGS];  /* silence after which a message's signals go invalid, > 0 */
+    uint8_t max_delta_counter;            /* 1..14: largest accepted alive-counter advance (1 = no loss) */
+    uint16_t max_catchup_steps;           /* >= 1: steps run at most per call before resynchronising */
+} fdi_ecu_config_t;
+
+typedef struct
+{
+    uint32_t can_id;
+    uint32_t received;  /* frames with this ID */
+    uint32_t accepted;  /* frames whose values were used */
+    uint32_t timeouts;  /* fresh -> silent transitions */
+    uint32_t rejected[FDI_ECU_N_REASONS];
+} fdi_ecu_msg_counters_t;
+
+typedef struct
+{
+    uint32_t frames;                       /* every fdi_ecu_rx call with a valid instance */
+    uint32_t rejected[FDI_ECU_N_REASONS];  /* all IDs (UNKNOWN_ID and OWN_FRAME only here) */
+    uint32_t steps;                        /* diagnosis steps run */
+    uint32_t steps_skipped;                /* steps dropped by the catch-up limit */
+    uint32_t tx_frames;                    /* diagnosis frames handed out by fdi_ecu_poll */
+    fdi_ecu_msg_counters_t msg[FDI_ECU_N_MSGS];
+} fdi_ecu_counters_t;
+
+typedef struct
+{
+    uint32_t step;            /* number of steps run (0: none yet) */
+    uint32_t t_us;            /* time T_k of the last step */
+    uint32_t validity;        /* FDI_SIGM_* mask used by the last step */
+    uint8_t status;           /* fdi_ecu_status_t */
+    uint8_t iso_class;        /* FDI_IsolationClass as sent */
+    fdi_diag_result_t diag;   /* alarm / evaluable masks, residuals, ratios, candidates, classes */
+} fdi_ecu_result_t;
+
+typedef struct
+{
+    uint32_t can_id;
+    uint8_t dlc;
+    uint8_t data[FDI_ECU_FRAME_LEN];
+} fdi_ecu_frame_t;
+
+typedef struct
+{
+    uint8_t n_frames; /* 0 or 1 */
+    fdi_ecu_frame_t frame[1];
+} fdi_ecu_tx_t;
+
+typedef struct
+{
+    uint32_t t_last_us;
+    uint8_t last_counter;
+    bool seen;      /* a frame passed the E2E check at least once (counter reference valid) */
+    bool have;      /* values accepted at least once */
+    bool status_ok; /* last E2E-valid frame had sender status OK/DEGRADED */
+    bool fresh;     /* state at the last step (for timeout counting) */
+} fdi_ecu_msg_state_t;
+
+typedef struct
+{
+    fdi_diag_t diag;
+    const fdi_table_t *table;
+    fdi_inputs_t in;
+    fdi_ecu_msg_state_t msg[FDI_ECU_N_MSGS];
+    uint32_t timeout_us[FDI_ECU_N_MSGS];
+    uint32_t gen_mask;  /* tests with a generator */
+    uint32_t step_us;
+    uint32_t next_us;   /* time of the next step */
+    uint32_t last_us;   /* latest time seen */
+    uint16_t max_catchup;
+    uint8_t max_delta;
+    uint8_t tx_counter;
+    bool started;
+    bool tx_pending;
+    fdi_ecu_counters_t cnt;
+    fdi_ecu_result_t res;
+} fdi_ecu_t; /* opaque by convention */
+
+/* Defaults for `table`: diagnoser settings as validated in tests/fw/test_fdi_diag.c (CUSUM k 1.5, h 150,
+   set 10, clear 100, warm-up = settling time + 20 steps, exoneration), ROMO sensor position, timeouts 3x the
+   DBC cycle times, max_delta_counter 1, max_catchup_steps 100. BAD_ARG on NULL; BAD_TABLE when the
+   table's design point has no finite settling time. */
+fdi_status_t fdi_ecu_config_default(fdi_ecu_config_t *cfg, const fdi_table_t *table);
+
+/* BAD_ARG: NULL, zero timeout, max_delta_counter outside 1..14, max_catchup_steps 0, table dt not a whole
+   number of microseconds in 100 us..10 s; others from fdi_diag_init(). A failed init leaves an instance
+   that every other call refuses with BAD_ARG. */
+fdi_status_t fdi_ecu_init(fdi_ecu_t *self, const fdi_ecu_config_t *cfg);
+
+/* One received frame at t_us. Rejections are counted, not errors (FDI_OK). BAD_ARG: self NULL or not
+   initialised, or data NULL with dlc > 0 (nothing counted). */
+fdi_status_t fdi_ecu_rx(fdi_ecu_t *self, uint32_t can_id, uint8_t dlc, const uint8_t *data, uint32_t t_us);
+
+/* Run the steps due by t_us; tx gets the diagnosis frame of the newest step if any ran since the last
+   poll. BAD_ARG on NULL / uninitialised (tx->n_frames set to 0 when tx is not NULL). */
+fdi_status_t fdi_ecu_poll(fdi_ecu_t *self, uint32_t t_us, fdi_ecu_tx_t *tx);
+
+/* Copies of the counters and of the last step's result. BAD_ARG on NULL / uninitialised. */
+fdi_status_t fdi_ecu_counters(const fdi_ecu_t *self, fdi_ecu_counters_t *out);
+fdi_status_t fdi_ecu_result(const fdi_ecu_t *self, fdi_ecu_result_t *out);
+
+/* Message index of an input CAN ID, or -1. Cannot fail. */
+int32_t fdi_ecu_msg_index(uint32_t can_id);
+
+/* CRC8 SAE-J1850 (poly 0x1D, init 0xFF, xor-out 0xFF) of the profile 11 header: data ID low byte, high
+   byte, then data[1..len-1]. len >= 2 and data non-NULL, else 0. Cannot fail. */
+uint8_t fdi_ecu_e2e_crc(uint16_t data_id, const uint8_t *data, uint8_t len);
+
+#endif /* FDI_ECU_H */

@@ -1,0 +1,212 @@
+"""Scoring a diagnosis run against the ground truth of the drive.
+
+Input: the sequence of diagnosis results (one `DiagRecord` per diagnosis step, from the bus or from an
+offline replay), the fault windows of the drive (``<log>.truth.json`` written by ``fdi-sim``) and the
+structural isolability classes of the diagnosis table (`TableClasses`). Per injected fault:
+
+* detected / detection delay: the first step with any test in alarm in ``[start, end + grace)`` (the grace
+  period stops where the next fault starts);
+* isolation delay: the first step whose candidate set equals the fault's structural isolability class, and
+  the fraction of the alarmed steps with that candidate set;
+* isolation: the candidate set that holds for most of the alarmed steps in that window ("verdict"); it is
+  correct iff it equals the fault's structural isolability class (the set of faults not isolable from it,
+  a single fault if it is uniquely isolable). A non-empty verdict that does not contain the fault is a wrong
+  isolation; an empty one means the alarm pattern fits no single fault ("unexplained");
+* a fault that no test of the table is sensitive to is "not detectable" by the table (expected: no alarm;
+  alarms in its window are reported, its isolation is not judged).
+
+False alarms: alarm episodes (steps with a non-empty alarm mask, consecutive steps merged) that start
+outside every ``[start, end + grace)`` window; their count and the total time in false alarm.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from itertools import pairwise
+from typing import Any
+
+from fdi_host.faults import FAULT_IDS
+
+
+@dataclass(frozen=True)
+class DiagRecord:
+    """One diagnosis step: its time on the drive's clock [s] and the content of the FDI_Diagnosis frame."""
+
+    t: float
+    alarm_mask: int
+    candidates: int
+    iso_class: int = 0
+    status: int = 0
+
+
+@dataclass(frozen=True)
+class FaultWindow:
+    fault: str  # "f4"
+    start: float
+    end: float  # the drive's duration if the fault stays
+
+    @property
+    def bit(self) -> int:
+        return 1 << FAULT_IDS.index(self.fault)
+
+
+@dataclass(frozen=True)
+class TableClasses:
+    """Structural facts of a diagnosis table, per fault j (bit j = fault f(j+1))."""
+
+    signature: tuple[int, ...]  # tests sensitive to fault j (test bitmask); 0 = not detectable
+    iso_class: tuple[int, ...]  # faults with the same signature as fault j (fault bitmask)
+    test_names: tuple[str, ...] = ()
+
+    @staticmethod
+    def from_signatures(signature: Sequence[int], test_names: Sequence[str] = ()) -> TableClasses:
+        """Classes from the signatures: faults with equal (non-zero) signatures are not isolable."""
+        sig = tuple(int(s) for s in signature)
+        classes = []
+        for s in sig:
+            mask = 0
+            if s != 0:
+                for k, other in enumerate(sig):
+                    if other == s:
+                        mask |= 1 << k
+            classes.append(mask)
+        return TableClasses(sig, tuple(classes), tuple(test_names))
+
+    def detectable(self, fault: str) -> bool:
+        j = FAULT_IDS.index(fault)
+        return j < len(self.signature) and self.signature[j] != 0
+
+    def class_of(self, fault: str) -> int:
+        j = FAULT_IDS.index(fault)
+        return self.iso_class[j] if j < len(self.iso_class) else 0
+
+    def test_name(self, i: int) -> str:
+        return self.test_names[i] if i < len(self.test_names) else f"t{i}"
+
+
+def fault_names(mask: int) -> str:
+    """``0b1010`` -> ``"f2,f4"``; ``"-"`` for an empty set."""
+    names = [f for j, f in enumerate(FAULT_IDS) if mask >> j & 1]
+    return ",".join(names) if names else "-"
+
+
+def windows_from_truth(truth: Mapping[str, Any]) -> list[FaultWindow]:
+    """Fault windows of a ``truth.json`` (times relative to the drive's start, ``start_time`` removed)."""
+    t0 = float(truth.get("start_time", 0.0))
+    out = []
+    for f in truth.get("faults", []):
+        for iv in f.get("intervals", []):
+            out.append(FaultWindow(str(f["fault"]), float(iv["start"]) - t0, float(iv["end"]) - t0))
+    return sorted(out, key=lambda w: (w.start, w.fault))
+
+
+@dataclass
+class FaultScore:
+    fault: str
+    start: float
+    end: float
+    detectable: bool  # structurally, by this table
+    expected_class: str  # faults not isolable from it ("-" if not detectable)
+    detected: bool = False
+    detection_delay: float | None = None
+    isolation_delay: float | None = None  # first step whose candidates equal the expected class
+    isolated_fraction: float = 0.0  # of the alarmed steps in the window, those with the expected class
+    verdict: str = "-"  # majority candidate set while in alarm
+    isolation_correct: bool | None = None  # None: nothing to judge (not detected)
+    wrong_isolation: bool = False  # the verdict is not empty and does not contain the fault
+
+
+@dataclass
+class FalseAlarm:
+    start: float
+    end: float
+    tests: str  # alarmed tests (union over the episode)
+
+
+@dataclass
+class Score:
+    faults: list[FaultScore]
+    false_alarms: list[FalseAlarm] = field(default_factory=list)
+    steps: int = 0
+    duration: float = 0.0
+
+    @property
+    def false_alarm_time(self) -> float:
+        return sum(fa.end - fa.start for fa in self.false_alarms)
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "steps": self.steps,
+            "duration": self.duration,
+            "faults": [asdict(f) for f in self.faults],
+            "false_alarms": [asdict(f) for f in self.false_alarms],
+            "false_alarm_count": len(self.false_alarms),
+            "false_alarm_time": self.false_alarm_time,
+        }
+
+
+def _step_time(records: Sequence[DiagRecord]) -> float:
+    if len(records) < 2:
+        return 0.0
+    gaps = sorted(b.t - a.t for a, b in pairwise(records))
+    return gaps[len(gaps) // 2]
+
+
+def score_run(
+    records: Sequence[DiagRecord],
+    windows: Sequence[FaultWindow],
+    classes: TableClasses,
+    grace: float = 1.0,
+) -> Score:
+    """Score `records` (time ordered) against `windows`; `grace` [s] after a fault's end still counts."""
+    recs = sorted(records, key=lambda r: r.t)
+    dt = _step_time(recs)
+    out = Score([], [], len(recs), (recs[-1].t - recs[0].t + dt) if recs else 0.0)
+    for w in windows:
+        det = classes.detectable(w.fault)
+        fs = FaultScore(w.fault, w.start, w.end, det, fault_names(classes.class_of(w.fault)) if det else "-")
+        # The grace period ends where the next fault (starting after this one ended) begins.
+        until = min([w.end + grace, *(o.start for o in windows if o.start >= w.end)])
+        inside = [r for r in recs if w.start <= r.t < until]
+        alarmed = [r for r in inside if r.alarm_mask != 0]
+        if alarmed:
+            fs.detected = True
+            fs.detection_delay = alarmed[0].t - w.start
+            votes = Counter(r.candidates for r in alarmed)
+            verdict, _ = max(votes.items(), key=lambda kv: (kv[1], kv[0] != 0))
+            fs.verdict = fault_names(verdict)
+            if det:
+                hits = [r for r in alarmed if r.candidates == classes.class_of(w.fault)]
+                fs.isolated_fraction = len(hits) / len(alarmed)
+                fs.isolation_delay = hits[0].t - w.start if hits else None
+            if det:  # a fault no test can see has no isolation to judge (alarms then come from elsewhere)
+                fs.isolation_correct = verdict == classes.class_of(w.fault)
+                fs.wrong_isolation = verdict != 0 and not verdict & w.bit
+        out.faults.append(fs)
+
+    def covered(t: float) -> bool:
+        return any(w.start <= t < w.end + grace for w in windows)
+
+    episode: FalseAlarm | None = None
+    tests = 0
+    for r in recs:
+        if r.alarm_mask != 0:
+            if episode is None and not covered(r.t):
+                episode, tests = FalseAlarm(r.t, r.t + dt, ""), 0
+            if episode is not None:
+                episode.end = r.t + dt
+                tests |= r.alarm_mask
+        elif episode is not None:
+            episode.tests = _test_list(tests, classes)
+            out.false_alarms.append(episode)
+            episode = None
+    if episode is not None:
+        episode.tests = _test_list(tests, classes)
+        out.false_alarms.append(episode)
+    return out
+
+
+def _test_list(mask: int, classes: TableClasses) -> str:
+    return ",".join(classes.test_name(i) for i in range(32) if mask >> i & 1) or "-"

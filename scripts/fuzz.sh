@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# libFuzzer harnesses of the C library (tests/fuzz/), built with clang -fsanitize=fuzzer,address,undefined.
+#   bash scripts/fuzz.sh [seconds]        run each harness for `seconds` (default 30); CI uses 20
+#   FUZZ_RUNS=10000000 bash scripts/fuzz.sh   run each harness for that many executions instead
+# Harnesses: fuzz_iso (table check + isolation), fuzz_diag (diagnoser step path), and fuzz_ecu (CAN frame
+# ingestion + step through fw/ecu) when the ECU core exists. The corpus persists in build/fuzz/corpus_<name>.
+# Prints the executions per harness; exits non-zero on any crash, invariant violation or sanitizer report
+# (the reproducer is left in build/fuzz/crash-*).
+set -euo pipefail
+top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$top"
+seconds="${1:-30}"
+out=build/fuzz
+mkdir -p "$out"
+cc="${FUZZ_CC:-clang}"
+flags=(-g -O2 -std=c99 -Wall -Wextra -Werror -fsanitize=fuzzer,address,undefined,float-divide-by-zero
+       -fno-sanitize-recover=all -fno-omit-frame-pointer -Ifw/include -Ifw/src -Ifw/generated -Itests/fw -Itests/fuzz)
+lib=(fw/src/*.c)
+for f in fw/generated/*.c; do [ -e "$f" ] && lib+=("$f"); done
+
+harnesses=(iso diag)
+build() { # name, extra sources...
+  local name="$1"; shift
+  "$cc" "${flags[@]}" "$@" "${lib[@]}" "tests/fuzz/fuzz_${name}.c" -lm -o "$out/fuzz_${name}"
+}
+pids=()
+build iso & pids+=($!)
+build diag & pids+=($!)
+if [ -f fw/ecu/src/fdi_ecu.c ] && [ -f tests/fuzz/fuzz_ecu.c ]; then
+  build ecu -Ifw/ecu/include -Ifw/generated/can fw/ecu/src/fdi_ecu.c fw/generated/can/*.c & pids+=($!)
+  harnesses+=(ecu)
+fi
+for p in "${pids[@]}"; do wait "$p"; done  # set -e: a failed build stops the script
+
+limit=(-max_total_time="$seconds")
+[ -n "${FUZZ_RUNS:-}" ] && limit=(-runs="$FUZZ_RUNS")
+status=0
+for h in "${harnesses[@]}"; do
+  mkdir -p "$out/corpus_$h"
+  log="$out/fuzz_$h.log"
+  if (cd "$out" && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+      "./fuzz_$h" "${limit[@]}" -max_len=4096 -timeout=10 -rss_limit_mb=1024 -print_final_stats=1 \
+      -artifact_prefix="./crash-$h-" "corpus_$h") >"$log" 2>&1; then
+    runs="$(grep -m1 'stat::number_of_executed_units' "$log" | awk '{print $2}')"
+    rate="$(grep -m1 'stat::average_exec_per_sec' "$log" | awk '{print $2}')"
+    echo "fuzz_$h: ${runs} executions (${rate}/s), 0 crashes, 0 sanitizer reports"
+  else
+    echo "fuzz_$h: FAILED, see $log:"; grep -E "ERROR|invariant|runtime error|SUMMARY|Test unit written" "$log" | head -20
+    status=1
+  fi
+done
+exit "$status"

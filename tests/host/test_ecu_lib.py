@@ -1,0 +1,228 @@
+"""The C ECU core through its Python bindings (fdi_host.ecu_lib), fed with the simulator's CAN frames.
+
+A drifting vx sensor (f4, ramp) on the kinematic table must be detected and isolated as f4 (and nothing else),
+the fault-free drive must give no detection at all; the diagnosis frames must decode with the DBC (cantools)
+into what the C result says; bad frames are counted by reason and do not change the diagnosis; a silent
+message makes the tests that read it "not evaluable".
+"""
+
+from __future__ import annotations
+
+import collections
+import itertools
+
+import pytest
+
+from fdi_host import e2e
+from fdi_host.canlog import Frame, build_frames
+from fdi_host.dbc import RomoDatabase
+from fdi_host.ecu_lib import DIAG_ID, REASONS, Ecu, EcuError, table_info
+from fdi_host.faults import FaultSpec
+from fdi_host.scenario import load_scenario
+from fdi_host.vehicle_sim import simulate
+
+DURATION = 13.0
+ONSET = 6.0
+
+
+def _frames(faults: list[FaultSpec]) -> list[Frame]:
+    res = simulate(load_scenario("fig6"), faults, duration=DURATION)
+    return build_frames(res)
+
+
+@pytest.fixture(scope="module")
+def clean_frames() -> list[Frame]:
+    return _frames([])
+
+
+@pytest.fixture(scope="module")
+def f4_frames() -> list[Frame]:
+    return _frames([FaultSpec("f4", ONSET, 2.0, shape="ramp", ramp=4.0)])
+
+
+def _run(ecu: Ecu, frames: list[Frame]) -> list[tuple[float, object, bytes]]:
+    """Replay frames; per diagnosis frame: time, the C result at that step, the frame bytes."""
+    out: list[tuple[float, object, bytes]] = []
+    for f in frames:
+        ecu.rx(f.frame_id, f.data, f.timestamp)
+        for fid, data in ecu.poll(f.timestamp):
+            assert fid == DIAG_ID
+            out.append((f.timestamp, ecu.result(), data))
+    return out
+
+
+def test_tables_are_exposed() -> None:
+    kin = table_info("kin")
+    assert kin.n_tests == 4 and kin.n_faults == 5 and all(kin.has_generator)
+    assert kin.dt == pytest.approx(0.01)
+    romo = table_info("romo")
+    assert romo.n_faults == 25 and romo.n_tests >= 1
+    assert romo.iso_class[9] == romo.iso_class[13]  # f10 / f14 share a class (M_TM + M_DB)
+    with pytest.raises(ValueError, match="unknown table"):
+        Ecu("nope")
+
+
+def test_fault_free_drive_gives_no_detection(clean_frames: list[Frame]) -> None:
+    ecu = Ecu("kin")
+    diag = _run(ecu, clean_frames)
+    steps = round(clean_frames[-1].timestamp / ecu.step_s)
+    assert abs(len(diag) - steps) <= 1  # one diagnosis frame per 10 ms step
+    assert not any(r.detected for _, r, _ in diag)  # type: ignore[attr-defined]
+    last = diag[-1][1]
+    assert last.status_name == "NO_FAULT" and last.evaluable_mask == 0b1111  # type: ignore[attr-defined]
+    c = ecu.counters()
+    assert c.rejected_total == 0
+    assert c.messages["IMU_Motion"].accepted == c.messages["IMU_Motion"].received > 2000
+    assert all(m.timeouts == 0 for m in c.messages.values())
+
+
+def test_vx_drift_is_isolated_as_f4(f4_frames: list[Frame], db: RomoDatabase) -> None:
+    ecu = Ecu("kin")
+    diag = _run(ecu, f4_frames)
+    detected = [(t, r) for t, r, _ in diag if r.detected]  # type: ignore[attr-defined]
+    assert detected, "f4 was not detected"
+    assert detected[0][0] > ONSET, "detection before the fault"
+    assert detected[0][0] - ONSET < 1.0
+    isolated = collections.Counter(tuple(r.candidate_labels()) for _, r in detected if r.isolated)
+    assert isolated[("f4",)] >= 100  # isolated as f4 for at least 1 s
+    assert set(isolated) == {("f4",)}, f"isolated as something else: {isolated}"
+    # every frame says what the C result says (decoded with cantools from the DBC)
+    for _, r, data in diag:
+        dec = db.decode(DIAG_ID, data)  # raises on a bad E2E CRC
+        assert dec.signals["FDI_Status"] == r.status  # type: ignore[attr-defined]
+        assert dec.signals["FDI_CandidateFaults"] == r.candidates  # type: ignore[attr-defined]
+        assert dec.signals["FDI_AlarmMask"] == r.alarm_mask  # type: ignore[attr-defined]
+    iso_frames = [db.decode(DIAG_ID, d) for _, r, d in diag if r.isolated]  # type: ignore[attr-defined]
+    assert {d.signals["FDI_IsolationClass"] for d in iso_frames} == {4}
+    counters = [e2e.counter_of(d) for _, _, d in diag]
+    assert all(b == e2e.next_counter(a) for a, b in itertools.pairwise(counters))
+
+
+def test_bad_frames_are_counted_and_ignored(clean_frames: list[Frame]) -> None:
+    """Every 7th IMU frame corrupted in one way or another: each counted by reason, no detection."""
+    kinds = ("crc", "dlc", "repeat", "unknown", "own", "status")
+    bad: list[Frame] = []
+    expected = collections.Counter[str]()
+    n = 0
+    prev_imu: Frame | None = None
+    for f in clean_frames:
+        if f.frame_id == 128 and f.timestamp > 4.0 and prev_imu is not None and n % 7 == 0:
+            kind = kinds[(n // 7) % len(kinds)]
+            if kind == "crc":
+                bad.append(Frame(f.timestamp, f.frame_id, bytes([f.data[0] ^ 0x5A]) + f.data[1:]))
+                expected["bad_crc"] += 1
+            elif kind == "dlc":
+                bad.append(Frame(f.timestamp, f.frame_id, f.data[:6]))
+                expected["bad_dlc"] += 1
+            elif kind == "repeat":
+                bad.append(prev_imu)  # a stale copy of the previous frame: repeated counter
+                bad.append(f)
+                expected["repeated_counter"] += 1
+            elif kind == "unknown":
+                bad.append(Frame(f.timestamp, 0x7FF, f.data))
+                bad.append(f)
+                expected["unknown_id"] += 1
+            elif kind == "own":
+                bad.append(Frame(f.timestamp, DIAG_ID, f.data))
+                bad.append(f)
+                expected["own_frame"] += 1
+            else:
+                raw = bytearray(f.data)
+                raw[1] = (raw[1] & 0x0F) | 0x20  # sender status LOCAL_FAULT
+                bad.append(Frame(f.timestamp, f.frame_id, e2e.protect(raw, 4224, raw[1] & 0x0F)))
+                expected["sensor_status"] += 1
+        else:
+            bad.append(f)
+        if f.frame_id == 128:
+            prev_imu = f
+            n += 1
+    ecu = Ecu("kin")
+    diag = _run(ecu, bad)
+    c = ecu.counters()
+    # a frame lost to a CRC or DLC error makes the next good frame's counter jump by 2: rejected as a jump
+    # (the receiver re-synchronises on it), unless max_delta_counter allows it
+    for reason in REASONS:
+        want = expected.get(reason, 0) + (expected["bad_crc"] + expected["bad_dlc"] if reason == "counter_jump" else 0)
+        assert c.rejected[reason] == want, reason
+    assert c.messages["IMU_Motion"].rejected == c.rejected | {"unknown_id": 0, "own_frame": 0}
+    assert not any(r.detected for _, r, _ in diag)  # type: ignore[attr-defined]
+
+
+def test_counter_gap_rejected_by_default_accepted_with_max_delta_2(clean_frames: list[Frame]) -> None:
+    dropped = [f for i, f in enumerate(clean_frames) if not (f.frame_id == 136 and i % 50 == 0 and f.timestamp > 4)]
+    n_drop = len(clean_frames) - len(dropped)
+    assert n_drop > 5
+    strict, loose = Ecu("kin"), Ecu("kin", max_delta_counter=2)
+    _run(strict, dropped)
+    _run(loose, dropped)
+    assert strict.counters().messages["VelocitySensor"].rejected["counter_jump"] == n_drop
+    assert loose.counters().rejected_total == 0
+
+
+def test_silent_message_makes_its_tests_not_evaluable(clean_frames: list[Frame]) -> None:
+    """VelocitySensor silent from 6 s to 8 s: after 3 cycles (30 ms) every kinematic test (they all read vx or
+    vy) is not evaluable, the frame says INPUT_INVALID; after it returns the tests warm up and come back."""
+    frames = [f for f in clean_frames if not (f.frame_id == 136 and 6.0 <= f.timestamp < 8.0)]
+    ecu = Ecu("kin")
+    diag = _run(ecu, frames)
+    by_ms = {r.t_us // 1000: r for _, r, _ in diag}  # type: ignore[attr-defined]
+    assert by_ms[5990].evaluable_mask == 0b1111
+    assert by_ms[6020].evaluable_mask == 0b1111  # last frame at 5.991 s: 29 ms old, inside the 30 ms timeout
+    assert by_ms[6030].evaluable_mask == 0  # 39 ms old
+    assert by_ms[6030].status_name == "INPUT_INVALID"
+    assert by_ms[6030].validity & 0b11000 == 0  # vx_m, vy_m invalid
+    assert by_ms[8000].evaluable_mask == 0  # back at 8.001 s, then a warm-up of 3.2 s
+    assert by_ms[12500].evaluable_mask == 0b1111
+    assert ecu.counters().messages["VelocitySensor"].timeouts == 1
+    assert not any(r.detected for _, r, _ in diag)  # type: ignore[attr-defined]
+
+
+def test_result_does_not_depend_on_the_poll_pattern(f4_frames: list[Frame]) -> None:
+    """Polling after every frame or only every 50 ms (timer only) gives the same step results."""
+    a, b = Ecu("kin"), Ecu("kin")
+    ra = {r.step: r for _, r, _ in _run(a, f4_frames)}  # type: ignore[attr-defined]
+    rb = {}
+    next_poll = 0.0
+    for f in f4_frames:
+        b.rx(f.frame_id, f.data, f.timestamp)
+        if f.timestamp >= next_poll:
+            b.poll(f.timestamp)
+            rb[b.result().step] = b.result()
+            next_poll += 0.05
+    common = sorted(set(ra) & set(rb))
+    assert len(common) > 200
+    for k in common:
+        assert ra[k] == rb[k]
+
+
+def test_bad_arguments() -> None:
+    with pytest.raises(TypeError, match="unknown Ecu option"):
+        Ecu("kin", cusum=3)
+    with pytest.raises(EcuError, match="BAD_ARG"):
+        Ecu("kin", warmup_steps=10)  # shorter than the settling time
+    with pytest.raises(EcuError, match="BAD_ARG"):
+        Ecu("kin", max_delta_counter=0)
+    with pytest.raises(ValueError, match="unknown message"):
+        Ecu("kin", timeout_s={"Nope": 0.1})
+    ecu = Ecu("kin")
+    ecu.rx(128, b"", 0.0)  # empty frame: bad dlc, counted
+    ecu.rx(128, bytes(64), 0.001)  # CAN FD sized: bad dlc
+    assert ecu.counters().rejected["bad_dlc"] == 2
+
+
+def test_process_in_c_equals_rx_poll_loop(f4_frames: list[Frame]) -> None:
+    """Ecu.process (one C call for the whole log) gives the frames and counters of the Python rx/poll loop,
+    including for bad frames (an over-long frame and an unknown ID in the middle)."""
+    frames = [(f.timestamp, f.frame_id, f.data) for f in f4_frames]
+    frames.insert(5000, (frames[5000][0], 128, bytes(12)))
+    frames.insert(6000, (frames[6000][0], 0x123, b"\x01\x02"))
+    a, b = Ecu("kin"), Ecu("kin")
+    batch = a.process(frames)
+    loop = []
+    for t, can_id, data in frames:
+        b.rx(can_id, data, t)
+        loop.extend((t, fid, payload) for fid, payload in b.poll(t))
+    assert batch == loop and len(batch) > 1000
+    assert a.counters() == b.counters()
+    assert a.counters().rejected["bad_dlc"] == 1 and a.counters().rejected["unknown_id"] == 1
+    assert a.result() == b.result()

@@ -1,0 +1,194 @@
+"""The monitor's scoring on synthetic frames: detection delay, wrong isolation, false alarms, lost/late frames."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from fdi_host import e2e
+from fdi_host.dbc import RomoDatabase
+from fdi_host.live_ecu import StepRecord
+from fdi_host.monitor import Monitor
+from fdi_host.score import DiagRecord, FaultWindow, TableClasses, fault_names, score_run, windows_from_truth
+from fdi_host.score_report import plot_diagnosis, plot_residuals, score_table, write_reports
+
+# Signatures of the kinematic table (fw/src/fdi_kin_table.c): tests 0..3 over f1..f5, all unique.
+KIN = TableClasses.from_signatures([0x0D, 0x0E, 0x0F, 0x07, 0x0B], ["r1", "r2", "r3", "r4"])
+F = {f"f{k}": 1 << (k - 1) for k in range(1, 26)}
+DT = 0.01
+
+
+def _truth(windows: list[tuple[str, float, float]], duration: float) -> dict[str, object]:
+    return {"start_time": 0.0, "duration": duration,
+            "faults": [{"fault": f, "intervals": [{"start": a, "end": b, "min": 1, "max": 1}]} for f, a, b in windows]}
+
+
+def _diag_frame(db: RomoDatabase, alarm: int, cand: int, counter: int) -> bytes:
+    return db.encode("FDI_Diagnosis", {"FDI_AlarmMask": alarm, "FDI_CandidateFaults": cand,
+                                       "FDI_IsolationClass": 0, "FDI_Status": 1}, counter)
+
+
+def _run_monitor(db: RomoDatabase, plan: list[tuple[float, float, int, int]], duration: float,
+                 drop_imu: set[int], late_imu: dict[int, float]) -> Monitor:
+    """IMU frames every 5 ms (some dropped / delayed) and a diagnosis frame every 10 ms following `plan`:
+    (from, to, alarm mask, candidates); the bus starts at wall time 1000 s."""
+    mon = Monitor(db, KIN)
+    t_wall0 = 1000.0
+    events: list[tuple[float, int, bytes]] = []
+    c = 0
+    for k in range(round(duration / 0.005)):
+        if k not in drop_imu:
+            data = db.encode("IMU_Motion", {"IMU_AccelX": 0.1}, c)
+            events.append((t_wall0 + k * 0.005 + late_imu.get(k, 0.0), 128, data))
+        c = e2e.next_counter(c)
+    c = 0
+    for k in range(round(duration / DT)):
+        t = k * DT
+        alarm, cand = 0, 0
+        for a, b, am, cm in plan:
+            if a <= t < b:
+                alarm, cand = am, cm
+        events.append((t_wall0 + t + 0.0007, 512, _diag_frame(db, alarm, cand, c)))
+        c = e2e.next_counter(c)
+    for t, fid, data in sorted(events, key=lambda e: e[0]):
+        mon.on_frame(fid, data, t)
+    return mon
+
+
+@pytest.fixture(scope="module")
+def scored(db: RomoDatabase) -> tuple[Monitor, dict[str, object]]:
+    plan = [
+        (1.0, 1.2, 0b0001, 0),  # false alarm, nothing injected
+        (3.25, 5.5, 0b0111, F["f4"]),  # f4 detected 0.25 s late, isolated correctly
+        (7.4, 7.9, 0b1101, F["f3"]),  # f1 detected 0.4 s late, isolated to f3: wrong
+        (9.0, 9.1, 0b1000, 0),  # second false alarm
+    ]
+    truth = _truth([("f4", 3.0, 5.0), ("f1", 7.0, 8.0), ("f6", 2.0, 2.5)], 10.0)
+    mon = _run_monitor(db, plan, 10.0, drop_imu={100, 101, 102}, late_imu={500: 0.004})
+    return mon, truth
+
+
+def test_detection_delay_and_isolation(scored: tuple[Monitor, dict[str, object]]) -> None:
+    mon, truth = scored
+    s = mon.score(truth, grace=1.0)
+    by = {f.fault: f for f in s.faults}
+    # Monitor time = receive time - first IMU frame, diagnosis frames arrive 0.7 ms after their step.
+    assert by["f4"].detected and by["f4"].detection_delay == pytest.approx(0.25 + 0.0007, abs=1e-6)
+    assert by["f4"].isolation_correct is True and not by["f4"].wrong_isolation and by["f4"].verdict == "f4"
+    assert by["f4"].isolation_delay == pytest.approx(0.25 + 0.0007, abs=1e-6) and by["f4"].isolated_fraction == 1.0
+    assert by["f1"].detected and by["f1"].detection_delay == pytest.approx(0.4 + 0.0007, abs=1e-6)
+    assert by["f1"].isolation_correct is False and by["f1"].wrong_isolation and by["f1"].verdict == "f3"
+    assert by["f1"].isolation_delay is None and by["f1"].isolated_fraction == 0.0
+    # f6 is outside the kinematic table: not detectable, and nothing alarmed in its window.
+    assert not by["f6"].detectable and not by["f6"].detected and by["f6"].isolation_correct is None
+
+
+def test_false_alarms(scored: tuple[Monitor, dict[str, object]]) -> None:
+    mon, truth = scored
+    s = mon.score(truth, grace=1.0)
+    assert len(s.false_alarms) == 2
+    assert s.false_alarms[0].start == pytest.approx(1.0007, abs=1e-6)
+    assert s.false_alarms[0].end - s.false_alarms[0].start == pytest.approx(0.2, abs=DT + 1e-6)
+    assert s.false_alarms[0].tests == "r1" and s.false_alarms[1].tests == "r4"
+    assert s.false_alarm_time == pytest.approx(0.3, abs=2 * DT)
+    # With no grace, the alarm tail of f4 (5.0..5.5) becomes a false alarm too.
+    assert len(mon.score(truth, grace=0.0).false_alarms) == 3
+
+
+def test_lost_and_late_frames(scored: tuple[Monitor, dict[str, object]]) -> None:
+    mon, _ = scored
+    imu, diag = mon.stats.messages[128], mon.stats.messages[512]
+    assert imu.lost == 3 and imu.received == 2000 - 3
+    assert imu.late == 1 and imu.max_lateness == pytest.approx(0.004, abs=1e-9)
+    assert diag.lost == 0 and diag.late == 0 and diag.received == 1000
+    assert len(mon.records) == 1000
+
+
+def test_corrupted_and_unknown_frames_are_counted(db: RomoDatabase) -> None:
+    mon = Monitor(db, KIN)
+    good = db.encode("IMU_Motion", {"IMU_AccelX": 0.1}, 0)
+    mon.on_frame(128, good, 1.0)
+    bad = bytes([good[0] ^ 0xFF]) + good[1:]
+    assert mon.on_frame(128, bad, 1.005) is None
+    mon.on_frame(0x7FF, b"\x00" * 8, 1.006)
+    mon.on_frame(128, good, 1.007)  # same counter again
+    assert mon.stats.messages[128].e2e_errors == 1 and mon.stats.messages[128].repeated == 1
+    assert mon.stats.unknown == 1
+    # A corrupted diagnosis frame is not a diagnosis.
+    d = _diag_frame(db, 1, F["f4"], 0)
+    assert mon.on_frame(512, bytes([d[0] ^ 1]) + d[1:], 1.01) is None and not mon.records
+
+
+def test_windows_from_truth_subtracts_start_time() -> None:
+    w = windows_from_truth({"start_time": 100.0, "faults": [{"fault": "f4", "intervals": [{"start": 105.0,
+                                                                                           "end": 107.5}]}]})
+    assert w == [FaultWindow("f4", 5.0, 7.5)]
+
+
+def test_classes_and_coarse_isolation() -> None:
+    tc = TableClasses.from_signatures([0b01, 0b10, 0b01, 0])
+    assert tc.iso_class[:4] == (0b0101, 0b0010, 0b0101, 0)
+    assert not tc.detectable("f4") and tc.detectable("f3")
+    assert fault_names(0b0101) == "f1,f3" and fault_names(0) == "-"
+    recs = [DiagRecord(k * DT, 1 if k >= 20 else 0, 0b0101 if k >= 20 else 0) for k in range(100)]
+    s = score_run(recs, [FaultWindow("f3", 0.1, 1.0)], tc)
+    assert s.faults[0].isolation_correct is True  # {f1, f3} is f3's structural class
+    recs2 = [DiagRecord(r.t, r.alarm_mask, 0b0111 if r.alarm_mask else 0) for r in recs]
+    s2 = score_run(recs2, [FaultWindow("f3", 0.1, 1.0)], tc)
+    assert s2.faults[0].isolation_correct is False and not s2.faults[0].wrong_isolation  # too coarse
+    s3 = score_run(recs, [FaultWindow("f4", 0.1, 1.0)], tc)  # f4: no test sees it, the alarms are not its
+    assert s3.faults[0].detected and s3.faults[0].isolation_correct is None and not s3.faults[0].wrong_isolation
+
+
+def test_reports_and_plots(scored: tuple[Monitor, dict[str, object]], tmp_path: Path) -> None:
+    mon, truth = scored
+    s = mon.score(truth, grace=1.0)
+    paths = write_reports(tmp_path, s, mon.stats, {"table": "kin"})
+    doc = json.loads((tmp_path / "report.json").read_text())
+    assert doc["score"]["false_alarm_count"] == 2 and doc["frames"]["messages"]["0x080"]["lost"] == 3
+    md = (tmp_path / "report.md").read_text()
+    assert "f4" in md and "WRONG" in md and "false alarms: 2 episodes" in score_table(s)
+    windows = windows_from_truth(truth)
+    steps = [StepRecord(k, k * DT + 0.0005, 128, 0, 0.0, 0.0, 1 if k > 300 else 0, 0xF, 0, 0,
+                        [0.0] * 4, [0.5, 1.5 if k > 300 else 0.2, 0.1, 0.1], k % 15) for k in range(1000)]
+    assert plot_residuals(tmp_path / "r.png", steps, windows, KIN, 0.0005) is not None
+    assert plot_diagnosis(tmp_path / "d.png", mon.records, windows, KIN) is not None
+    for p in [*paths, tmp_path / "r.png", tmp_path / "d.png"]:
+        assert p.stat().st_size > 0
+
+
+def test_live_table_shows_alarms_and_candidates(db: RomoDatabase) -> None:
+    mon = Monitor(db, KIN)
+    mon.on_frame(128, db.encode("IMU_Motion", {}, 0), 5.0)
+    assert mon.table()[-1].startswith("candidates: -")
+    mon.on_frame(512, db.encode("FDI_Diagnosis", {"FDI_AlarmMask": 0b0111, "FDI_CandidateFaults": F["f4"],
+                                                  "FDI_IsolationClass": 4, "FDI_Status": 3}, 0), 5.01)
+    rows = mon.table()
+    assert [r.split()[:3] for r in rows[2:6]] == [["r1", "ALARM", "1"], ["r2", "ALARM", "1"], ["r3", "ALARM", "1"],
+                                                 ["r4", "ok", "0"]]
+    assert rows[-1] == "candidates: f4  (isolated)"
+    assert "alarm [r1,r2,r3]" in mon.status_line()
+
+
+def test_unexplained_alarms_are_not_a_wrong_isolation() -> None:
+    recs = [DiagRecord(k * DT, 0b0101 if k >= 20 else 0, 0) for k in range(100)]  # alarms, no candidate
+    s = score_run(recs, [FaultWindow("f4", 0.1, 1.0)], KIN)
+    f = s.faults[0]
+    assert f.detected and f.isolation_correct is False and not f.wrong_isolation and f.verdict == "-"
+    assert "unexplained" in score_table(s)
+
+
+def test_merged_diagnosis_steps_count_one_late_frame(db: RomoDatabase) -> None:
+    """The ECU merges steps that fall due together (one frame, counter + 1): one late frame, no drift after."""
+    mon = Monitor(db, KIN)
+    mon.on_frame(128, db.encode("IMU_Motion", {}, 0), 1.0)
+    t, c = 1.0007, 0
+    for k in range(200):
+        t += 0.04 if k == 100 else DT  # a 40 ms stall of the ECU, then on time again
+        mon.on_frame(512, _diag_frame(db, 0, 0, c), t)
+        c = e2e.next_counter(c)
+    st = mon.stats.messages[512]
+    assert st.received == 200 and st.lost == 0 and st.late == 1
+    assert st.max_lateness == pytest.approx(0.03, abs=1e-9)

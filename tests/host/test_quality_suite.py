@@ -1,0 +1,113 @@
+"""The diagnosis quality suite (fdi_host.quality): quick mode end to end through the ECU core, the case
+evaluation on hand-made result sequences, the sensor-fault shortcut against a full simulation, the fault-size
+file's errors."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fdi_host.ecu_lib import EcuResult
+from fdi_host.faults import FaultSpec
+from fdi_host.quality import (
+    DEFAULT_SIZES,
+    QualityError,
+    SuiteConfig,
+    evaluate_case,
+    faulty_drive,
+    load_fault_sizes,
+    run_suite,
+    summary_rows,
+)
+from fdi_host.quality_cli import main, quick_config
+from fdi_host.quality_report import markdown, to_dict
+from fdi_host.scenario import load_scenario
+from fdi_host.vehicle_sim import simulate
+
+
+def result(t: float, candidates: int = 0, alarm: int = 0) -> EcuResult:
+    iso = candidates != 0 and candidates in (1, 2, 4, 8, 16)
+    return EcuResult(
+        step=int(t * 100), t_us=round(t * 1e6), status=3 if iso else (2 if alarm else 1), validity=0x7FFFF,
+        alarm_mask=alarm, evaluable_mask=0xF, candidates=candidates, class_mask=candidates,
+        n_classes=1 if iso else (0 if candidates == 0 else 2), detected=alarm != 0, isolated=iso,
+        iso_class=0, test_status=("ok",) * 4, residuals=(0.0,) * 4, ratios=(0.0,) * 4, test_names=("",) * 4,
+    )
+
+
+def test_evaluate_case_outcomes() -> None:
+    spec = FaultSpec("f4", 5.0, 0.5)
+    quiet = [result(4.0 + 0.01 * k) for k in range(100)]
+    # detected 120 ms after the onset, isolated as f4 from 300 ms on
+    seq = quiet + [result(5.0 + 0.01 * k, *((8, 7) if k >= 30 else ((0, 2) if k >= 12 else (0, 0))))
+                   for k in range(100)]
+    det, delay, outcome, iso_delay, share, final, pre = evaluate_case(seq, spec, 5.0, 8)
+    assert det and delay == pytest.approx(0.12) and outcome == "exact" and iso_delay == pytest.approx(0.30)
+    assert share == pytest.approx(70 / 88) and final == ("f4",) and pre == 0
+    # one step isolating f5 makes it "wrong", whatever else happens
+    wrong = [*seq[:150], result(5.5, 16, 3), *seq[151:]]
+    assert evaluate_case(wrong, spec, 5.0, 8)[2] == "wrong"
+    # never detected: missed; a detection before the onset is counted
+    missed = [result(3.9, 0, 1), *quiet, *(result(5.0 + 0.01 * k) for k in range(50))]
+    det, delay, outcome, _, _, _, pre = evaluate_case(missed, spec, 5.0, 8)
+    assert not det and delay is None and outcome == "missed" and pre == 1
+    # detected, never a single class
+    unexplained = quiet + [result(5.0 + 0.01 * k, 0, 2) for k in range(50)]
+    assert evaluate_case(unexplained, spec, 5.0, 8)[2] == "not isolated"
+
+
+def test_sensor_fault_shortcut_equals_full_simulation() -> None:
+    scen = load_scenario("cornering")
+    base = simulate(scen, [], seed=5, duration=3.0)
+    for spec in (FaultSpec("f4", 1.0, 0.5), FaultSpec("f23", 1.5, 2.0, shape="ramp", ramp=1.0)):
+        fast = faulty_drive(base, spec)
+        full = simulate(scen, [spec], seed=5, duration=3.0)
+        assert set(fast.measured) == set(full.measured)
+        for name in full.measured:
+            np.testing.assert_allclose(fast.measured[name], full.measured[name], rtol=0, atol=1e-9, err_msg=name)
+        np.testing.assert_array_equal(fast.fault_values, full.fault_values)
+
+
+def test_fault_sizes_file(tmp_path: Path) -> None:
+    sizes = load_fault_sizes(DEFAULT_SIZES)
+    assert set(sizes) == {f"f{k}" for k in range(1, 26)} and all(v > 0 for v in sizes.values())
+    for text, needle in (("[sizes]\nf99 = 1\n", "unknown fault 'f99'"), ("[sizes]\nf1 = -1\n", "positive number"),
+                         ("f1 = 1\n", "expected a [sizes] table"), ("[sizes\n", "not valid TOML")):
+        p = tmp_path / "s.toml"
+        p.write_text(text, encoding="utf-8")
+        with pytest.raises(QualityError, match=needle.replace("[", r"\[")):
+            load_fault_sizes(p)
+    with pytest.raises(QualityError, match="unknown fault shape"):
+        SuiteConfig(shapes=("sine",))
+
+
+def test_quick_suite_kin_table(tmp_path: Path) -> None:
+    """Quick mode (CI): f1..f5 on the cornering drive, step at the minimal size, plus its fault-free drive.
+    Every fault detected, never a wrong class, no false detection; the reports hold every case."""
+    res = run_suite(quick_config("kin"))
+    rows = {r["fault"]: r for r in summary_rows(res)}
+    assert list(rows) == ["f1", "f2", "f3", "f4", "f5"]
+    assert all(r["goal_detection"] and r["goal_never_wrong"] for r in rows.values()), rows
+    assert sum(c.pre_onset_detections for c in res.cases) == 0
+    assert res.fault_free and all(d.detection_events == 0 for d in res.fault_free)
+    assert any(c.outcome == "exact" for c in res.cases)
+    d = to_dict(res)
+    back = json.loads(json.dumps(d))  # JSON-serialisable (tuples come back as lists)
+    assert len(back["cases"]) == 5 and back["summary"] == d["summary"] and back["fault_free"]["drives"] >= 1
+    md = markdown(res)
+    assert "| f4 |" in md and "quick mode" in md
+    assert dataclasses.asdict(res.cases[0])["fault"] == "f1"
+
+
+def test_cli_errors_and_help(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    assert "example" in capsys.readouterr().out
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[sizes]\nf1 = 0\n", encoding="utf-8")
+    assert main(["--quick", "--sizes", str(bad)]) == 2
+    assert "positive number" in capsys.readouterr().err
