@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from fdi_analysis.mso import bits, find_msos, iter_msos, load_reference, prepare, reference
+from fdi_analysis.mso import MsoSummary, bits, find_msos, iter_msos, load_reference, prepare, reference
 from fdi_analysis.mso.engine import split_tasks
 from fdi_analysis.random_structures import sparse_random_structure
 from fdi_analysis.structure import Structure
@@ -188,6 +189,21 @@ def test_ctrl_c_gives_partial_result(workers: int) -> None:
     full = find_msos(g, workers=1, progress=False).count
     # like Ctrl-C: SIGINT from outside (a thread could not run while the C loop holds the GIL). On a loaded
     # machine the signal may come only after the search ended; such a run proves nothing and is repeated.
+    # A process started in the background by a non-interactive shell inherits SIGINT ignored (POSIX), so
+    # Python has no KeyboardInterrupt handler there: install it as an interactive session has it.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        part, sent_during_search = _interrupt_search(g, workers)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert sent_during_search and part is not None, "SIGINT never arrived during the search"
+    assert not part.complete
+    assert 0 <= part.count < full
+
+
+def _interrupt_search(g: Structure, workers: int) -> tuple[MsoSummary | None, bool]:
+    part = None
+    sent_during_search = False
     for _ in range(3):
         killer = subprocess.Popen(["sh", "-c", f"sleep 0.3; kill -INT {os.getpid()}"])
         part = None
@@ -200,9 +216,7 @@ def test_ctrl_c_gives_partial_result(workers: int) -> None:
             sent_during_search = False
         if sent_during_search:
             break
-    assert sent_during_search and part is not None, "SIGINT never arrived during the search"
-    assert not part.complete
-    assert 0 <= part.count < full
+    return part, sent_during_search
 
 
 def test_rejects_too_many_equations() -> None:

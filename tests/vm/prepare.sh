@@ -14,7 +14,9 @@ stamp="initrd-$(sha1sum "$top/tests/vm/init" | cut -c1-12)"
 if [ -f vmlinuz ] && [ -f initrd.gz ] && [ -f "$stamp" ]; then echo "$cache"; exit 0; fi
 
 busybox_bin="$(command -v busybox || echo /bin/busybox)"
-if [ ! -x "$busybox_bin" ] || ! LC_ALL=C ldd "$busybox_bin" 2>&1 | grep -q "not a dynamic executable"; then
+# ldd exits 1 on a static binary; read its text first (under pipefail a pipe would fail on that status)
+ldd_text="$(LC_ALL=C ldd "$busybox_bin" 2>&1 || true)"
+if [ ! -x "$busybox_bin" ] || [[ "$ldd_text" != *"not a dynamic executable"* ]]; then
   echo "prepare.sh: no static busybox (apt-get install busybox-static)" >&2; exit 1
 fi
 
