@@ -7,44 +7,9 @@
 
 #include "fdi_float.h"
 #include "fdi_gen.h"
+#include "fdi_gen_internal.h"
 #include "fdi_signals.h"
 #include "fdi_svf.h"
-
-static fdi_status_t gen_filt(fdi_gen_t *g, const fdi_gen_param_t *par, uint32_t idx, float u, bool reset,
-                         fdi_svf_out_t *out)
-{
-    fdi_status_t st;
-    if (reset)
-    {
-        st = fdi_svf_reset(&g->filt[idx], u);
-        out->y = u;
-        out->dy = 0.0f;
-    }
-    else
-    {
-        st = fdi_svf_step(&g->filt[idx], &par->svf, u, out);
-    }
-    return st;
-}
-
-static fdi_status_t gen_worst(fdi_status_t a, fdi_status_t b)
-{
-    return (a != FDI_OK) ? a : b;
-}
-
-static fdi_status_t gen_finish(fdi_status_t st, float value, bool reset, float *r)
-{
-    fdi_status_t res = st;
-    if ((res == FDI_OK) && !fdi_float_is_finite(value))
-    {
-        res = FDI_NOT_FINITE;
-    }
-    if (res == FDI_OK)
-    {
-        *r = reset ? 0.0f : value;
-    }
-    return res;
-}
 
 /* MSO3: K1 K2 D1 D2 S1 S2 S3 S4
  * residual K2; derivative causality for dvx, dvy; 10 filters, level 2; multiplied by psidot_m (filtered x2)**2
@@ -62,19 +27,19 @@ static fdi_status_t gen_1(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_in
     fdi_svf_out_t o8 = {0.0f, 0.0f};
     fdi_svf_out_t o9 = {0.0f, 0.0f};
     fdi_status_t st = FDI_OK;
-    st = gen_worst(st, gen_filt(g, par, 0U, in->ax_m, reset, &o0));
-    st = gen_worst(st, gen_filt(g, par, 1U, in->ay_m, reset, &o1));
-    st = gen_worst(st, gen_filt(g, par, 2U, in->psidot_m, reset, &o2));
-    st = gen_worst(st, gen_filt(g, par, 3U, in->vx_m, reset, &o3));
-    st = gen_worst(st, gen_filt(g, par, 4U, o0.y, reset, &o4));
-    st = gen_worst(st, gen_filt(g, par, 5U, o1.y, reset, &o5));
-    st = gen_worst(st, gen_filt(g, par, 6U, o2.y, reset, &o6));
-    st = gen_worst(st, gen_filt(g, par, 7U, o2.dy, reset, &o7));
-    st = gen_worst(st, gen_filt(g, par, 8U, o3.y, reset, &o8));
-    st = gen_worst(st, gen_filt(g, par, 9U, o3.dy, reset, &o9));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->ax_m, reset, &o0));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->ay_m, reset, &o1));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->psidot_m, reset, &o2));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->vx_m, reset, &o3));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, o0.y, reset, &o4));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, o1.y, reset, &o5));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, o2.y, reset, &o6));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 7U, o2.dy, reset, &o7));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 8U, o3.y, reset, &o8));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 9U, o3.dy, reset, &o9));
     {
         const float value = ((-0.3f * (o6.y * o6.y * o6.y * o6.y)) + (0.3f * (o6.dy * o6.dy)) + (-(o4.y * o6.dy)) + (o4.dy * o6.y) + (o5.y * (o6.y * o6.y)) + (-0.3f * o6.y * o7.dy) + (-(o6.y * o9.dy)) + (-((o6.y * o6.y * o6.y) * o8.y)) + (o6.dy * o8.dy));
-        st = gen_finish(st, value, reset, r);
+        st = fdi_gen_finish(st, value, reset, r);
     }
     return st;
 }
@@ -95,19 +60,19 @@ static fdi_status_t gen_2(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_in
     fdi_svf_out_t o8 = {0.0f, 0.0f};
     fdi_svf_out_t o9 = {0.0f, 0.0f};
     fdi_status_t st = FDI_OK;
-    st = gen_worst(st, gen_filt(g, par, 0U, in->ax_m, reset, &o0));
-    st = gen_worst(st, gen_filt(g, par, 1U, in->ay_m, reset, &o1));
-    st = gen_worst(st, gen_filt(g, par, 2U, in->psidot_m, reset, &o2));
-    st = gen_worst(st, gen_filt(g, par, 3U, in->vy_m, reset, &o3));
-    st = gen_worst(st, gen_filt(g, par, 4U, o0.y, reset, &o4));
-    st = gen_worst(st, gen_filt(g, par, 5U, o1.y, reset, &o5));
-    st = gen_worst(st, gen_filt(g, par, 6U, o2.y, reset, &o6));
-    st = gen_worst(st, gen_filt(g, par, 7U, o2.dy, reset, &o7));
-    st = gen_worst(st, gen_filt(g, par, 8U, o3.y, reset, &o8));
-    st = gen_worst(st, gen_filt(g, par, 9U, o3.dy, reset, &o9));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->ax_m, reset, &o0));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->ay_m, reset, &o1));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->psidot_m, reset, &o2));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->vy_m, reset, &o3));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, o0.y, reset, &o4));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, o1.y, reset, &o5));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, o2.y, reset, &o6));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 7U, o2.dy, reset, &o7));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 8U, o3.y, reset, &o8));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 9U, o3.dy, reset, &o9));
     {
         const float value = ((-1.0f * (o6.y * o6.y * o6.y * o6.y)) + (1.0f * (o6.dy * o6.dy)) + (o4.y * (o6.y * o6.y)) + (o5.y * o6.dy) + (-(o5.dy * o6.y)) + (-1.0f * o6.y * o7.dy) + (o6.y * o9.dy) + ((o6.y * o6.y * o6.y) * o8.y) + (-(o6.dy * o8.dy)));
-        st = gen_finish(st, value, reset, r);
+        st = fdi_gen_finish(st, value, reset, r);
     }
     return st;
 }
@@ -127,15 +92,15 @@ static fdi_status_t gen_3(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_in
     fdi_svf_out_t o7 = {0.0f, 0.0f};
     fdi_svf_out_t o8 = {0.0f, 0.0f};
     fdi_status_t st = FDI_OK;
-    st = gen_worst(st, gen_filt(g, par, 0U, in->ax_m, reset, &o0));
-    st = gen_worst(st, gen_filt(g, par, 1U, in->ay_m, reset, &o1));
-    st = gen_worst(st, gen_filt(g, par, 2U, in->psidot_m, reset, &o2));
-    st = gen_worst(st, gen_filt(g, par, 3U, in->vx_m, reset, &o3));
-    st = gen_worst(st, gen_filt(g, par, 4U, in->vy_m, reset, &o4));
-    st = gen_worst(st, gen_filt(g, par, 5U, in->delta1_m, reset, &o5));
-    st = gen_worst(st, gen_filt(g, par, 6U, in->iTM1_m, reset, &o6));
-    st = gen_worst(st, gen_filt(g, par, 7U, in->P_f_m, reset, &o7));
-    st = gen_worst(st, gen_filt(g, par, 8U, in->omega1_m, reset, &o8));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->ax_m, reset, &o0));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->ay_m, reset, &o1));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->psidot_m, reset, &o2));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->vx_m, reset, &o3));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, in->vy_m, reset, &o4));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, in->delta1_m, reset, &o5));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, in->iTM1_m, reset, &o6));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 7U, in->P_f_m, reset, &o7));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 8U, in->omega1_m, reset, &o8));
     {
         const float t0 = cosf(o5.y);
         const float t1 = ((0.425f * o2.y) + (-o3.y));
@@ -146,7 +111,7 @@ static fdi_status_t gen_3(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_in
         const float t6 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o8.y)), fabsf(((-t4) + (t0 * t1)))));
         const float t7 = (380.25f * (1.0f / (t6 * t6)));
         const float value = ((5.925925925925926f * o6.y) + (-3.333333333333333f * o8.dy) + (-0.0003555555555555555f * o7.y * tanhf((2.0f * o8.y))) + (-19.5f * t5 * (1.0f / (t6)) * (2565.3149999999996f + (-109.04920767306088f * o0.y) + (-180.34482758620692f * o1.y)) * (1.0f / sqrtf((1.0f + ((t5 * t5) * t7) + (t7 * (((t0 * t3) + (t1 * t2)) * ((t0 * t3) + (t1 * t2)))))))));
-        st = gen_finish(st, value, reset, r);
+        st = fdi_gen_finish(st, value, reset, r);
     }
     return st;
 }
@@ -171,20 +136,20 @@ static fdi_status_t gen_4(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_in
     fdi_svf_out_t o12 = {0.0f, 0.0f};
     fdi_svf_out_t o13 = {0.0f, 0.0f};
     fdi_status_t st = FDI_OK;
-    st = gen_worst(st, gen_filt(g, par, 0U, in->ay_m, reset, &o0));
-    st = gen_worst(st, gen_filt(g, par, 1U, in->psidot_m, reset, &o1));
-    st = gen_worst(st, gen_filt(g, par, 2U, in->vx_m, reset, &o2));
-    st = gen_worst(st, gen_filt(g, par, 3U, in->vy_m, reset, &o3));
-    st = gen_worst(st, gen_filt(g, par, 4U, in->delta1_m, reset, &o4));
-    st = gen_worst(st, gen_filt(g, par, 5U, in->delta2_m, reset, &o5));
-    st = gen_worst(st, gen_filt(g, par, 6U, in->delta3_m, reset, &o6));
-    st = gen_worst(st, gen_filt(g, par, 7U, in->delta4_m, reset, &o7));
-    st = gen_worst(st, gen_filt(g, par, 8U, in->iTM2_m, reset, &o8));
-    st = gen_worst(st, gen_filt(g, par, 9U, in->P_f_m, reset, &o9));
-    st = gen_worst(st, gen_filt(g, par, 10U, in->omega1_m, reset, &o10));
-    st = gen_worst(st, gen_filt(g, par, 11U, in->omega2_m, reset, &o11));
-    st = gen_worst(st, gen_filt(g, par, 12U, in->omega3_m, reset, &o12));
-    st = gen_worst(st, gen_filt(g, par, 13U, in->omega4_m, reset, &o13));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->ay_m, reset, &o0));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->psidot_m, reset, &o1));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->vx_m, reset, &o2));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->vy_m, reset, &o3));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, in->delta1_m, reset, &o4));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, in->delta2_m, reset, &o5));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, in->delta3_m, reset, &o6));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 7U, in->delta4_m, reset, &o7));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 8U, in->iTM2_m, reset, &o8));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 9U, in->P_f_m, reset, &o9));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 10U, in->omega1_m, reset, &o10));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 11U, in->omega2_m, reset, &o11));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 12U, in->omega3_m, reset, &o12));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 13U, in->omega4_m, reset, &o13));
     {
         const float t0 = (-o3.y);
         const float t1 = (o1.y * ((-1.0f * o1.y) + (-t0)));
@@ -231,7 +196,7 @@ static fdi_status_t gen_4(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_in
         const float t42 = ((0.27f * o12.y) + (-(t18 * t37)) + (-(t34 * t38)));
         const float t43 = (19.5f * (1.0f / (t40)) * (2565.3149999999996f + t24 + (-t4)) * (1.0f / sqrtf((1.0f + ((t39 * t39) * t41) + (t41 * (t42 * t42))))));
         const float value = ((313.8f * o1.dy) + (-1046.0f * t1) + (1046.0f * o2.dy) + (-(t2 * ((5.925925925925926f * o8.y) + (-3.333333333333333f * o11.dy) + (-0.0003555555555555555f * o9.y * tanhf((2.0f * o11.y)))))) + (-(t15 * t19 * t26)) + (-(t16 * t23 * t26)) + (-(t27 * t30 * t36)) + (-(t28 * t35 * t36)) + (-(t37 * t39 * t43)) + (-(t38 * t42 * t43)) + (-19.5f * t11 * (1.0f / (t13)) * t3 * (1.0f / sqrtf((1.0f + ((t11 * t11) * t14) + (t14 * (((0.27f * o11.y) + (-t12)) * ((0.27f * o11.y) + (-t12))))))) * (2565.3149999999996f + t4 + (-t5) + (-t6) + t7)));
-        st = gen_finish(st, value, reset, r);
+        st = fdi_gen_finish(st, value, reset, r);
     }
     return st;
 }
@@ -253,17 +218,17 @@ static fdi_status_t gen_5(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_in
     fdi_svf_out_t o9 = {0.0f, 0.0f};
     fdi_svf_out_t o10 = {0.0f, 0.0f};
     fdi_status_t st = FDI_OK;
-    st = gen_worst(st, gen_filt(g, par, 0U, in->psidot_m, reset, &o0));
-    st = gen_worst(st, gen_filt(g, par, 1U, in->vx_m, reset, &o1));
-    st = gen_worst(st, gen_filt(g, par, 2U, in->vy_m, reset, &o2));
-    st = gen_worst(st, gen_filt(g, par, 3U, in->delta1_m, reset, &o3));
-    st = gen_worst(st, gen_filt(g, par, 4U, in->delta2_m, reset, &o4));
-    st = gen_worst(st, gen_filt(g, par, 5U, in->delta3_m, reset, &o5));
-    st = gen_worst(st, gen_filt(g, par, 6U, in->iTM3_m, reset, &o6));
-    st = gen_worst(st, gen_filt(g, par, 7U, in->P_r_m, reset, &o7));
-    st = gen_worst(st, gen_filt(g, par, 8U, in->omega1_m, reset, &o8));
-    st = gen_worst(st, gen_filt(g, par, 9U, in->omega2_m, reset, &o9));
-    st = gen_worst(st, gen_filt(g, par, 10U, in->omega3_m, reset, &o10));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->psidot_m, reset, &o0));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->vx_m, reset, &o1));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->vy_m, reset, &o2));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->delta1_m, reset, &o3));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, in->delta2_m, reset, &o4));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, in->delta3_m, reset, &o5));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, in->iTM3_m, reset, &o6));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 7U, in->P_r_m, reset, &o7));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 8U, in->omega1_m, reset, &o8));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 9U, in->omega2_m, reset, &o9));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 10U, in->omega3_m, reset, &o10));
     {
         const float t0 = (-o2.y);
         const float t1 = (o0.y * ((-1.0f * o0.y) + (-t0)));
@@ -306,7 +271,7 @@ static fdi_status_t gen_5(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_in
         const float t38 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o10.y)), fabsf(((t23 * t3) + (t34 * t35)))));
         const float t39 = (380.25f * (1.0f / (t38 * t38)));
         const float value = ((485.04689655172416f * o0.dy) + (-1046.0f * t1) + (-1729.8675862068967f * t2) + (1046.0f * o1.dy) + (-1729.8675862068967f * o2.dy) + (-64.49793103448276f * t24 * t33) + (-39.0f * t29 * t33) + (-2.0f * t3 * ((5.925925925925926f * o6.y) + (-3.333333333333333f * o10.dy) + (-0.0003555555555555555f * o7.y * tanhf((2.0f * o10.y))))) + (64.49793103448276f * t12 * t13 * t14 * t20 * t6) + (-64.49793103448276f * t13 * t14 * t20 * t4 * t8) + (-39.0f * t22 * t24 * t30 * t31 * t32) + (64.49793103448276f * t22 * t29 * t30 * t31 * t32) + (-39.0f * t34 * t37 * (1.0f / (t38)) * (2565.3149999999996f + (-t15) + (-t19)) * (1.0f / sqrtf((1.0f + ((t37 * t37) * t39) + (t39 * (((0.27f * o10.y) + (-(t28 * t3)) + (-(t34 * t36))) * ((0.27f * o10.y) + (-(t28 * t3)) + (-(t34 * t36))))))))));
-        st = gen_finish(st, value, reset, r);
+        st = fdi_gen_finish(st, value, reset, r);
     }
     return st;
 }
@@ -328,17 +293,17 @@ static fdi_status_t gen_6(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_in
     fdi_svf_out_t o9 = {0.0f, 0.0f};
     fdi_svf_out_t o10 = {0.0f, 0.0f};
     fdi_status_t st = FDI_OK;
-    st = gen_worst(st, gen_filt(g, par, 0U, in->psidot_m, reset, &o0));
-    st = gen_worst(st, gen_filt(g, par, 1U, in->vx_m, reset, &o1));
-    st = gen_worst(st, gen_filt(g, par, 2U, in->vy_m, reset, &o2));
-    st = gen_worst(st, gen_filt(g, par, 3U, in->delta1_m, reset, &o3));
-    st = gen_worst(st, gen_filt(g, par, 4U, in->delta2_m, reset, &o4));
-    st = gen_worst(st, gen_filt(g, par, 5U, in->delta4_m, reset, &o5));
-    st = gen_worst(st, gen_filt(g, par, 6U, in->iTM4_m, reset, &o6));
-    st = gen_worst(st, gen_filt(g, par, 7U, in->P_r_m, reset, &o7));
-    st = gen_worst(st, gen_filt(g, par, 8U, in->omega1_m, reset, &o8));
-    st = gen_worst(st, gen_filt(g, par, 9U, in->omega2_m, reset, &o9));
-    st = gen_worst(st, gen_filt(g, par, 10U, in->omega4_m, reset, &o10));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->psidot_m, reset, &o0));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->vx_m, reset, &o1));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->vy_m, reset, &o2));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->delta1_m, reset, &o3));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, in->delta2_m, reset, &o4));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, in->delta4_m, reset, &o5));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, in->iTM4_m, reset, &o6));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 7U, in->P_r_m, reset, &o7));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 8U, in->omega1_m, reset, &o8));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 9U, in->omega2_m, reset, &o9));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 10U, in->omega4_m, reset, &o10));
     {
         const float t0 = (-o2.y);
         const float t1 = (o0.y * ((-1.0f * o0.y) + (-t0)));
@@ -384,7 +349,7 @@ static fdi_status_t gen_6(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_in
         const float t41 = ((0.27f * o8.y) + (-t37) + (t32 * t34));
         const float t42 = (1.0f / sqrtf((1.0f + ((t35 * t35) * t40) + (t40 * (t41 * t41)))));
         const float value = ((142.55310344827586f * o0.dy) + (-1046.0f * t1) + (1046.0f * o1.dy) + (1729.8675862068967f * o2.dy) + (1729.8675862068967f * o0.y * t2) + (-64.49793103448276f * t23 * t4) + (-39.0f * t23 * t5) + (-2.0f * t3 * ((5.925925925925926f * o6.y) + (-3.333333333333333f * o10.dy) + (-0.0003555555555555555f * o7.y * tanhf((2.0f * o10.y))))) + (-39.0f * t14 * t15 * t22 * t4 * t9) + (64.49793103448276f * t14 * t15 * t22 * t5 * t9) + (-39.0f * t24 * t27 * (1.0f / (t30)) * (1.0f / sqrtf((1.0f + ((t27 * t27) * t31) + (t31 * (((0.27f * o10.y) + (-t29) + (-(t24 * t26))) * ((0.27f * o10.y) + (-t29) + (-(t24 * t26)))))))) * (2565.3149999999996f + t16 + (-t17) + t21 + (-t28))) + (64.49793103448276f * t32 * t35 * t36 * t39 * t42) + (-64.49793103448276f * t33 * t36 * t39 * t41 * t42));
-        st = gen_finish(st, value, reset, r);
+        st = fdi_gen_finish(st, value, reset, r);
     }
     return st;
 }

@@ -2,6 +2,7 @@
 #include "fdi_arr_kin.h"
 
 #include "fdi_float.h"
+#include "fdi_gen_internal.h"
 
 /* Filter slots. Stage 1 filters raw signals, stage 2 filters stage-1 outputs (r3, r4 only). */
 #define S1_V 0U  /* the differentiated velocity (vx for MSO1/3, vy for MSO2/4) */
@@ -13,42 +14,6 @@
 #define S2_O 6U  /* other acceleration, second stage */
 #define S2_V 7U  /* velocity, second stage */
 
-static fdi_status_t filt(fdi_gen_t *g, const fdi_gen_param_t *par, uint32_t idx, float u, bool reset,
-                         fdi_svf_out_t *out)
-{
-    fdi_status_t st;
-    if (reset)
-    {
-        st = fdi_svf_reset(&g->filt[idx], u);
-        out->y = u;
-        out->dy = 0.0f;
-    }
-    else
-    {
-        st = fdi_svf_step(&g->filt[idx], &par->svf, u, out);
-    }
-    return st;
-}
-
-static fdi_status_t worst(fdi_status_t a, fdi_status_t b)
-{
-    return (a != FDI_OK) ? a : b;
-}
-
-static fdi_status_t finish(fdi_status_t st, float value, bool reset, float *r)
-{
-    fdi_status_t res = st;
-    if ((res == FDI_OK) && !fdi_float_is_finite(value))
-    {
-        res = FDI_NOT_FINITE;
-    }
-    if (res == FDI_OK)
-    {
-        *r = reset ? 0.0f : value;
-    }
-    return res;
-}
-
 /* r = a_along - (dv/dt + sign * v_other * w), one filter stage: MSO1 (sign -1), MSO2 (sign +1). */
 static fdi_status_t one_stage(fdi_gen_t *g, const fdi_gen_param_t *par, float v, float a_along, float w,
                               float v_other, float sign, bool reset, float *r)
@@ -57,11 +22,11 @@ static fdi_status_t one_stage(fdi_gen_t *g, const fdi_gen_param_t *par, float v,
     fdi_svf_out_t fa = {0.0f, 0.0f};
     fdi_svf_out_t fw = {0.0f, 0.0f};
     fdi_svf_out_t fo = {0.0f, 0.0f};
-    fdi_status_t st = filt(g, par, S1_V, v, reset, &fv);
-    st = worst(st, filt(g, par, S1_A, a_along, reset, &fa));
-    st = worst(st, filt(g, par, S1_W, w, reset, &fw));
-    st = worst(st, filt(g, par, S1_O, v_other, reset, &fo));
-    return finish(st, fa.y - (fv.dy + (sign * fo.y * fw.y)), reset, r);
+    fdi_status_t st = fdi_gen_filter_step(g, par, S1_V, v, reset, &fv);
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, S1_A, a_along, reset, &fa));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, S1_W, w, reset, &fw));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, S1_O, v_other, reset, &fo));
+    return fdi_gen_finish(st, fa.y - (fv.dy + (sign * fo.y * fw.y)), reset, r);
 }
 
 /*
@@ -80,19 +45,19 @@ static fdi_status_t two_stage(fdi_gen_t *g, const fdi_gen_param_t *par, float v,
     fdi_svf_out_t fw2 = {0.0f, 0.0f};
     fdi_svf_out_t fo2 = {0.0f, 0.0f};
     fdi_svf_out_t fv2 = {0.0f, 0.0f};
-    fdi_status_t st = filt(g, par, S1_V, v, reset, &fv);
-    st = worst(st, filt(g, par, S1_A, a_along, reset, &fa));
-    st = worst(st, filt(g, par, S1_W, w, reset, &fw));
-    st = worst(st, filt(g, par, S1_O, a_other, reset, &fo));
-    st = worst(st, filt(g, par, S2_P, fv.dy - fa.y, reset, &fp2));
-    st = worst(st, filt(g, par, S2_W, fw.y, reset, &fw2));
-    st = worst(st, filt(g, par, S2_O, fo.y, reset, &fo2));
-    st = worst(st, filt(g, par, S2_V, fv.y, reset, &fv2));
+    fdi_status_t st = fdi_gen_filter_step(g, par, S1_V, v, reset, &fv);
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, S1_A, a_along, reset, &fa));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, S1_W, w, reset, &fw));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, S1_O, a_other, reset, &fo));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, S2_P, fv.dy - fa.y, reset, &fp2));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, S2_W, fw.y, reset, &fw2));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, S2_O, fo.y, reset, &fo2));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, S2_V, fv.y, reset, &fv2));
     {
         const float w2 = fw2.y;
         const float bracket = fo2.y + (cross * fv2.y * w2);
         const float value = ((w2 * fp2.dy) - (fp2.y * fw2.dy)) + (sign * bracket * w2 * w2);
-        st = finish(st, value, reset, r);
+        st = fdi_gen_finish(st, value, reset, r);
     }
     return st;
 }
@@ -143,7 +108,7 @@ static fdi_status_t observe(fdi_gen_t *g, const fdi_gen_param_t *par, float f, f
     {
         st = fdi_obs_step(&g->obs, &par->obs, f, y, &res);
     }
-    return finish(st, res, reset, r);
+    return fdi_gen_finish(st, res, reset, r);
 }
 
 fdi_status_t fdi_arr_kin_x_obs(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_inputs_t *in, bool reset,

@@ -193,3 +193,51 @@ fdi_status_t fdi_gen_step(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi
 {
     return run(self, par, in, false, r);
 }
+
+fdi_status_t fdi_gen_filter_step(fdi_gen_t *g, const fdi_gen_param_t *par, uint32_t idx, float u, bool reset,
+                                 fdi_svf_out_t *out)
+{
+    fdi_status_t st;
+    if ((g == NULL) || (par == NULL) || (out == NULL) || (idx >= FDI_GEN_MAX_FILTERS))
+    {
+        st = FDI_BAD_ARG;
+    }
+    else if (reset)
+    {
+        st = fdi_svf_reset(&g->filt[idx], u);
+        out->y = u;
+        out->dy = 0.0f;
+    }
+    else
+    {
+        st = fdi_svf_step(&g->filt[idx], &par->svf, u, out);
+    }
+    return st;
+}
+
+fdi_status_t fdi_gen_status_worst(fdi_status_t a, fdi_status_t b)
+{
+    return (a != FDI_OK) ? a : b;
+}
+
+fdi_status_t fdi_gen_finish(fdi_status_t st, float value, bool reset, float *r)
+{
+    fdi_status_t res = st;
+    if (r == NULL)
+    {
+        res = FDI_BAD_ARG;
+    }
+    else if ((res == FDI_OK) && !fdi_float_is_finite(value))
+    {
+        res = FDI_NOT_FINITE;
+    }
+    else if (res == FDI_OK)
+    {
+        *r = reset ? 0.0f : value;
+    }
+    else
+    {
+        /* the failing status is returned unchanged */
+    }
+    return res;
+}

@@ -69,7 +69,8 @@ def compile_and_check(repo: Path, folder: Path) -> str:
     gens = folder / f"{GENERATORS}.c"
     if not gens.is_file():
         gens = repo / OUT / f"{GENERATORS}.c"  # the table alone links against the committed generators
-    subprocess.run([cc, *flags, f"-I{repo / 'fw/include'}", f"-I{folder}", f"-I{gens.parent}", str(main),
+    includes = [f"-I{repo / 'fw/include'}", f"-I{repo / 'fw/src'}", f"-I{folder}", f"-I{gens.parent}"]
+    subprocess.run([cc, *flags, *includes, str(main),
                     str(folder / f"{NAME}.c"), str(gens), *sorted(str(p) for p in (repo / "fw/src").glob("*.c")),
                     "-lm", "-o", str(exe)], check=True)
     res = subprocess.run([str(exe)], capture_output=True, text=True)

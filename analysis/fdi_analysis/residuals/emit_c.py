@@ -57,7 +57,8 @@ def _function(g: Generator, slot: int) -> str:
         lines.append(f"    fdi_svf_out_t o{k} = {{0.0f, 0.0f}};")
     lines.append("    fdi_status_t st = FDI_OK;")
     for k, f in enumerate(g.filters):
-        lines.append(f"    st = gen_worst(st, gen_filt(g, par, {k}U, {_node_c(g, f)}, reset, &o{k}));")
+        step = f"fdi_gen_filter_step(g, par, {k}U, {_node_c(g, f)}, reset, &o{k})"
+        lines.append(f"    st = fdi_gen_status_worst(st, {step});")
     subs, red = sympy.cse(g.expr, symbols=sympy.numbered_symbols("t"), order="canonical")
     tmp = {str(s) for s, _ in subs}
 
@@ -68,7 +69,7 @@ def _function(g: Generator, slot: int) -> str:
     for s, e in subs:
         lines.append(f"        const float {s} = {to_c(e, name)};")
     lines.append(f"        const float value = {to_c(red[0], name)};")
-    lines.append("        st = gen_finish(st, value, reset, r);")
+    lines.append("        st = fdi_gen_finish(st, value, reset, r);")
     lines.append("    }")
     lines.append("    return st;")
     lines.append("}")
@@ -132,44 +133,9 @@ def render(generators: Sequence[Generator], name: str, command: str) -> tuple[st
 
 #include "fdi_float.h"
 #include "fdi_gen.h"
+#include "fdi_gen_internal.h"
 #include "fdi_signals.h"
 #include "fdi_svf.h"
-
-static fdi_status_t gen_filt(fdi_gen_t *g, const fdi_gen_param_t *par, uint32_t idx, float u, bool reset,
-                         fdi_svf_out_t *out)
-{{
-    fdi_status_t st;
-    if (reset)
-    {{
-        st = fdi_svf_reset(&g->filt[idx], u);
-        out->y = u;
-        out->dy = 0.0f;
-    }}
-    else
-    {{
-        st = fdi_svf_step(&g->filt[idx], &par->svf, u, out);
-    }}
-    return st;
-}}
-
-static fdi_status_t gen_worst(fdi_status_t a, fdi_status_t b)
-{{
-    return (a != FDI_OK) ? a : b;
-}}
-
-static fdi_status_t gen_finish(fdi_status_t st, float value, bool reset, float *r)
-{{
-    fdi_status_t res = st;
-    if ((res == FDI_OK) && !fdi_float_is_finite(value))
-    {{
-        res = FDI_NOT_FINITE;
-    }}
-    if (res == FDI_OK)
-    {{
-        *r = reset ? 0.0f : value;
-    }}
-    return res;
-}}
 
 {funcs}
 
