@@ -19,7 +19,7 @@ from typing import Any
 import can
 
 from fdi_host import canlog
-from fdi_host.live_bus import StopFlag, add_bus_arguments, open_bus, try_realtime
+from fdi_host.live_bus import StopFlag, add_bus_arguments, open_bus, signal_ready, try_realtime
 from fdi_host.live_ecu import DIAG_ID, EcuSession
 
 EPILOG = """\
@@ -102,9 +102,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (OSError, ValueError, ImportError, can.CanError) as exc:
         print(f"fdi-ecu: cannot open {args.interface} bus: {exc}", file=sys.stderr)
         return 2
-    if args.ready_file is not None:
-        args.ready_file.parent.mkdir(parents=True, exist_ok=True)
-        args.ready_file.write_text("ready\n", encoding="utf-8")
+    signal_ready(args.ready_file)
     if not args.quiet:
         print(f"fdi-ecu: table {args.table} on {args.interface}; Ctrl-C to stop", flush=True)
     try:

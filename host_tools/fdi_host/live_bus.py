@@ -12,6 +12,7 @@ import argparse
 import os
 import resource
 import signal
+from pathlib import Path
 from types import FrameType
 
 import can
@@ -33,6 +34,13 @@ def open_bus(interface: str, channel: str | None) -> can.BusABC:
     if channel is None:
         channel = DEFAULT_CHANNEL if interface == "udp_multicast" else "vcan0" if interface == "socketcan" else "0"
     return can.Bus(interface=interface, channel=channel)
+
+
+def signal_ready(path: Path | None) -> None:
+    """Tell a supervisor (fdi-live) that this process listens on the bus: write `path` when given."""
+    if path is not None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text("ready\n", encoding="utf-8")
 
 
 class StopFlag:

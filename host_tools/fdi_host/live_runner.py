@@ -48,7 +48,8 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--no-scenario-faults", action="store_true", help="ignore the faults of the scenario file")
     ap.add_argument("--duration", type=float, help="override the scenario duration [s]")
     ap.add_argument("--seed", type=int, help="override the noise seed")
-    ap.add_argument("--table", choices=("romo", "kin"), default="kin", help="ECU diagnosis table (default kin)")
+    ap.add_argument("--table", choices=("romo", "kin"), default="romo",
+                    help="ECU diagnosis table: romo (generated, default) or kin (hand-written kinematic tests)")
     ap.add_argument("--transport", choices=("auto", "vcan", "netns", "current"), default="auto",
                     help="vcan0, udp_multicast in a private netns, or udp_multicast here (default auto)")
     ap.add_argument("--channel", default="239.74.163.2", help="multicast group for udp_multicast")

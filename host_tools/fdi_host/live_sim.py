@@ -15,15 +15,10 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from tqdm import tqdm
-
 from fdi_host import canlog
 from fdi_host.dbc import RomoDatabase
-from fdi_host.faults import FaultSpecError, parse_fault
 from fdi_host.live_bus import StopFlag, add_bus_arguments, open_bus, try_realtime
 from fdi_host.live_sender import send_paced
-from fdi_host.scenario import ScenarioError, load_scenario
-from fdi_host.vehicle_sim import SimConfig, default_plant, simulate
 
 EPILOG = """\
 examples:
@@ -64,21 +59,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         ap.error(f"--out {args.out}: unsupported extension; use {', '.join(canlog.LOG_SUFFIXES)}")
     if not args.speed > 0.0:
         ap.error("--speed must be > 0")
-    try:
-        sc = load_scenario(args.scenario)
-        extra = [parse_fault(f) for f in args.fault]
-    except (ScenarioError, FaultSpecError) as exc:
-        ap.error(str(exc))
-    from fdi_host.sim_cli import write_truth
+    from fdi_host.sim_cli import simulate_from_args, write_truth
 
-    faults = ([] if args.no_scenario_faults else list(sc.faults)) + extra
-    duration = args.duration if args.duration is not None else sc.duration
-    cfg = SimConfig(noise_scale=0.0 if args.no_noise else 1.0)
     stop = StopFlag()
-    plant = default_plant()
-    with tqdm(total=round(duration / cfg.dt) + 1, unit="ms", desc=f"simulate {sc.name}", disable=args.quiet) as bar:
-        result = simulate(sc, faults, seed=args.seed, plant=plant, config=cfg, duration=duration,
-                          progress=bar.update)
+    drive = simulate_from_args(ap, args)
+    result, plant, duration = drive.result, drive.plant, drive.duration
     db = RomoDatabase()
     frames = canlog.build_frames(result, db)
     truth = args.truth or (args.out.with_suffix(".truth.json") if args.out else None)

@@ -22,7 +22,7 @@ from typing import Any
 import can
 
 from fdi_host.dbc import RomoDatabase
-from fdi_host.live_bus import StopFlag, add_bus_arguments, open_bus
+from fdi_host.live_bus import StopFlag, add_bus_arguments, open_bus, signal_ready
 from fdi_host.live_ecu import DIAG_ID, ORIGIN_LEAD, load_steps
 from fdi_host.monitor_frames import FrameStats
 from fdi_host.score import DiagRecord, Score, TableClasses, fault_names, score_run, windows_from_truth
@@ -179,9 +179,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (OSError, ValueError, ImportError, can.CanError) as exc:
         print(f"fdi-monitor: cannot open {args.interface} bus: {exc}", file=sys.stderr)
         return 2
-    if args.ready_file is not None:
-        args.ready_file.parent.mkdir(parents=True, exist_ok=True)
-        args.ready_file.write_text("ready\n", encoding="utf-8")
+    signal_ready(args.ready_file)
     tty = sys.stdout.isatty()
     shown = 0
     t_start = next_show = time.monotonic()

@@ -9,6 +9,7 @@ import argparse
 import json
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -83,6 +84,33 @@ def write_truth(result: SimResult, plant: Plant, duration: float, start_time: fl
     return path
 
 
+@dataclass(frozen=True)
+class Drive:
+    """A simulated drive as the command line asked for it."""
+
+    result: SimResult
+    plant: Plant
+    duration: float
+
+
+def simulate_from_args(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Drive:
+    """Scenario, scenario faults (unless --no-scenario-faults) and --fault specs, duration, seed and noise from
+    the common options of `fdi-sim` and `fdi-sim live`; simulates with a progress bar (a bad option: ap.error)."""
+    try:
+        sc = load_scenario(args.scenario)
+        extra = [parse_fault(f) for f in args.fault]
+    except (ScenarioError, FaultSpecError) as exc:
+        ap.error(str(exc))
+    faults = ([] if args.no_scenario_faults else list(sc.faults)) + extra
+    duration = args.duration if args.duration is not None else sc.duration
+    cfg = SimConfig(noise_scale=0.0 if args.no_noise else 1.0)
+    plant = default_plant()
+    with tqdm(total=round(duration / cfg.dt) + 1, unit="ms", desc=f"simulate {sc.name}", disable=args.quiet) as bar:
+        result = simulate(sc, faults, seed=args.seed, plant=plant, config=cfg, duration=duration,
+                          progress=bar.update)
+    return Drive(result=result, plant=plant, duration=duration)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args_list = list(sys.argv[1:] if argv is None else argv)
     if args_list and args_list[0] == "fig6":
@@ -101,19 +129,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if out.suffix not in canlog.LOG_SUFFIXES:
             ap.error(f"--out {out}: unsupported extension; use {', '.join(canlog.LOG_SUFFIXES)}")
     try:
-        sc = load_scenario(args.scenario)
-        extra = [parse_fault(f) for f in args.fault]
-    except (ScenarioError, FaultSpecError) as exc:
-        ap.error(str(exc))
-    faults = ([] if args.no_scenario_faults else list(sc.faults)) + extra
-    duration = args.duration if args.duration is not None else sc.duration
-    cfg = SimConfig(noise_scale=0.0 if args.no_noise else 1.0)
-    n_steps = round(duration / cfg.dt) + 1
-    try:
-        plant = default_plant()
-        with tqdm(total=n_steps, unit="ms", desc=f"simulate {sc.name}", disable=args.quiet) as bar:
-            result = simulate(sc, faults, seed=args.seed, plant=plant, config=cfg, duration=duration,
-                              progress=bar.update)
+        drive = simulate_from_args(ap, args)
+        result, plant, duration = drive.result, drive.plant, drive.duration
         frames: list[canlog.Frame] = []
         if args.out:
             db = RomoDatabase()
