@@ -2,6 +2,7 @@
 # libFuzzer harnesses of the C library (tests/fuzz/), built with clang -fsanitize=fuzzer,address,undefined.
 #   bash scripts/fuzz.sh [seconds]        run each harness for `seconds` (default 30); CI uses 20
 #   FUZZ_RUNS=10000000 bash scripts/fuzz.sh   run each harness for that many executions instead
+#   FUZZ_ONLY="diag ecu"   run only these harnesses;  FUZZ_MAX_LEN=1024   longest input (default 4096 bytes)
 # Harnesses: fuzz_iso (table check + isolation), fuzz_diag (diagnoser step path), and fuzz_ecu (CAN frame
 # ingestion + step through fw/ecu) when the ECU core exists. The corpus persists in build/fuzz/corpus_<name>.
 # Prints the executions per harness; exits non-zero on any crash, invariant violation or sanitizer report
@@ -35,11 +36,12 @@ for p in "${pids[@]}"; do wait "$p"; done  # set -e: a failed build stops the sc
 limit=(-max_total_time="$seconds")
 [ -n "${FUZZ_RUNS:-}" ] && limit=(-runs="$FUZZ_RUNS")
 status=0
+[ -n "${FUZZ_ONLY:-}" ] && read -r -a harnesses <<<"$FUZZ_ONLY"
 for h in "${harnesses[@]}"; do
   mkdir -p "$out/corpus_$h"
   log="$out/fuzz_$h.log"
   if (cd "$out" && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-      "./fuzz_$h" "${limit[@]}" -max_len=4096 -timeout=10 -rss_limit_mb=1024 -print_final_stats=1 \
+      "./fuzz_$h" "${limit[@]}" -max_len="${FUZZ_MAX_LEN:-4096}" -timeout=10 -rss_limit_mb=1024 -print_final_stats=1 \
       -artifact_prefix="./crash-$h-" "corpus_$h") >"$log" 2>&1; then
     runs="$(grep -m1 'stat::number_of_executed_units' "$log" | awk '{print $2}')"
     rate="$(grep -m1 'stat::average_exec_per_sec' "$log" | awk '{print $2}')"

@@ -1,20 +1,26 @@
 #!/usr/bin/env bash
 # Regenerates every committed generated file from its source (tests fail when a committed copy is stale):
-#   fw/generated/fdi_romo_table.{h,c}   <- analysis/models/romo_grouped.toml + romo_thresholds.toml
+#   fw/generated/fdi_romo_table.{h,c}, fdi_romo_generators.{h,c}   <- analysis/models/romo_grouped.toml +
+#     romo_thresholds.toml + fault sizes;  fdi_kin_calibration.h <- simulated drives;  can/ <- dbc/romo.dbc
 set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$top"
 [ -x .venv/bin/fdi-analyze ] || bash scripts/bootstrap.sh
 # analysis/models/romo_thresholds.toml [generated]  <- fault-free simulated drives through the generators (~1 min)
 .venv/bin/fdi-analyze calibrate analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml
-# fw/generated/fdi_romo_table.{h,c}, fdi_romo_generators.{h,c}  <- model + thresholds (realizable MSOs only)
-.venv/bin/fdi-analyze export-c analysis/models/romo_grouped.toml \
-  --thresholds analysis/models/romo_thresholds.toml --out fw/generated
 # host_tools/scenarios/fault_sizes.toml [per_test.*]  <- step-fault sweep through the generators (~10 min; only
 # with FDI_SWEEP_SIZES=1; tests/analysis/test_residual_faults.py checks the committed sizes against the thresholds)
 if [ "${FDI_SWEEP_SIZES:-0}" = 1 ]; then
   .venv/bin/fdi-analyze fault-sizes analysis/models/romo_grouped.toml \
     --thresholds analysis/models/romo_thresholds.toml --sizes host_tools/scenarios/fault_sizes.toml
 fi
+# fw/generated/fdi_romo_table.{h,c}, fdi_romo_generators.{h,c}  <- model + thresholds (realizable MSOs only)
+#   + the per-test fault sizes (which quiet tests may exonerate which fault)
+.venv/bin/fdi-analyze export-c analysis/models/romo_grouped.toml \
+  --thresholds analysis/models/romo_thresholds.toml --fault-sizes host_tools/scenarios/fault_sizes.toml \
+  --out fw/generated
+# fw/generated/fdi_kin_calibration.h  <- the hand-written kinematic table's variances and reaction sizes from
+#   simulated drives through the C ECU core (~4 min)
+.venv/bin/python -m fdi_host.kin_calibration --out fw/generated/fdi_kin_calibration.h
 # fw/generated/can/romo_can.{h,c}, romo_can_e2e.h   <- dbc/romo.dbc (cantools generate_c_source + E2E data IDs)
 .venv/bin/python fw/ecu/tools/gen_romo_can.py --dbc dbc/romo.dbc --out fw/generated/can

@@ -3,7 +3,8 @@
     python analysis/bench/bench_mso.py                  # FDT examples, random structures, grouped ROMO (+FDT, ~2 min)
     python analysis/bench/bench_mso.py --no-fdt-romo    # skip FDT's 100 s grouped ROMO run
     python analysis/bench/bench_mso.py --ungrouped      # also count the 75M MSO sets of the ungrouped model
-    python analysis/bench/bench_mso.py --selection-limit 60   # longer exact selection on the full model
+    python analysis/bench/bench_mso.py --selection-limit 20   # shorter exact selection on the full model
+    python analysis/bench/bench_mso.py --selection-without-sat   # also the code-search fallback (no python-sat)
 
 Prints measured times, MSO/s and ratios; nothing is hard-coded.
 """
@@ -19,7 +20,9 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import TypeVar
+from unittest import mock
 
+from fdi_analysis import selection_sat
 from fdi_analysis.candidates_mtes import candidates_from_mtes
 from fdi_analysis.cli_select import optimality
 from fdi_analysis.mso import find_msos, isolability, iter_msos, load_reference, mtes, prepare
@@ -93,8 +96,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-fdt-romo", action="store_true", help="do not run FDT on grouped ROMO (about 100 s)")
     ap.add_argument("--ungrouped", action="store_true", help="count the ungrouped ROMO MSO sets (75M) on 2 workers")
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--selection-limit", type=float, default=20.0,
-                    help="time limit [s] of each optimal selection on the full vertical model (default 20)")
+    ap.add_argument("--selection-limit", type=float, default=60.0,
+                    help="time limit [s] of each optimal selection on the full vertical model (default 60)")
+    ap.add_argument("--selection-without-sat", action="store_true",
+                    help="also run the optimal selection without python-sat (the code-search fallback)")
     ap.add_argument("--slow", action="store_true", help="add a 150-equation case where FDT needs minutes")
     args = ap.parse_args(argv)
 
@@ -177,15 +182,27 @@ def main(argv: list[str] | None = None) -> int:
     budget = args.selection_limit
     print(f"full vertical test selection on the MTES candidates ({t_c:.1f} s to build them), optimal with "
           f"{budget:.0f} s limit per method:")
+    solvers = [("SAT", True)] if selection_sat.HAVE_SAT else [("code search, python-sat missing", False)]
+    if args.selection_without_sat and selection_sat.HAVE_SAT:
+        solvers.append(("code search", False))
+    exact_total = iso.elapsed_s + t_mt + t_c  # isolability, MTES, candidates, then both optimal selections
     for method in ("A", "B"):
         t = time.perf_counter()
         g = greedy(cands, full.nf, method)
         t_g = time.perf_counter() - t
-        t = time.perf_counter()
-        o = optimal(cands, full.nf, method, time_limit_s=budget)
-        t_o = time.perf_counter() - t
-        print(f"  method {method}: greedy {len(g.tests)} tests ({t_g:.1f} s); optimal {len(o.tests)} tests, "
-              f"{o.total_cost} unknowns in {t_o:.1f} s: {optimality(o)}")
+        print(f"  method {method}: greedy {len(g.tests)} tests, {g.total_cost} unknowns ({t_g:.1f} s)")
+        for label, use_sat in solvers:
+            load = os.getloadavg()[0]
+            t = time.perf_counter()
+            with mock.patch.object(selection_sat, "HAVE_SAT", use_sat):
+                o = optimal(cands, full.nf, method, time_limit_s=budget)
+            t_o = time.perf_counter() - t
+            print(f"    optimal ({label}): {len(o.tests)} tests, {o.total_cost} unknowns in {t_o:.1f} s: "
+                  f"{optimality(o)} (load average {load:.1f} at the start)")
+            if label == solvers[0][0]:
+                exact_total += t_o
+    print(f"  full vertical, isolability + MTES candidates + optimal selections A and B ({solvers[0][0]}): "
+          f"{exact_total:.1f} s")
 
     if args.ungrouped:
         u = load_reference(REF / "romo_dual_track_63x73.json")

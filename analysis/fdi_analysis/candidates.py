@@ -10,6 +10,7 @@ from __future__ import annotations
 from fdi_analysis.fault_matrix import Candidate
 from fdi_analysis.mso import MsoSummary, find_msos
 from fdi_analysis.structure import Structure
+from fdi_analysis.summary import require_redundancy
 
 
 def candidates_from_summary(summary: MsoSummary) -> list[Candidate]:
@@ -19,6 +20,7 @@ def candidates_from_summary(summary: MsoSummary) -> list[Candidate]:
 
 
 def mso_candidates(st: Structure, workers: int = 2, progress: bool = True) -> tuple[MsoSummary, list[Candidate]]:
+    require_redundancy(st)
     summary = find_msos(st, workers=workers, progress=progress)
     if not summary.complete:
         raise KeyboardInterrupt

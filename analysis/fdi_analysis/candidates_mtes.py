@@ -16,6 +16,7 @@ from fdi_analysis.fault_matrix import Candidate
 from fdi_analysis.mso import bits, isolability, isolability_from_signatures, mtes
 from fdi_analysis.mso.results import MtesResult
 from fdi_analysis.structure import Structure
+from fdi_analysis.summary import require_redundancy
 
 
 def candidates_from_mtes(st: Structure, result: MtesResult) -> list[Candidate]:
@@ -38,6 +39,7 @@ def candidates_from_mtes(st: Structure, result: MtesResult) -> list[Candidate]:
 
 
 def mtes_candidates(st: Structure) -> tuple[MtesResult, list[Candidate]]:
+    require_redundancy(st)
     result = mtes(st)
     return result, candidates_from_mtes(st, result)
 

@@ -7,6 +7,8 @@ import sys
 from collections.abc import Sequence
 
 from fdi_analysis import cli_calibrate, cli_convert, cli_export, cli_mso, cli_report, cli_select
+from fdi_analysis.exoneration import FaultSizesError
+from fdi_analysis.export_c import ExportError
 from fdi_analysis.model import ModelError
 from fdi_analysis.structure import StructureError
 
@@ -17,7 +19,7 @@ EPILOG = """examples:
   fdi-analyze mso analysis/models/romo_grouped.toml
   fdi-analyze select analysis/models/romo_grouped.toml -o out/grouped
   fdi-analyze export-c analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \
-      --out fw/generated
+      --fault-sizes host_tools/scenarios/fault_sizes.toml --out fw/generated
   fdi-analyze convert analysis/models/romo_grouped.toml --to-fdt out/romo_grouped_fdt.json
 """
 
@@ -40,7 +42,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         code: int = args.func(args)
-    except (ModelError, StructureError) as exc:
+    except (ModelError, StructureError, ExportError, FaultSizesError) as exc:
         print(f"fdi-analyze: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

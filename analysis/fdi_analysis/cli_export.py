@@ -6,12 +6,14 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from fdi_analysis.exoneration import FaultSizes
 from fdi_analysis.export_c import Thresholds, render
 from fdi_analysis.model_loader import load_model
 from fdi_analysis.residuals import emit_c
 
 EXAMPLE = ("example: fdi-analyze export-c analysis/models/romo_grouped.toml "
-           "--thresholds analysis/models/romo_thresholds.toml --out fw/generated")
+           "--thresholds analysis/models/romo_thresholds.toml --fault-sizes host_tools/scenarios/fault_sizes.toml "
+           "--out fw/generated")
 
 
 def register(sub: Any) -> None:
@@ -25,6 +27,9 @@ def register(sub: Any) -> None:
     )
     p.add_argument("model", type=Path, help="model file (.toml) or FDT structure (.json)")
     p.add_argument("--thresholds", type=Path, required=True, help="gates, variances and generator design point")
+    p.add_argument("--fault-sizes", type=Path, default=None,
+                   help="stated fault sizes per test (fdi-analyze fault-sizes); a test exonerates a fault only when "
+                   "it reacts at the fault's stated size (default: every test of the signature exonerates)")
     p.add_argument("--out", type=Path, required=True, help="output folder (fw/generated)")
     p.add_argument("--name", default="fdi_romo_table", help="C name of the table (default fdi_romo_table)")
     p.add_argument("--workers", type=int, default=2, help="worker processes of the MSO search (default 2)")
@@ -32,27 +37,29 @@ def register(sub: Any) -> None:
     p.set_defaults(func=run)
 
 
-def command_line(model: Path, thresholds: Path, out: Path, name: str) -> str:
-    return f"fdi-analyze export-c {model.as_posix()} --thresholds {thresholds.as_posix()} --out {out.as_posix()}" + (
-        f" --name {name}" if name != "fdi_romo_table" else "")
+def command_line(model: Path, thresholds: Path, out: Path, name: str, sizes: Path | None = None) -> str:
+    return (f"fdi-analyze export-c {model.as_posix()} --thresholds {thresholds.as_posix()}"
+            + (f" --fault-sizes {sizes.as_posix()}" if sizes is not None else "")
+            + f" --out {out.as_posix()}" + (f" --name {name}" if name != "fdi_romo_table" else ""))
 
 
 def generate(model_path: Path, thresholds_path: Path, out: Path, name: str, workers: int = 2,
-             progress: bool = False) -> tuple[str, str]:
-    files = generate_all(model_path, thresholds_path, out, name, workers, progress)
+             progress: bool = False, sizes_path: Path | None = None) -> tuple[str, str]:
+    files = generate_all(model_path, thresholds_path, out, name, workers, progress, sizes_path)
     return files[f"{name}.h"], files[f"{name}.c"]
 
 
 def generate_all(model_path: Path, thresholds_path: Path, out: Path, name: str, workers: int = 2,
-                 progress: bool = False) -> dict[str, str]:
+                 progress: bool = False, sizes_path: Path | None = None) -> dict[str, str]:
     """The table and the generated residual generators of the optimal selection among realizable MSOs."""
     from fdi_analysis.residuals.export import selected_generators
 
     model = load_model(model_path)
-    command = command_line(model_path, thresholds_path, out, name)
+    command = command_line(model_path, thresholds_path, out, name, sizes_path)
+    sizes = FaultSizes.load(sizes_path) if sizes_path is not None else None
     tests, gens = selected_generators(model, workers=workers, progress=progress)
     header, source = render(model, tests, Thresholds.load(thresholds_path), name, command,
-                            generated=[True] * len(tests))
+                            generated=[True] * len(tests), sizes=sizes)
     gname = generators_name(name)
     gh, gc = emit_c.render(gens, gname, command)
     return {f"{name}.h": header, f"{name}.c": source, f"{gname}.h": gh, f"{gname}.c": gc}
@@ -63,7 +70,8 @@ def generators_name(table_name: str) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    files = generate_all(args.model, args.thresholds, args.out, args.name, args.workers, not args.no_progress)
+    files = generate_all(args.model, args.thresholds, args.out, args.name, args.workers, not args.no_progress,
+                         args.fault_sizes)
     args.out.mkdir(parents=True, exist_ok=True)
     for fname, text in files.items():
         (args.out / fname).write_text(text, encoding="utf-8")

@@ -9,6 +9,7 @@ from typing import Any
 
 from fdi_analysis.model_loader import load_model
 from fdi_analysis.mso import find_msos
+from fdi_analysis.summary import require_redundancy
 
 EXAMPLE = "example: fdi-analyze mso analysis/models/romo_grouped.toml -o out/grouped --workers 2"
 
@@ -31,6 +32,7 @@ def register(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     model = load_model(args.model)
     st = model.structure()
+    require_redundancy(st)
     s = find_msos(st, workers=args.workers, progress=not args.no_progress)
     state = "complete" if s.complete else "INTERRUPTED, partial"
     print(f"{model.name}: {s.count:,} MSO sets ({state}) in {s.elapsed_s:.2f} s on {s.workers} workers, "

@@ -69,6 +69,11 @@ def selection_rows(model: Model, sel: Selection) -> list[dict[str, Any]]:
 
 REJECTION_KINDS = (
     ("integrating", "need open-loop integration"),
+    ("observer states", "need open-loop integration of two or more states (one observer state per generator)"),
+    ("computed from the observer state", "differentiate a value computed from an observer state"),
+    ("not observable", "have an observer state the residual equation does not see"),
+    ("inside the observer", "divide by a signal inside an observer"),
+    ("not an output equation", "leave only a differential constraint for the observer's residual"),
     ("division by a signal", "divide by a signal inside a non-rational law"),
     ("cannot be solved", "need a non-invertible equation solved"),
     ("algebraic loop", "contain an algebraic loop"),
@@ -128,8 +133,10 @@ def run(args: argparse.Namespace) -> int:
         from fdi_analysis.residuals.realizability import realizable_candidates
 
         all_cands = cands
-        cands, reasons = realizable_candidates(model, cands)
-        print(f"realizable: {len(cands):,} of {len(all_cands):,} candidates; rejected: {rejection_summary(reasons)}")
+        observed: list[Any] = []
+        cands, reasons = realizable_candidates(model, cands, with_observer=observed)
+        print(f"realizable: {len(cands):,} of {len(all_cands):,} candidates ({len(observed):,} with one state "
+              f"estimated by an observer); rejected: {rejection_summary(reasons)}")
         if not cands:
             print("no realizable candidate: nothing to select")
             return 1

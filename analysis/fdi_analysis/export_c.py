@@ -2,17 +2,20 @@
 
 Writes ``<name>.h`` and ``<name>.c``: one ``const fdi_table_t`` with the selected MSO sets (fault bitmask,
 signals used, generator kind, gate and variance, interpretation), the fault names, the fault signature
-matrix as bitmask rows, the isolability classes, and per test the equations and unknowns of its MSO set.
+matrix as bitmask rows, the isolability classes, the reaction size of each (fault, test) that decides
+exoneration (fdi_analysis.exoneration), and per test the equations and unknowns of its MSO set.
 Output is deterministic: the same model and selection give byte-identical files.
 """
 
 from __future__ import annotations
 
+import re
 import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from fdi_analysis.exoneration import FaultSizes, test_size_rows
 from fdi_analysis.fault_matrix import Candidate
 from fdi_analysis.interpretation import interpret
 from fdi_analysis.model import Model
@@ -73,7 +76,8 @@ def _signal_macro(known: str) -> str:
 
 
 def render(model: Model, tests: Sequence[Candidate], thresholds: Thresholds, name: str,
-           command: str, generated: Sequence[bool] | None = None) -> tuple[str, str]:
+           command: str, generated: Sequence[bool] | None = None,
+           sizes: FaultSizes | None = None) -> tuple[str, str]:
     """The header and source text of the table `name` (e.g. "fdi_romo_table").
 
     `generated[k]` true: test k runs generated generator slot (number of generated tests before it), kind
@@ -100,8 +104,9 @@ def render(model: Model, tests: Sequence[Candidate], thresholds: Thresholds, nam
             kind = KNOWN_GENERATORS.get(frozenset(eqs), NO_GENERATOR)
             variance = thresholds.variance.get(kind, 1.0)
         mask = " | ".join(_signal_macro(z) for z in knowns) or "0U"
+        number = re.fullmatch(r"MSO(\d+)", t.label)
         rows.append(
-            f"    {{{k + 1}U, {kind}, 0x{t.faults:08X}U, {mask},\n"
+            f"    {{{int(number.group(1)) if number else k + 1}U, {kind}, 0x{t.faults:08X}U, {mask},\n"
             f"     {_c_float(thresholds.gate)}, {_c_float(variance)}, {_c_string(interpret(model, eqs))}}},"
         )
         eq_lists.append(" ".join(eqs))
@@ -111,6 +116,11 @@ def render(model: Model, tests: Sequence[Candidate], thresholds: Thresholds, nam
         sig = sum(1 << i for i, t in enumerate(tests) if t.faults >> j & 1)
         signatures.append(sig)
     classes = [sum(1 << k for k in range(st.nf) if signatures[k] == signatures[j]) for j in range(st.nf)]
+    labels = [t.label for t in tests]
+    size_rows, margin = test_size_rows(list(st.faults), labels, signatures, sizes)
+    size_note = (f"reaction sizes from {sizes.source}, 0 = no reaction within the fault's limits" if sizes is not None
+                 else "1 on the signature (no fault sizes given: classic exoneration)")
+    size_lines = [f"    {', '.join(_c_float(x) for x in row)}, /* {st.faults[j]} */" for j, row in enumerate(size_rows)]
     fault_names = [f"{f.name} {f.desc}".strip() for f in model.faults]
 
     header = f"""{banner}
@@ -154,6 +164,11 @@ static const uint32_t iso_class[{st.nf}] = {{
 {chr(10).join(f"    0x{c:08X}U, /* {st.faults[j]} */" for j, c in enumerate(classes))}
 }};
 
+/* Row j, column i: size of fault j at which test i reacts ({size_note}). */
+static const float test_size[{st.nf} * {len(tests)}] = {{
+{chr(10).join(size_lines)}
+}};
+
 const char *const {name}_equations[{len(tests)}] = {{
 {chr(10).join("    " + _c_string(s) + "," for s in eq_lists)}
 }};
@@ -171,6 +186,8 @@ const fdi_table_t {name} = {{
     tests,
     fault_signature,
     iso_class,
+    test_size,
+    {_c_float(margin)},
 }};
 """
     return header, source

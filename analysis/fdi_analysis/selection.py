@@ -4,7 +4,9 @@
   order); a test is kept when adding it clears at least one element of the fault matrix.
 - `optimal`: the fewest tests that reach the same fault matrix as all candidates together, ties broken by
   the smallest total cost, solved exactly in two stages (minimum count, then minimum cost at that count)
-  by bounds, local-search incumbents and an exact code-assignment search (`selection_exact`).
+  by bounds, local-search incumbents and an exact decision: SAT (count) and incremental SAT (cost) on a
+  symmetry-reduced code model (`selection_sat`, needs python-sat), or without python-sat the
+  code-assignment search of `selection_exact` (slower; more often "not proven" at the time limit).
 
 Both only need one candidate per distinct fault set: tests with the same fault set clear the same fault
 matrix elements, so the cheapest represents them all (`cheapest_per_signature`).
@@ -17,7 +19,9 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
+from fdi_analysis import selection_sat
 from fdi_analysis.fault_matrix import Candidate, Method, distinguished_pairs, fault_matrix
 from fdi_analysis.selection_exact import (
     BoolMatrix,
@@ -36,6 +40,7 @@ from fdi_analysis.selection_exact import (
 LOCAL_SEARCH_ITERATIONS = 1000  # per local-search run in the cost stage
 COUNT_SEARCH_ITERATIONS = 300  # per k in the count stage; a failure there is settled by the exact search
 COST_SEEDS = 6
+SPECULATE = True  # start the cost search beside the last count refutation (second core)
 
 
 @dataclass(frozen=True)
@@ -107,46 +112,64 @@ def optimal(tests: Sequence[Candidate], nf: int, method: Method, time_limit_s: f
     by_mask = _candidate_by_mask(cands, problem)
     cover = cover_matrix(problem)
     costs = np.array(problem.costs, dtype=np.int64)
-    best = min(_greedy_columns(problem, cands, nf, method), cover_greedy(cover), key=len)
+    best = min(_greedy_columns(problem, cands, cover), cover_greedy(cover), key=len)
     lb = root_lower_bound(problem)
-    best, lb = _count_stage(problem, cover, best, lb, deadline)
-    count_proven = lb == len(best)
-    best, cost_proven = _cost_stage(problem, cover, costs, best, count_proven, deadline)
+    exact = _ExactSolver(problem)
+    try:
+        best, lb = _count_stage(problem, cover, costs, best, lb, deadline, exact)
+        count_proven = lb == len(best)
+        best, cost_proven = _cost_stage(problem, cover, costs, best, count_proven, deadline, exact)
+    finally:
+        exact.cancel_pending()
     chosen = sorted((by_mask[problem.columns[c]] for c in best), key=_order_key)
     return Selection(method=method, kind="optimal", tests=tuple(chosen), proven=count_proven and cost_proven,
                      lower_bound=lb)
 
 
+def _column_masks(cands: Sequence[Candidate], problem: Problem) -> npt.NDArray[np.uint64]:
+    """Each candidate's fault set as a bitmask over the problem's items."""
+    faults = np.array([t.faults for t in cands], dtype=np.uint64)
+    masks = np.zeros(len(cands), dtype=np.uint64)
+    one = np.uint64(1)
+    for k, item in enumerate(problem.item_of_fault):
+        masks |= ((faults >> np.uint64(k)) & one) << np.uint64(item)
+    return masks
+
+
 def _candidate_by_mask(cands: Sequence[Candidate], problem: Problem) -> dict[int, Candidate]:
     """The cheapest candidate behind each reduced column (same tie order as `cheapest_per_signature`)."""
     out: dict[int, Candidate] = {}
-    for t in cands:  # sorted cheapest first
-        mask = 0
-        for k, item in enumerate(problem.item_of_fault):
-            if t.faults >> k & 1:
-                mask |= 1 << item
-        out.setdefault(mask, t)
+    for t, mask in zip(cands, _column_masks(cands, problem).tolist(), strict=True):  # sorted cheapest first
+        out.setdefault(int(mask), t)
     return out
 
 
-def _greedy_columns(problem: Problem, cands: Sequence[Candidate], nf: int, method: Method) -> list[int]:
+def _greedy_columns(problem: Problem, cands: Sequence[Candidate], cover: BoolMatrix) -> list[int]:
+    """The paper's greedy (`greedy`) on the reduced problem, as column indices: candidates in cost order,
+    kept when they separate a required item pair not separated yet (a fault pair is separated exactly when
+    its item pair is, and every separable item pair is required)."""
     index = {c: i for i, c in enumerate(problem.columns)}
+    rows = np.packbits(cover, axis=1)
+    covered = 0
     cols = []
-    for t in greedy(cands, nf, method).tests:
-        mask = 0
-        for k, item in enumerate(problem.item_of_fault):
-            if t.faults >> k & 1:
-                mask |= 1 << item
-        cols.append(index[mask])
+    for mask in _column_masks(cands, problem).tolist():  # cands are in greedy's order (cheapest first)
+        c = index.get(int(mask))
+        if c is None:  # no faults of any item: separates nothing
+            continue
+        row = int.from_bytes(rows[c].tobytes(), "big")
+        if row & ~covered:
+            covered |= row
+            cols.append(c)
     return sorted(set(cols))
 
 
-def _count_stage(problem: Problem, cover: BoolMatrix, best: list[int], lb: int,
-                 deadline: float) -> tuple[list[int], int]:
+def _count_stage(problem: Problem, cover: BoolMatrix, costs: IntArray, best: list[int], lb: int,
+                 deadline: float, exact: _ExactSolver) -> tuple[list[int], int]:
     """First shrink the incumbent from above by local search (k = |best| - 1, ...). Then for k = lb, lb+1,
-    ...: a short local search may find a selection with k columns (then k is optimal, all smaller k being
-    refuted); otherwise the exact search finds one or proves none exists (lb = k+1)."""
-    search: CodeSearch | None = None
+    ...: a short local search (only without SAT, which finds selections fast) may find a selection with k
+    columns (then k is optimal, all smaller k being refuted); otherwise the exact search finds one or
+    proves none exists (lb = k+1). When one refutation would prove the incumbent's count (lb = |best| - 1),
+    the cost search at |best| starts beside it on the second core (`_ExactSolver.speculate`)."""
     iterations = min(COUNT_SEARCH_ITERATIONS, 20 * len(problem.columns))
     while lb < len(best) - 1 and time.monotonic() < deadline:  # shrink the incumbent from above first
         found = local_search(cover, len(best) - 1, iterations=iterations, seed=len(best), deadline=deadline)
@@ -154,27 +177,40 @@ def _count_stage(problem: Problem, cover: BoolMatrix, best: list[int], lb: int,
             break
         best = sorted(found)
     while lb < len(best):
-        found = local_search(cover, lb, iterations=iterations, seed=lb, deadline=deadline)
+        found = None
+        if exact.sat is None:
+            found = local_search(cover, lb, iterations=iterations, seed=lb, deadline=deadline)
+        elif lb == len(best) - 1:
+            best = sorted(cheaper_swaps(cover, costs, best, deadline))
+            exact.speculate(len(best), int(costs[best].sum()))
         try:
             if found is None:
-                search = search or CodeSearch(problem, deadline)
-                found = search.feasible(lb)
-        except SearchTimeoutError:
+                found = exact.feasible(lb, deadline)
+        except (SearchTimeoutError, selection_sat.SatTimeoutError):
             break
         if found is None:
             lb += 1
         else:
             best = sorted(found)
+            exact.cancel_pending()
     return best, lb
 
 
 def _cost_stage(problem: Problem, cover: BoolMatrix, costs: IntArray, best: list[int], count_proven: bool,
-                deadline: float) -> tuple[list[int], bool]:
-    """Cheapest selection with len(best) columns: local-search incumbents, then branch and bound."""
+                deadline: float, exact: _ExactSolver) -> tuple[list[int], bool]:
+    """Cheapest selection with len(best) columns: cheaper swaps, local-search incumbents (skipped when the
+    exact SAT search follows: it improves faster), then the exact search from that upper bound."""
     k = len(best)
+    if count_proven and exact.pending_k() == k:  # started during the count stage
+        better, proven = exact.cheapest(k, int(costs[best].sum()), deadline)
+        if better is not None and costs[better].sum() < costs[best].sum():
+            best = better
+        return sorted(best), proven
+    exact.cancel_pending()
     iterations = min(LOCAL_SEARCH_ITERATIONS, 20 * len(problem.columns))
     best = cheaper_swaps(cover, costs, best, deadline)
-    for seed in range(COST_SEEDS):
+    exact_follows = count_proven and exact.sat is not None
+    for seed in range(0 if exact_follows else COST_SEEDS):
         if time.monotonic() > deadline:
             break
         found = local_search(cover, k, iterations=iterations, seed=100 + seed, deadline=deadline)
@@ -184,11 +220,55 @@ def _cost_stage(problem: Problem, cover: BoolMatrix, costs: IntArray, best: list
                 best = found
     if not count_proven:
         return sorted(best), False
-    try:
-        better = CodeSearch(problem, deadline, with_costs=True).cheapest(k, int(costs[best].sum()))
-    except SearchTimeoutError:
-        return sorted(best), False
-    return sorted(better if better is not None else best), True
+    better, proven = exact.cheapest(k, int(costs[best].sum()), deadline)
+    if better is not None and costs[better].sum() < costs[best].sum():
+        best = better
+    return sorted(best), proven
+
+
+class _ExactSolver:
+    """The exact decisions: SAT (`selection_sat`) when python-sat is installed, else the code search."""
+
+    def __init__(self, problem: Problem) -> None:
+        self.problem = problem
+        self.sat = selection_sat.SatSelector(problem) if selection_sat.HAVE_SAT else None
+        self.search: CodeSearch | None = None
+        self.pending: selection_sat.PendingCost | None = None
+
+    def feasible(self, k: int, deadline: float) -> list[int] | None:
+        """A selection with at most k columns, or None when none exists (time-outs raise)."""
+        if self.sat is not None:
+            return self.sat.feasible(k, deadline)
+        self.search = self.search or CodeSearch(self.problem, deadline)
+        return self.search.feasible(k)
+
+    def speculate(self, k: int, upper: int) -> None:
+        """Start the cost search at k in the background (SAT only; one at a time)."""
+        if SPECULATE and self.sat is not None and self.pending is None:
+            self.pending = self.sat.cheapest_start(k, upper)
+
+    def pending_k(self) -> int | None:
+        return None if self.pending is None else self.pending.k
+
+    def cancel_pending(self) -> None:
+        if self.pending is not None:
+            self.pending.cancel()
+            self.pending = None
+
+    def cheapest(self, k: int, upper: int, deadline: float) -> tuple[list[int] | None, bool]:
+        """(a selection with k columns cheaper than `upper`, or None; whether it is proven cheapest, or
+        for None, whether none cheaper exists). Best effort at the deadline, then unproven. Collects the
+        background search if it was started for this k (it started from an upper bound at least as
+        large as `upper`, so its answer is only used when cheaper than `upper`)."""
+        if self.pending is not None and self.pending.k == k:
+            pending, self.pending = self.pending, None
+            return pending.collect(deadline)
+        if self.sat is not None:
+            return self.sat.cheapest(k, upper, deadline)
+        try:
+            return CodeSearch(self.problem, deadline, with_costs=True).cheapest(k, upper), True
+        except SearchTimeoutError:
+            return None, False
 
 
 def reaches_same_matrix(selection: Selection, tests: Sequence[Candidate], nf: int) -> bool:

@@ -1,5 +1,9 @@
 """Exact minimum test selection: reduction, bounds, symmetry and a code-assignment search.
 
+(`selection_sat` decides the same questions with a SAT solver on the same code model and is used when
+python-sat is installed; the search here is the pure-Python fallback and the reference it is tested
+against.)
+
 The problem. Every candidate test is a column T (a set of faults). A set of k selected columns gives every
 fault j a *code*: the k-bit vector of the selected tests sensitive to j (the no-fault row has code 0). The
 selection reaches the fault matrix of all candidates iff every *required* pair is separated:
@@ -197,7 +201,9 @@ def automorphisms(problem: Problem, order: Sequence[int], with_costs: bool,
                   max_nodes: int = 200_000) -> list[list[int]]:
     """Item permutations mapping the column family onto itself (and costs, if asked): stabiliser-chain
     generators relative to `order` (each fixes the items before its base point). Every returned
-    permutation is verified on all columns. The backtracking shares a budget of `max_nodes`; stopping
+    permutation is verified on all columns. Candidate images are pruned by co-occurrence counts (with
+    costs: also cost-weighted co-occurrence, without which the search spends its budget on targets that
+    only fail at the cost check). The backtracking shares a budget of `max_nodes`; stopping
     early only loses symmetry pruning, never exactness."""
     n = problem.n_items
     cols = np.array(problem.columns, dtype=np.uint64)
@@ -208,6 +214,9 @@ def automorphisms(problem: Problem, order: Sequence[int], with_costs: bool,
     co = np.zeros((n, n), dtype=np.int64)
     bits = np.array([((cols >> np.uint64(i)) & np.uint64(1)).astype(np.int64) for i in range(n)])
     co[:, :] = bits @ bits.T
+    if with_costs:  # cost-weighted co-occurrence is invariant too: prunes targets that only fail on costs
+        weighted = (bits * np.array(problem.costs, dtype=np.int64)) @ bits.T
+        co = co * (int(weighted.max()) + 1) + weighted
 
     def verify(perm: list[int]) -> bool:
         mapped = _map_columns(sorted_cols, perm)

@@ -11,7 +11,7 @@ from typing import Any
 from fdi_analysis.dm import DMResult, dulmage_mendelsohn, equivalence_classes
 from fdi_analysis.isolability import IsolabilityResult, isolability
 from fdi_analysis.model import Model
-from fdi_analysis.structure import Structure
+from fdi_analysis.structure import Structure, StructureError
 
 
 @dataclass(frozen=True)
@@ -84,6 +84,15 @@ def structural_problems(st: Structure, dm: DMResult, iso: IsolabilityResult) -> 
     if nd and dm.redundancy > 0:
         out.append(f"not detectable (no equation in the overdetermined part): {', '.join(nd)}")
     return out
+
+
+def require_redundancy(st: Structure) -> None:
+    """StructureError naming the problem when the structure has no redundancy: there is no MSO set, no test
+    and nothing to select or export (the commands that need tests call this first)."""
+    dm = dulmage_mendelsohn(st.X)
+    if dm.redundancy == 0:
+        problems = structural_problems(st, dm, isolability(st))
+        raise StructureError("; ".join(problems) or "no structural redundancy")
 
 
 def summarize(model: Model) -> Summary:

@@ -10,7 +10,16 @@
  *   else if first usable step since then: reset the generator at the current inputs, restart the evaluator
  *        and count warmup_steps steps with status NOT_EVALUABLE (the filters settle), then
  *   status_i = fdi_eval(r_i)  (OK or ALARM); a non-finite residual is rejected (NOT_EVALUABLE, re-arm)
- *   isolation on the alarm / evaluable masks in the configured mode.
+ *   isolation on the alarm / evaluable masks in the configured mode (below).
+ *
+ * Isolation episodes. An episode starts at the first alarm; the tests in alarm at any step of the episode
+ * stay accused (latched: a test that reacts only transiently to a step fault still counts) until no test
+ * has been in alarm for episode_clear_steps steps. `detected` holds during the episode. With exoneration, a
+ * test clears the faults of its table row `exonerating` only once it has had time to react: it must have
+ * been evaluable and quiet for iso_settle_steps consecutive steps and the episode must be that old. Before
+ * that the candidates are the faults that explain every accused test (no exoneration), which contains the
+ * true fault but may span several classes. iso_settle_steps = 0 and episode_clear_steps = 1 give the
+ * memoryless rule (isolation on this step's masks only).
  * Signals that no test needs do not matter. fdi_diag_step() returns FDI_OK for invalid or non-finite
  * signals: that is an operating condition reported per test, not an error of the call.
  *
@@ -21,7 +30,7 @@
  * Cost per step: sum of the generators (r1, r2 4 filters, r3, r4 8 filters) + ~25 operations per test
  * for evaluation + n_faults iterations of isolation. Measured (scripts/bench_fw.sh, kinematic table, 4
  * tests): ~2,500 instructions per step on Cortex-M4F (qemu -icount), ~2,400 on x86-64 (callgrind).
- * Memory: sizeof(fdi_diag_t) = 2,532 bytes on Cortex-M4F for FDI_DIAG_MAX_TESTS = 16 (~36 + 156 per test
+ * Memory: sizeof(fdi_diag_t) = 2,580 bytes on Cortex-M4F for FDI_DIAG_MAX_TESTS = 16 (~48 + 158 per test
  * slot), caller-owned (static or stack); the library itself has no .data/.bss.
  */
 #ifndef FDI_DIAG_H
@@ -58,6 +67,8 @@ typedef struct
     uint16_t clear_count;     /* consecutive quiet samples to clear it, >= 1 */
     uint16_t warmup_steps;    /* steps after (re)start before a test is evaluable, >= the settling time */
     fdi_iso_mode_t mode;      /* isolation with or without exoneration */
+    uint16_t iso_settle_steps;    /* steps a quiet test (and the episode) must last before it exonerates */
+    uint16_t episode_clear_steps; /* steps without any alarm that end an episode, >= 1 */
 } fdi_diag_config_t;
 
 typedef struct
@@ -66,7 +77,12 @@ typedef struct
     fdi_gen_param_t par;
     fdi_iso_mode_t mode;
     uint16_t warmup_steps;
+    uint16_t iso_settle_steps;
+    uint16_t episode_clear_steps;
+    uint16_t episode_age; /* steps since the episode started (saturating) */
+    uint16_t calm;        /* consecutive steps without an alarm during the episode */
     uint8_t n_tests;
+    uint32_t accused;   /* tests in alarm at some step of the current episode (0: no episode) */
     uint32_t rearm;     /* tests whose generator must be reset at the next usable step */
     uint32_t alarm;     /* tests in alarm (last step) */
     uint32_t evaluable; /* tests evaluable (last step) */
@@ -76,6 +92,7 @@ typedef struct
     float residual[FDI_DIAG_MAX_TESTS];
     float ratio[FDI_DIAG_MAX_TESTS];
     uint16_t warm[FDI_DIAG_MAX_TESTS];
+    uint16_t quiet_run[FDI_DIAG_MAX_TESTS]; /* consecutive evaluable steps without alarm (saturating) */
 } fdi_diag_t; /* opaque by convention */
 
 typedef struct
@@ -86,7 +103,8 @@ typedef struct
     fdi_test_status_t status[FDI_DIAG_MAX_TESTS];
     float residual[FDI_DIAG_MAX_TESTS]; /* last residual (0 while not evaluable for lack of inputs) */
     float ratio[FDI_DIAG_MAX_TESTS];    /* last test ratio (0 while not evaluable) */
-    fdi_iso_result_t iso;               /* candidates and isolability class */
+    uint32_t accused_mask;              /* tests accused in the current isolation episode */
+    fdi_iso_result_t iso;               /* candidates and isolability class (detected: episode active) */
 } fdi_diag_result_t;
 
 /* BAD_ARG: NULL or bad config; BAD_TABLE: table fails fdi_table_check(); NOT_FINITE: NaN/Inf in cfg. */

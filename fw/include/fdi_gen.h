@@ -25,6 +25,15 @@
  * below (a switch on the slot); they use up to FDI_GEN_MAX_FILTERS filters of the instance and the shared
  * filter coefficients of fdi_gen_param_t; model parameters (including d_x, d_y) are compiled in from the
  * model file, so fdi_gen_param_t.d_x/d_y only apply to the hand-written kinematic kinds.
+ * A generated generator with integral causality (a state its MSO set would otherwise integrate open loop,
+ * e.g. a wheel speed without its sensor) keeps the state estimate in the instance's fdi_obs_t (xh, and the
+ * observer input of the previous step in g_prev): xh' = F(xh, u) + L(xh, u) e(xh, u), r = e, with the
+ * run-time gain L = -max(lambda + a, 0) c / (c^2 + eps) (a = dF/dxh, c = de/dxh, compiled in) and the step
+ * of fdi_gen_internal.h (exponential of the error pole a + L c, input averaged over the step; stable for any
+ * pole). At a reset xh starts from the state's sensor outside the MSO set (when finite, else 0; it is not
+ * an input of the test); the error decays with the pole (lambda = 2 x 2 pi x 1 Hz = 12.6 1/s where the
+ * injection acts, the wheel's own slip dynamics of ~ -150..-800 1/s otherwise) inside the warm-up.
+ * fdi_gen_param_t.obs applies to the hand-written kinds only.
  *
  * Memory: fdi_gen_t 4 + 16 filters * 12 + 8 = 204 bytes; fdi_gen_param_t 32 bytes (shared by all tests).
  */

@@ -21,6 +21,14 @@
  *    signature equals fault j's (method B of the paper: faults with identical signatures cannot be told
  *    apart by any selected test). It contains bit j itself; a fault with a unique signature has a class of
  *    one bit. The classes partition the faults and fdi_table_check() verifies them against the signatures.
+ *  - test_size (format 3) is an n_faults x n_tests matrix, row j = fault j, column i = test i: the size of
+ *    fault j (in the fault's unit) at which test i reacts, from the analysis' fault-size sweep; 0 where test
+ *    i does not react to fault j within the fault's physical limits (or is not sensitive to it at all). It
+ *    decides exoneration (fdi_iso.h): a quiet test clears fault j only when the tests in alarm imply, were
+ *    the fault j, a size of at least exoneration_margin times the size at which the quiet test reacts. A
+ *    structurally sensitive but weak test therefore accuses a fault when it alarms and never clears it.
+ *    A table without measured sizes uses 1 for every signature pair and margin 1: the classic rule (every
+ *    quiet test of the signature clears the fault).
  *  - tests[i].input_mask uses the FDI_SIGM_* layout of fdi_signals.h and must contain every signal the
  *    generator of tests[i].kind reads (it may contain more).
  *  - Residual evaluation: alarm when r^2 > gate^2 * variance (|r| > gate * sigma); variance is the
@@ -34,7 +42,7 @@
  *  - kind FDI_GEN_NONE marks a selected test without an on-board generator yet: it is always reported
  *    "not evaluable" and therefore neither accuses nor exonerates any fault.
  *
- * Memory (flash): ~40 bytes + 32 bytes per test + 8 bytes per fault + the strings. Cost: none at run time.
+ * Memory (flash): ~48 bytes + 32 bytes per test + 8 bytes per fault + 4 bytes per (fault, test) + the strings. Cost: none at run time.
  */
 #ifndef FDI_TABLE_H
 #define FDI_TABLE_H
@@ -43,7 +51,7 @@
 
 #include "fdi_status.h"
 
-#define FDI_TABLE_FORMAT_VERSION 2U /* bump on any change of these types; checked by fdi_table_check() */
+#define FDI_TABLE_FORMAT_VERSION 3U /* bump on any change of these types; checked by fdi_table_check() */
 #define FDI_TABLE_MAX_FAULTS 32U    /* fault bitmasks are uint32_t */
 #define FDI_TABLE_MAX_TESTS 32U     /* test bitmasks are uint32_t */
 
@@ -82,7 +90,7 @@ typedef enum
 /* One selected MSO set = one test. */
 typedef struct
 {
-    uint16_t mso_id;            /* MSO number from the analysis (e.g. 3 for MSO3 of Table II) */
+    uint32_t mso_id;            /* MSO number from the analysis (e.g. 3 for MSO3 of Table II, 433 for MSO433) */
     fdi_gen_kind_t kind;        /* residual generator, see fdi_gen_kind_t */
     uint32_t fault_mask;        /* faults the test is sensitive to (bit j = fault f(j+1)) */
     uint32_t input_mask;        /* measured signals the generator reads (FDI_SIGM_*) */
@@ -114,13 +122,16 @@ typedef struct
     const fdi_test_desc_t *tests;   /* n_tests tests */
     const uint32_t *fault_signature; /* n_faults rows: bit i = test i is sensitive to the fault */
     const uint32_t *iso_class;      /* n_faults rows: faults structurally not isolable from the fault */
+    const float *test_size;         /* n_faults * n_tests, row-major: size of fault j test i reacts to; 0: never */
+    float exoneration_margin;       /* >= 1: how much larger the implied fault size must be to exonerate */
 } fdi_table_t;
 
 /*
  * Validate a table: version, counts, non-NULL arrays and strings, no bits beyond n_faults / n_tests /
  * FDI_SIGM_ALL, known generator kinds, input masks covering each generator's signals, finite positive
  * gate and variance, signature matrix equal to the transposed fault masks, classes equal to the sets of
- * faults with identical signatures. FDI_OK or FDI_BAD_ARG (NULL) or FDI_BAD_TABLE.
+ * faults with identical signatures, finite non-negative test sizes that are 0 outside the signatures,
+ * margin finite and >= 1. FDI_OK or FDI_BAD_ARG (NULL) or FDI_BAD_TABLE.
  * Cost: O(n_faults^2 + n_tests * n_faults) bit operations, once at init.
  */
 fdi_status_t fdi_table_check(const fdi_table_t *table);

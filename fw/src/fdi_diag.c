@@ -39,7 +39,7 @@ static fdi_status_t check_config(const fdi_diag_config_t *cfg)
     {
         st = FDI_NOT_FINITE;
     }
-    else if ((cfg->table->n_tests > FDI_DIAG_MAX_TESTS) ||
+    else if ((cfg->table->n_tests > FDI_DIAG_MAX_TESTS) || (cfg->episode_clear_steps == 0U) ||
              ((cfg->mode != FDI_ISO_NO_EXONERATION) && (cfg->mode != FDI_ISO_EXONERATION)))
     {
         st = FDI_BAD_ARG;
@@ -82,12 +82,18 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             self->residual[i] = 0.0f;
             self->ratio[i] = 0.0f;
             self->warm[i] = cfg->warmup_steps;
+            self->quiet_run[i] = 0U;
         }
         if (st == FDI_OK)
         {
             self->table = t;
             self->mode = cfg->mode;
             self->warmup_steps = cfg->warmup_steps;
+            self->iso_settle_steps = cfg->iso_settle_steps;
+            self->episode_clear_steps = cfg->episode_clear_steps;
+            self->episode_age = 0U;
+            self->calm = 0U;
+            self->accused = 0U;
             self->n_tests = t->n_tests;
             self->rearm = 0xFFFFFFFFU;
             self->alarm = 0U;
@@ -158,6 +164,61 @@ static bool run_test(fdi_diag_t *self, uint32_t i, const fdi_inputs_t *in, bool 
     return evaluable;
 }
 
+static uint16_t sat_inc(uint16_t x)
+{
+    return (x < 0xFFFFU) ? (uint16_t)(x + 1U) : x;
+}
+
+/* Episode bookkeeping and the isolation of this step (see "Isolation episodes" in fdi_diag.h). */
+static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable)
+{
+    uint32_t exonerate = 0U;
+    uint32_t i;
+    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+    {
+        const uint32_t bit = (uint32_t)1U << i;
+        self->quiet_run[i] = (((evaluable & bit) != 0U) && ((alarm & bit) == 0U)) ? sat_inc(self->quiet_run[i]) : 0U;
+    }
+    if (alarm != 0U)
+    {
+        if (self->accused == 0U)
+        {
+            self->episode_age = 0U;
+        }
+        self->accused |= alarm;
+        self->calm = 0U;
+    }
+    else if (self->accused != 0U)
+    {
+        self->calm = sat_inc(self->calm);
+        if (self->calm >= self->episode_clear_steps)
+        {
+            self->accused = 0U;
+        }
+    }
+    else
+    {
+        /* no episode */
+    }
+    if (self->accused != 0U)
+    {
+        self->episode_age = sat_inc(self->episode_age);
+    }
+    if ((self->mode == FDI_ISO_EXONERATION) && (self->episode_age >= self->iso_settle_steps))
+    {
+        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+        {
+            if (self->quiet_run[i] >= self->iso_settle_steps)
+            {
+                exonerate |= ((uint32_t)1U << i) & evaluable;
+            }
+        }
+    }
+    exonerate &= ~self->accused;
+    /* accused tests stay in the alarm set even while not evaluable now: they alarmed in this episode */
+    return fdi_iso_run(self->table, self->accused, self->accused | exonerate, self->mode, &self->iso);
+}
+
 fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_inputs_t *inputs, uint32_t validity)
 {
     fdi_status_t st = FDI_OK;
@@ -195,7 +256,7 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_inputs_t *inputs, uint32_
         }
         self->alarm = alarm;
         self->evaluable = evaluable;
-        st = fdi_iso_run(self->table, alarm, evaluable, self->mode, &self->iso);
+        st = isolate(self, alarm, evaluable);
     }
     return st;
 }
@@ -224,6 +285,7 @@ fdi_status_t fdi_diag_result(const fdi_diag_t *self, fdi_diag_result_t *out)
             out->residual[i] = used ? self->residual[i] : 0.0f;
             out->ratio[i] = used ? self->ratio[i] : 0.0f;
         }
+        out->accused_mask = self->accused;
         out->iso = self->iso;
         st = FDI_OK;
     }

@@ -1,6 +1,7 @@
 /* fdi_gen.c - generator parameters, input masks and dispatch on the kind (see fdi_gen.h). */
 #include "fdi_gen.h"
 
+#include <math.h>
 #include <stdbool.h>
 #include <stddef.h>
 
@@ -240,4 +241,59 @@ fdi_status_t fdi_gen_finish(fdi_status_t st, float value, bool reset, float *r)
         /* the failing status is returned unchanged */
     }
     return res;
+}
+
+float fdi_gen_obs_predict(const fdi_gen_t *g, const fdi_gen_param_t *par, float g1, float jac)
+{
+    float xh = 0.0f;
+    if ((g != NULL) && (par != NULL))
+    {
+        const float dt = 2.0f * par->svf.h;
+        const float jdt = jac * dt;
+        const float phi = (fabsf(jdt) > 1.0e-6f) ? (expm1f(jdt) / jac) : dt;
+        xh = g->obs.xh + (phi * (0.5f * (g->obs.g_prev + g1)));
+    }
+    return xh;
+}
+
+fdi_status_t fdi_gen_obs_store(fdi_gen_t *g, float xh, float g_next)
+{
+    fdi_status_t st = FDI_OK;
+    if (g == NULL)
+    {
+        st = FDI_BAD_ARG;
+    }
+    else if (!fdi_float_is_finite(xh) || !fdi_float_is_finite(g_next))
+    {
+        st = FDI_NOT_FINITE;
+    }
+    else
+    {
+        g->obs.xh = xh;
+        g->obs.g_prev = g_next;
+    }
+    return st;
+}
+
+float fdi_gen_heaviside(float x)
+{
+    return (x > 0.0f) ? 1.0f : 0.0f;
+}
+
+float fdi_gen_sign(float x)
+{
+    float s = 0.0f;
+    if (x > 0.0f)
+    {
+        s = 1.0f;
+    }
+    else if (x < 0.0f)
+    {
+        s = -1.0f;
+    }
+    else
+    {
+        /* 0 (and NaN, caught by the caller's finiteness check) */
+    }
+    return s;
 }

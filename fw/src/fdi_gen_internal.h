@@ -23,6 +23,21 @@ fdi_status_t fdi_gen_filter_step(fdi_gen_t *g, const fdi_gen_param_t *par, uint3
 fdi_status_t fdi_gen_status_worst(fdi_status_t a, fdi_status_t b);
 fdi_status_t fdi_gen_finish(fdi_status_t st, float value, bool reset, float *r);
 
+/*
+ * Observer generators (integral causality for one state, fdi_analysis/residuals/observer.py): the estimate
+ * lives in g->obs (xh = estimate, g_prev = observer input G of the previous step).
+ * fdi_gen_obs_predict: xh[k] = xh[k-1] + phi * (g_prev + g1) / 2 with phi = expm1(jac dt) / jac (dt when
+ *   |jac dt| < 1e-6), the exponential of the error pole jac = a + L c; stable for every jac < 0. g NULL or
+ *   par NULL give 0 (callers pass their checked instance).
+ * fdi_gen_obs_store: keep xh and g_prev for the next step; NOT_FINITE (nothing stored) on NaN/Inf, BAD_ARG on
+ *   NULL.
+ * fdi_gen_heaviside(x): 1 for x > 0, else 0; fdi_gen_sign(x): -1, 0, 1 (derivatives of Max and Abs).
+ */
+float fdi_gen_obs_predict(const fdi_gen_t *g, const fdi_gen_param_t *par, float g1, float jac);
+fdi_status_t fdi_gen_obs_store(fdi_gen_t *g, float xh, float g_next);
+float fdi_gen_heaviside(float x);
+float fdi_gen_sign(float x);
+
 fdi_status_t fdi_gen_run_checked(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi_inputs_t *in, bool reset,
                                  float *r);
 

@@ -8,11 +8,54 @@ static uint32_t iso_low_bits(uint32_t n)
     return (n >= 32U) ? 0xFFFFFFFFU : (((uint32_t)1U << (n & 31U)) - 1U);
 }
 
+/*
+ * Whether a quiet test clears fault j: the alarms imply, were the fault j, a size of at least
+ * implied = max over alarmed tests of their reaction size (any alarmed test that never reacts to j within
+ * its limits implies a size beyond every stated one); a quiet test with reaction size s > 0 and
+ * margin * s <= implied would have reacted.
+ */
+static bool iso_exonerated(const fdi_table_t *table, uint32_t j, uint32_t alarm_mask, uint32_t quiet)
+{
+    const uint32_t nt = (uint32_t)table->n_tests;
+    const float *row = &table->test_size[(size_t)j * (size_t)nt];
+    float implied = 0.0f;
+    bool beyond = false;
+    bool cleared = false;
+    uint32_t i;
+    for (i = 0U; i < nt; ++i)
+    {
+        if ((alarm_mask & ((uint32_t)1U << i)) != 0U)
+        {
+            if (row[i] <= 0.0f)
+            {
+                beyond = true;
+            }
+            else if (row[i] > implied)
+            {
+                implied = row[i];
+            }
+            else
+            {
+                /* a smaller size implies less */
+            }
+        }
+    }
+    for (i = 0U; (i < nt) && !cleared; ++i)
+    {
+        if (((quiet & ((uint32_t)1U << i)) != 0U) && (row[i] > 0.0f))
+        {
+            cleared = beyond || ((table->exoneration_margin * row[i]) <= implied);
+        }
+    }
+    return cleared;
+}
+
 fdi_status_t fdi_iso_run(const fdi_table_t *table, uint32_t alarm_mask, uint32_t evaluable_mask,
                          fdi_iso_mode_t mode, fdi_iso_result_t *out)
 {
     fdi_status_t st = FDI_OK;
     if ((table == NULL) || (out == NULL) || (table->fault_signature == NULL) || (table->iso_class == NULL) ||
+        (table->test_size == NULL) ||
         (table->n_faults > FDI_TABLE_MAX_FAULTS) || (table->n_tests > FDI_TABLE_MAX_TESTS))
     {
         st = FDI_BAD_ARG;
@@ -35,7 +78,7 @@ fdi_status_t fdi_iso_run(const fdi_table_t *table, uint32_t alarm_mask, uint32_t
             for (j = 0U; j < (uint32_t)table->n_faults; ++j)
             {
                 const uint32_t sig = table->fault_signature[j];
-                if (((alarm_mask & ~sig) == 0U) && ((quiet & sig) == 0U))
+                if (((alarm_mask & ~sig) == 0U) && !iso_exonerated(table, j, alarm_mask, quiet & sig))
                 {
                     cand |= ((uint32_t)1U << j);
                 }

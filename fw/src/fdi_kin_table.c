@@ -1,14 +1,15 @@
 /*
  * fdi_kin_table.c - hand-made diagnosis table of the kinematic tests MSO1..MSO4 (see fdi_kin_table.h).
- * Data only. Variances: fault-free residual variance measured on the synthetic manoeuvre of
- * tests/fw/fdi_test_util.h (turn at 10 m/s and 0.5 rad/s plus sinusoidal speed, side-slip and yaw
- * manoeuvres; white sensor noise sigma ax, ay 0.02 m/s^2, yaw rate 0.001 rad/s, vx, vy 0.01 m/s) at the
- * design point below (100 Hz, 1 Hz derivative filters), sigma rounded up by ~20 %.
+ * Data only. Variances and reaction sizes: fw/generated/fdi_kin_calibration.h, from drives of the vehicle
+ * simulator through the C ECU core at the design point below (100 Hz, 1 Hz derivative filters) by
+ * `python -m fdi_host.kin_calibration` (the rules of `fdi-analyze calibrate` and `fault-sizes`; a test fails
+ * when the header is stale).
  */
 #include "fdi_kin_table.h"
 
 #include <stddef.h>
 
+#include "fdi_kin_calibration.h"
 #include "fdi_signals.h"
 
 #define F1 0x01U /* ax sensor */
@@ -22,13 +23,13 @@ static const char *const kin_fault_names[5] = {"f1 ax sensor", "f2 ay sensor", "
 
 static const fdi_test_desc_t kin_tests[4] = {
     {1U, FDI_GEN_KIN_X_DERIV, F1 | F3 | F4 | F5, FDI_SIGM_AX_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M,
-     5.0f, 1.3e-4f, "Kinematics. Measured a_x & measured velocities"},
+     5.0f, FDI_KIN_VARIANCE_1, "Kinematics. Measured a_x & measured velocities"},
     {2U, FDI_GEN_KIN_Y_DERIV, F2 | F3 | F4 | F5, FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M,
-     5.0f, 1.44e-4f, "Kinematics. Measured a_y & measured velocities"},
+     5.0f, FDI_KIN_VARIANCE_2, "Kinematics. Measured a_y & measured velocities"},
     {3U, FDI_GEN_KIN_ARR3, F1 | F2 | F3 | F4, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M,
-     5.0f, 3.2e-4f, "Kinematics. No v_y measurement"},
+     5.0f, FDI_KIN_VARIANCE_3, "Kinematics. No v_y measurement"},
     {4U, FDI_GEN_KIN_ARR4, F1 | F2 | F3 | F5, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VY_M,
-     5.0f, 3.8e-4f, "Kinematics. No v_x measurement"},
+     5.0f, FDI_KIN_VARIANCE_4, "Kinematics. No v_x measurement"},
 };
 
 /* Column j of the test fault masks: bit i = test i sees fault j. */
@@ -36,6 +37,10 @@ static const uint32_t kin_signature[5] = {0x0DU, 0x0EU, 0x0FU, 0x07U, 0x0BU};
 
 /* Every signature is unique: each class is the fault itself. */
 static const uint32_t kin_iso_class[5] = {F1, F2, F3, F4, F5};
+
+/* Reaction sizes (fault j, test i) for exoneration (fdi_iso.h): a weak test (e.g. MSO1 for the yaw rate
+   offset f3, which enters r1 only as vy * f3) does not clear the fault when it stays quiet. */
+static const float kin_test_size[5 * 4] = FDI_KIN_TEST_SIZES;
 
 const fdi_table_t fdi_kin_table = {
     FDI_TABLE_FORMAT_VERSION,
@@ -46,4 +51,6 @@ const fdi_table_t fdi_kin_table = {
     kin_tests,
     kin_signature,
     kin_iso_class,
+    kin_test_size,
+    FDI_KIN_EXONERATION_MARGIN,
 };

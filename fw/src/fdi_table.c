@@ -23,7 +23,9 @@ static bool header_ok(const fdi_table_t *t)
     return (t->format_version == FDI_TABLE_FORMAT_VERSION) && (t->n_faults >= 1U) &&
            (t->n_faults <= FDI_TABLE_MAX_FAULTS) && (t->n_tests >= 1U) && (t->n_tests <= FDI_TABLE_MAX_TESTS) &&
            (t->fault_names != NULL) && (t->tests != NULL) && (t->fault_signature != NULL) &&
-           (t->iso_class != NULL) && table_positive_finite(t->design.dt) && table_positive_finite(t->design.cutoff_hz) &&
+           (t->iso_class != NULL) && (t->test_size != NULL) && fdi_float_is_finite(t->exoneration_margin) &&
+           (t->exoneration_margin >= 1.0f) && table_positive_finite(t->design.dt) &&
+           table_positive_finite(t->design.cutoff_hz) &&
            table_positive_finite(t->design.zeta) && table_positive_finite(t->design.obs_gain);
 }
 
@@ -73,6 +75,12 @@ static bool faults_ok(const fdi_table_t *t)
             }
         }
         ok = ok && (t->iso_class[j] == same);
+        for (g = 0U; ok && (g < (uint32_t)t->n_tests); ++g)
+        {
+            const float size = t->test_size[(j * (uint32_t)t->n_tests) + g];
+            ok = fdi_float_is_finite(size) && (size >= 0.0f) &&
+                 ((size <= 0.0f) || ((t->fault_signature[j] & ((uint32_t)1U << g)) != 0U));
+        }
     }
     return ok;
 }

@@ -18,7 +18,6 @@ from typing import Any
 
 import can
 
-from fdi_host import canlog
 from fdi_host.live_bus import StopFlag, add_bus_arguments, open_bus, signal_ready, try_realtime
 from fdi_host.live_ecu import DIAG_ID, EcuSession
 
@@ -57,7 +56,8 @@ def counter_summary(c: Any) -> str:
 
 
 def run(bus: can.BusABC, session: EcuSession, stop: StopFlag, duration: float | None, idle_exit: float | None,
-        rx_log: list[canlog.Frame] | None = None, origin_file: Path | None = None, period: float = 0.005) -> None:
+        rx_log: list[tuple[float, int, bytes]] | None = None, origin_file: Path | None = None,
+        period: float = 0.005) -> None:
     """The receive / poll / send loop until `stop` (or the duration / idle limit).
 
     Timer polls run the steps due two steps before now: they only matter when traffic stops (timeouts), and
@@ -76,11 +76,12 @@ def run(bus: can.BusABC, session: EcuSession, stop: StopFlag, duration: float | 
         if msg is not None and not (msg.is_error_frame or msg.is_remote_frame):
             last_rx = time.monotonic()
             fid, data, ts = int(msg.arbitration_id), bytes(msg.data), float(msg.timestamp)
-            if session.origin is None and origin_file is not None and origin_file.exists():
-                session.anchor(float(origin_file.read_text(encoding="utf-8")))
-            out = session.feed(fid, data, ts, 0.0)
+            out_anchor: list[tuple[int, bytes]] = []
+            if session.origin is None and fid != DIAG_ID and origin_file is not None and origin_file.exists():
+                out_anchor = session.anchor(float(origin_file.read_text(encoding="utf-8")), 0.0, ts)
+            out = out_anchor + session.feed(fid, data, ts, 0.0)
             if rx_log is not None and fid != DIAG_ID:
-                rx_log.append(canlog.Frame(ts, fid, data))
+                rx_log.append((ts, fid, data))
         else:
             out = session.tick(time.time(), grace)
         for fid, data in out:
@@ -106,7 +107,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not args.quiet:
         print(f"fdi-ecu: table {args.table} on {args.interface}; Ctrl-C to stop", flush=True)
     try:
-        rx_log: list[canlog.Frame] | None = [] if args.rx_log is not None else None
+        rx_log: list[tuple[float, int, bytes]] | None = [] if args.rx_log is not None else None
         if args.realtime:
             print(f"fdi-ecu: {try_realtime()}", flush=True)
         run(bus, session, stop, args.duration, args.idle_exit, rx_log, args.origin_file)
@@ -117,7 +118,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.log is not None:
         print(f"wrote {session.write(args.log)}", flush=True)
     if args.rx_log is not None and rx_log is not None:
-        canlog.write_log(rx_log, args.rx_log)
+        from fdi_host import canlog  # imported at the end: it pulls in the simulator (seconds), a restarted
+        # ECU must be back on the bus quickly
+
+        canlog.write_log([canlog.Frame(*f) for f in rx_log], args.rx_log)
         print(f"wrote {args.rx_log} ({len(rx_log)} frames)", flush=True)
     return 0
 

@@ -63,6 +63,7 @@ def _struct_types(max_tests: int) -> dict[str, type[ctypes.Structure]]:
             ("table", ctypes.c_void_p), ("d_x", ctypes.c_float), ("d_y", ctypes.c_float),
             ("cusum_k", ctypes.c_float), ("cusum_h", ctypes.c_float), ("set_count", ctypes.c_uint16),
             ("clear_count", ctypes.c_uint16), ("warmup_steps", ctypes.c_uint16), ("mode", ctypes.c_int),
+            ("iso_settle_steps", ctypes.c_uint16), ("episode_clear_steps", ctypes.c_uint16),
         ]
 
     class Config(ctypes.Structure):
@@ -93,7 +94,7 @@ def _struct_types(max_tests: int) -> dict[str, type[ctypes.Structure]]:
         _fields_ = [
             ("n_tests", ctypes.c_uint8), ("alarm_mask", ctypes.c_uint32), ("evaluable_mask", ctypes.c_uint32),
             ("status", ctypes.c_int * max_tests), ("residual", ctypes.c_float * max_tests),
-            ("ratio", ctypes.c_float * max_tests), ("iso", IsoResult),
+            ("ratio", ctypes.c_float * max_tests), ("accused_mask", ctypes.c_uint32), ("iso", IsoResult),
         ]
 
     class Result(ctypes.Structure):
@@ -248,6 +249,7 @@ class EcuResult:
     validity: int  # FDI_SIGM_* mask used by the last step
     alarm_mask: int
     evaluable_mask: int
+    accused_mask: int  # tests accused in the current isolation episode (latched alarms)
     candidates: int  # fault bitmask (bit j = fault f(j+1))
     class_mask: int
     n_classes: int
@@ -276,7 +278,8 @@ class Ecu:
     """One ECU core instance (C struct in a ctypes buffer) on table ``"romo"`` (generated) or ``"kin"``.
 
     Overrides: ``d_x``, ``d_y``, ``cusum_k``, ``cusum_h``, ``set_count``, ``clear_count``, ``warmup_steps``,
-    ``mode`` ("exoneration" | "no_exoneration"), ``timeout_s`` (one value for all messages or a mapping
+    ``mode`` ("exoneration" | "no_exoneration"), ``iso_settle_steps``, ``episode_clear_steps`` (fdi_diag.h),
+    ``timeout_s`` (one value for all messages or a mapping
     message name -> seconds), ``max_delta_counter``, ``max_catchup_steps``.
     """
 
@@ -300,7 +303,7 @@ class Ecu:
         for key in ("d_x", "d_y", "cusum_k", "cusum_h"):
             if key in ov:
                 setattr(d, key, float(ov.pop(key)))
-        for key in ("set_count", "clear_count", "warmup_steps"):
+        for key in ("set_count", "clear_count", "warmup_steps", "iso_settle_steps", "episode_clear_steps"):
             if key in ov:
                 v = int(ov.pop(key))
                 if not 0 <= v <= 0xFFFF:
@@ -402,7 +405,7 @@ class Ecu:
         n = self.table.n_tests
         return EcuResult(
             step=int(r.step), t_us=int(r.t_us), status=int(r.status), validity=int(r.validity),
-            alarm_mask=int(d.alarm_mask), evaluable_mask=int(d.evaluable_mask),
+            alarm_mask=int(d.alarm_mask), evaluable_mask=int(d.evaluable_mask), accused_mask=int(d.accused_mask),
             candidates=int(d.iso.candidates), class_mask=int(d.iso.class_mask), n_classes=int(d.iso.n_classes),
             detected=bool(d.iso.detected), isolated=bool(d.iso.isolated), iso_class=int(r.iso_class),
             test_status=tuple(TEST_STATUS_NAMES[int(d.status[i])] for i in range(n)),

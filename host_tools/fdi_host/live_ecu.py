@@ -8,7 +8,9 @@ jitter therefore cannot move a frame across a boundary, and a live run and an of
 frames cross the same boundaries with the same inputs.
 
 Live, the sender can announce the wall time of the drive's t = 0 (``--origin-file``), which then replaces
-the first frame's receive time (that one frame may be delayed by a cold start). The first call is ``poll(0)``
+the first frame's receive time (that one frame may be delayed by a cold start). An ECU process started (or
+restarted) while the drive is under way anchors to the same origin and starts its steps at the last step
+boundary before its first frame (`EcuSession.anchor` with ``first_wall``). The first call is ``poll(0)``
 at the origin: the C core starts its step schedule T_k = t_first + k * dt at
 its first call, so the boundaries fall on whole milliseconds of the drive and the frames half way between.
 Order per frame: ``poll(t)`` first (runs the steps that are due strictly from the frames received before),
@@ -134,10 +136,20 @@ class EcuSession:
         self.frames_in += n
         self.last_t = t
 
-    def anchor(self, t0_wall: float, now: float = 0.0) -> list[tuple[int, bytes]]:
-        """Start the step schedule: the drive's t = 0 is at wall time `t0_wall` (default: the first frame)."""
+    def anchor(self, t0_wall: float, now: float = 0.0, first_wall: float | None = None) -> list[tuple[int, bytes]]:
+        """Start the step schedule: the drive's t = 0 is at wall time `t0_wall` (default: the first frame).
+
+        `first_wall`: receive time of the first frame, when this ECU joins a drive already under way (a
+        restarted ECU process): the C core then starts at the last step boundary k * dt before that frame,
+        on the same grid as from t = 0, instead of catching up (and skipping) every step since t = 0.
+        """
         self.origin = t0_wall - ORIGIN_LEAD
-        return self._poll(0.0, -1, b"", self.origin, now)
+        t_start = 0.0
+        if first_wall is not None:
+            k = math.floor(round((first_wall - self.origin) / self.dt, 6))
+            t_start = max(0, k) * self.dt
+        self.last_t = t_start
+        return self._poll(t_start, -1, b"", self.origin + t_start, now)
 
     def tick(self, wall_now: float, grace: float = 0.002) -> list[tuple[int, bytes]]:
         """Timer poll: steps due `grace` before now (frames in flight are not overtaken)."""

@@ -6,6 +6,10 @@ same millisecond go back to back, in CAN-ID order as the simulator produced them
 ``bus.send`` is recorded with the frame's ID and E2E counter (`SendLog`), so latencies can be measured
 against receive timestamps on the same host: the udp_multicast interface overwrites frame timestamps with
 the receive time, so a send time cannot travel in the frame itself.
+
+A restarted sender joins the drive where it is (`resume_frames`): only the frames not yet due on the drive's
+clock are sent, at their times on that clock (``first_wall``), and every message's alive counter starts
+again at a given value, as a sender that lost its state would.
 """
 
 from __future__ import annotations
@@ -15,11 +19,47 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Protocol
 
 import can
 import numpy as np
 
-from fdi_host.canlog import Frame
+from fdi_host import e2e
+from fdi_host.dbc import RomoDatabase
+
+LOG_SUFFIXES = (".log", ".asc", ".blf")  # python-can log formats (as fdi_host.canlog)
+
+
+class TimedFrame(Protocol):
+    """A frame with its time on the drive [s] (`fdi_host.canlog.Frame`, `BusFrame`)."""
+
+    @property
+    def timestamp(self) -> float: ...
+    @property
+    def frame_id(self) -> int: ...
+    @property
+    def data(self) -> bytes: ...
+
+
+@dataclass(frozen=True)
+class BusFrame:
+    """A frame to send (same fields as `fdi_host.canlog.Frame`; this module does not import the simulator,
+    so that a restarted sender is back on the bus within about a second)."""
+
+    timestamp: float
+    frame_id: int
+    data: bytes
+
+
+def read_log_frames(path: str | Path) -> list[BusFrame]:
+    """A CAN log's data frames (python-can reader for the extension: .log, .asc, .blf)."""
+    p = Path(path)
+    if p.suffix not in LOG_SUFFIXES:
+        raise ValueError(f"unsupported log format {p.suffix!r}; use one of {LOG_SUFFIXES}")
+    if not p.is_file():
+        raise OSError(f"no such file: {p}")
+    return [BusFrame(float(m.timestamp), int(m.arbitration_id), bytes(m.data)) for m in can.LogReader(str(p))
+            if not (m.is_error_frame or m.is_remote_frame)]
 
 
 @dataclass
@@ -50,17 +90,20 @@ class SendLog:
 
 def send_paced(
     bus: can.BusABC,
-    frames: Sequence[Frame],
+    frames: Sequence[TimedFrame],
     speed: float | None = 1.0,
     stop: Callable[[], bool] = lambda: False,
     lead: float = 0.05,
     on_start: Callable[[float], None] | None = None,
+    first_wall: float | None = None,
 ) -> SendLog:
     """Send `frames` (time ordered) at `speed` times real time (None: as fast as possible).
 
     `stop()` is checked between frames (Ctrl-C / SIGTERM handlers set it); `lead` [s] before the first frame;
     `on_start(wall)` is called with the wall-clock time the first frame is due, before it is sent. The
     garbage collector is paused while sending (its pauses would delay frames by milliseconds).
+    `first_wall`: the wall-clock time the first frame is due (a sender joining a drive under way), instead of
+    `lead` from now.
     """
     if speed is not None and not speed > 0.0:
         raise ValueError(f"speed must be > 0 (or None for as fast as possible), got {speed}")
@@ -71,8 +114,12 @@ def send_paced(
     gc.collect()
     gc_was_on = gc.isenabled()
     gc.disable()
-    start = time.monotonic() + lead
-    log.start_wall = time.time() + lead
+    if first_wall is not None:
+        start = time.monotonic() + (first_wall - time.time())
+        log.start_wall = first_wall
+    else:
+        start = time.monotonic() + lead
+        log.start_wall = time.time() + lead
     if on_start is not None:
         on_start(log.start_wall)
     try:
@@ -83,7 +130,7 @@ def send_paced(
     return log
 
 
-def _send_loop(bus: can.BusABC, frames: Sequence[Frame], speed: float | None, stop: Callable[[], bool],
+def _send_loop(bus: can.BusABC, frames: Sequence[TimedFrame], speed: float | None, stop: Callable[[], bool],
                start: float, t0: float, log: SendLog) -> None:
     for f in frames:
         if stop():
@@ -103,3 +150,28 @@ def _send_loop(bus: can.BusABC, frames: Sequence[Frame], speed: float | None, st
         log.sim_t.append(rel)
         log.frame_id.append(f.frame_id)
         log.counter.append(f.data[1] & 0x0F if len(f.data) > 1 else -1)
+
+
+def resume_frames(frames: Sequence[TimedFrame], t_from: float, counter_start: int,
+                  db: RomoDatabase | None = None) -> list[BusFrame]:
+    """The frames of a drive from drive time `t_from` on, each message's alive counter restarted at
+    `counter_start` (0..14) and its E2E CRC recomputed, as a restarted sender would send them."""
+    if not 0 <= counter_start <= e2e.COUNTER_MAX:
+        raise ValueError(f"counter start {counter_start} outside 0..{e2e.COUNTER_MAX}")
+    db = db or RomoDatabase()
+    counters: dict[int, int] = {}
+    data_ids: dict[int, int | None] = {}
+    out = []
+    for f in frames:
+        if f.timestamp < t_from:
+            continue
+        if f.frame_id not in data_ids:
+            data_ids[f.frame_id] = db.data_id(db.message_by_id(f.frame_id).name)
+        did = data_ids[f.frame_id]
+        data = f.data
+        if did is not None and len(data) >= 2:
+            c = counters.get(f.frame_id, counter_start)
+            counters[f.frame_id] = e2e.next_counter(c)
+            data = e2e.protect(data, did, c)
+        out.append(BusFrame(f.timestamp, f.frame_id, data))
+    return out

@@ -6,6 +6,12 @@ drive's clock: t = receive time minus the receive time of the first sensor frame
 frames are at t = 0), so the monitor must be listening before the drive starts (``fdi-live`` does that).
 At the end (SIGINT/SIGTERM, ``--duration`` or ``--idle-exit``) the run is scored (`fdi_host.score`) and
 report.md, report.json, diagnosis.png and, with ``--ecu-log``, residuals.png are written.
+
+Gaps (`fdi_host.monitor_gaps`): a silence of the FDI_Diagnosis stream (the ECU is down) or of the sensor
+frames (the simulator is down) longer than ``--gap-threshold`` is printed when it ends (and shown in the live
+table while it lasts), listed with start, end and duration in report.md/json, counted per stream, and
+passed to the scoring (a gap is never a detection; a fault missed while a gap overlapped its window is
+"not evaluable").
 """
 
 from __future__ import annotations
@@ -25,6 +31,7 @@ from fdi_host.dbc import RomoDatabase
 from fdi_host.live_bus import StopFlag, add_bus_arguments, open_bus, signal_ready
 from fdi_host.live_ecu import DIAG_ID, ORIGIN_LEAD, load_steps
 from fdi_host.monitor_frames import FrameStats
+from fdi_host.monitor_gaps import Gap, GapTracker, gap_summary
 from fdi_host.score import DiagRecord, Score, TableClasses, fault_names, score_run, windows_from_truth
 from fdi_host.score_report import frame_table, plot_diagnosis, plot_residuals, score_table, write_reports
 
@@ -48,9 +55,13 @@ class Monitor:
     records: list[DiagRecord] = field(default_factory=list)
     t0: float | None = None  # receive time of the first sensor frame
     last_rx: float = 0.0
+    gap_threshold: float = 0.25  # s: a longer silence of a stream is a gap
+    gaps: GapTracker = field(init=False)
+    new_gaps: list[Gap] = field(default_factory=list)  # gaps ended since the caller last emptied this list
 
     def __post_init__(self) -> None:
-        self.stats = FrameStats(self.db, {DIAG_ID: self.step})
+        self.stats = FrameStats(self.db, {DIAG_ID: self.step}, self.gap_threshold)
+        self.gaps = GapTracker(self.gap_threshold)
 
     def on_frame(self, frame_id: int, data: bytes, t_rx: float) -> DiagRecord | None:
         self.last_rx = t_rx
@@ -58,7 +69,11 @@ class Monitor:
         if frame_id != DIAG_ID:
             if self.t0 is None and ok:
                 self.t0 = t_rx
+            if self.t0 is not None and frame_id in self.stats.messages:  # a known sensor message
+                self._stream("sensors", t_rx - self.t0)
             return None
+        if self.t0 is not None:
+            self._stream("diagnosis", t_rx - self.t0)
         if not ok or self.t0 is None:
             return None
         sig = self.db.decode(frame_id, data, check_e2e=False).signals
@@ -67,21 +82,36 @@ class Monitor:
         self.records.append(rec)
         return rec
 
-    def status_line(self) -> str:
+    def _stream(self, stream: str, t: float) -> None:
+        gap = self.gaps.frame(stream, t)
+        if gap is not None:
+            self.new_gaps.append(gap)
+
+    def silence_note(self, now_wall: float) -> str:
+        """Streams silent right now (wall time `now_wall`), for the live table; empty if none."""
+        if self.t0 is None:
+            return ""
+        silent = self.gaps.silent(now_wall - self.t0)
+        return "  ".join(f"{s.upper()} SILENT for {d:.1f} s" for s, d in sorted(silent.items()))
+
+    def status_line(self, now_wall: float | None = None) -> str:
         if not self.records:
             return f"waiting for diagnosis frames ({sum(m.received for m in self.stats.messages.values())} frames)"
         r = self.records[-1]
         alarms = ",".join(self.classes.test_name(i) for i in range(32) if r.alarm_mask >> i & 1) or "-"
         lost = sum(m.lost for m in self.stats.messages.values())
         n = sum(m.received for m in self.stats.messages.values())
+        note = self.silence_note(now_wall) if now_wall is not None else ""
+        n_gaps = len(self.gaps.gaps)
         return (f"t={r.t:7.2f} s  frames {n:7d} lost {lost:3d}  diag {len(self.records):6d}  "
-                f"alarm [{alarms}]  candidates [{fault_names(r.candidates)}]")
+                f"alarm [{alarms}]  candidates [{fault_names(r.candidates)}]"
+                + (f"  gaps {n_gaps}" if n_gaps else "") + (f"  {note}" if note else ""))
 
-    def table(self) -> list[str]:
-        """The live table: one row per test (alarm or quiet, alarmed steps so far), then the candidates."""
+    def table(self, now_wall: float | None = None) -> list[str]:
+        """The live table: one row per test (alarm or quiet, alarmed steps so far), the candidates, the gaps."""
         r = self.records[-1] if self.records else None
         n = max(len(self.classes.test_names), 1)
-        rows = [self.status_line(), f"{'test':8s} {'now':6s} {'alarmed steps':>13s}"]
+        rows = [self.status_line(now_wall), f"{'test':8s} {'now':6s} {'alarmed steps':>13s}"]
         for i in range(n):
             on = r is not None and bool(r.alarm_mask >> i & 1)
             count = sum(1 for x in self.records if x.alarm_mask >> i & 1)
@@ -89,10 +119,20 @@ class Monitor:
         cls = "-" if r is None else ("isolated" if 1 <= r.iso_class <= 25 else "not isolated" if r.iso_class == 255
                                      else "nothing detected")
         rows.append(f"candidates: {fault_names(r.candidates) if r else '-'}  ({cls})")
+        note = self.silence_note(now_wall) if now_wall is not None else ""
+        if self.gaps.gaps or note:  # gaps so far (the last three in full), and a silence going on now
+            rows.append(gap_summary(self.gaps.gaps) + (f"; now: {note}" if note else ""))
+            rows += [f"  {g.describe()}" for g in self.gaps.gaps[-3:]]
         return rows
 
+    def finish_gaps(self, drive_end: float | None) -> list[Gap]:
+        """Close the gap list at the end of the run (silences that never ended; see `GapTracker.finish`)."""
+        return self.gaps.finish(drive_end)
+
     def score(self, truth: dict[str, Any], grace: float) -> Score:
-        return score_run(self.records, windows_from_truth(truth), self.classes, grace)
+        d = truth.get("duration")
+        gaps = self.finish_gaps(float(d) if isinstance(d, int | float) else None)
+        return score_run(self.records, windows_from_truth(truth), self.classes, grace, gaps)
 
 
 def classes_for(table: str, classes_file: Path | None) -> tuple[TableClasses, float]:
@@ -125,6 +165,8 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--ready-file", type=Path, help="file created once the bus is open (for orchestration)")
     ap.add_argument("--origin-file", type=Path, help="wall-clock time of the drive's t = 0 (fdi-sim live "
                     "--origin-file); default: the first sensor frame's receive time")
+    ap.add_argument("--gap-threshold", type=float, default=0.25,
+                    help="a silence of the diagnosis or sensor frames longer than this is a gap [s] (default 0.25)")
     ap.add_argument("--refresh", type=float, default=1.0, help="live table refresh period [s]")
     ap.add_argument("--quiet", action="store_true", help="no live table")
     return ap
@@ -134,6 +176,8 @@ def finish(mon: Monitor, args: argparse.Namespace) -> int:
     """Score, print and write the reports."""
     print(frame_table(mon.stats))
     if args.truth is None:
+        gaps = mon.finish_gaps(None)
+        print("\n".join([gap_summary(gaps), *(f"  {g.describe()}" for g in gaps)]))
         print("no --truth given: nothing to score")
         return 0
     try:
@@ -146,7 +190,7 @@ def finish(mon: Monitor, args: argparse.Namespace) -> int:
     windows = windows_from_truth(truth)
     paths = write_reports(args.out_dir, score, mon.stats, {"table": args.table, "truth": str(args.truth),
                                                            "diagnosis_frames": len(mon.records)})
-    p = plot_diagnosis(args.out_dir / "diagnosis.png", mon.records, windows, mon.classes)
+    p = plot_diagnosis(args.out_dir / "diagnosis.png", mon.records, windows, mon.classes, score.gaps)
     paths += [p] if p else []
     if args.ecu_log is not None:
         deadline = time.monotonic() + args.ecu_log_wait
@@ -173,7 +217,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ImportError, OSError, RuntimeError, KeyError, ValueError) as exc:
         print(f"fdi-monitor: no fault signatures for table {args.table}: {exc}", file=sys.stderr)
         return 2
-    mon = Monitor(RomoDatabase(), classes, step)
+    if not args.gap_threshold > 0.0:
+        ap.error("--gap-threshold must be > 0")
+    mon = Monitor(RomoDatabase(), classes, step, gap_threshold=args.gap_threshold)
     try:
         bus = open_bus(args.interface, args.channel)
     except (OSError, ValueError, ImportError, can.CanError) as exc:
@@ -197,15 +243,19 @@ def main(argv: Sequence[str] | None = None) -> int:
                 if mon.t0 is None and args.origin_file is not None and args.origin_file.exists():
                     mon.t0 = float(args.origin_file.read_text(encoding="utf-8"))
                 mon.on_frame(int(msg.arbitration_id), bytes(msg.data), float(msg.timestamp))
+            for gap in mon.new_gaps:  # an event worth a line of its own, also with --quiet
+                print(("\n" if tty and not args.quiet else "") + gap.describe(), flush=True)
+                shown = 0
+            mon.new_gaps.clear()
             if not args.quiet and now >= next_show:
                 next_show = now + args.refresh
                 if tty:  # redraw the table in place
-                    rows = mon.table()
+                    rows = mon.table(time.time())
                     up = f"\x1b[{shown}F" if shown else ""
                     print(up + "".join(f"\x1b[K{row}\n" for row in rows), end="", flush=True)
                     shown = len(rows)
                 else:
-                    print(mon.status_line(), flush=True)
+                    print(mon.status_line(time.time()), flush=True)
     finally:
         bus.shutdown()
     return finish(mon, args)

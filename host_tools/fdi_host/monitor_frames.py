@@ -7,7 +7,10 @@
   (messages given in `cycles`, i.e. the diagnosis frame: the ECU sends one when a step completes and merges
   steps that fall due together, so there a frame is late when it comes more than 1.5 steps after the
   previous one);
-* e2e errors: CRC mismatch; repeated: the same counter twice (ignored, like the ECU does).
+* e2e errors: CRC mismatch; repeated: the same counter twice (ignored, like the ECU does);
+* gaps: silences longer than `gap_threshold` (the sender or the ECU restarted, or a sensor went silent).
+  After a gap the message starts afresh: its alive counter may restart anywhere, so the counter jump is
+  not counted as lost frames, and the nominal times are anchored again at the first frame after the gap.
 """
 
 from __future__ import annotations
@@ -29,6 +32,8 @@ class MessageStats:
     late: int = 0
     e2e_errors: int = 0
     repeated: int = 0
+    gaps: int = 0
+    gap_time: float = 0.0  # s, total silence in gaps
     max_lateness: float = 0.0  # s, largest arrival - nominal
     first_t: float | None = None
     last_t: float = 0.0
@@ -45,8 +50,11 @@ class MessageStats:
 class FrameStats:
     """Feed every received frame to `add`; read `messages` (by frame id)."""
 
-    def __init__(self, db: RomoDatabase, cycles: dict[int, float] | None = None) -> None:
+    def __init__(self, db: RomoDatabase, cycles: dict[int, float] | None = None, gap_threshold: float = 0.25) -> None:
+        if not gap_threshold > 0.0:
+            raise ValueError(f"gap threshold must be > 0 s, got {gap_threshold}")
         self.db = db
+        self.gap_threshold = gap_threshold
         self.cycles = dict(cycles or {})  # frame id -> cycle [s] overriding the DBC (the diagnosis step)
         self.messages: dict[int, MessageStats] = {}
         self.unknown = 0
@@ -69,6 +77,10 @@ class FrameStats:
             return False
         c = e2e.counter_of(data)
         if st.last_counter is None or st.first_t is None:
+            st.first_t, st.index = t, 0
+        elif t - st.last_t > max(self.gap_threshold, 3.0 * st.cycle):  # a silence: start afresh
+            st.gaps += 1
+            st.gap_time += t - st.last_t
             st.first_t, st.index = t, 0
         else:
             delta = (c - st.last_counter) % (e2e.COUNTER_MAX + 1)

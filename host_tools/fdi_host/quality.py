@@ -119,8 +119,13 @@ class SuiteResult:
     not_in_table: list[str] = field(default_factory=list)
 
 
-def load_fault_sizes(path: Path = DEFAULT_SIZES) -> dict[str, float]:
-    """Minimal detectable size per fault id from a TOML file with a [sizes] table."""
+def load_fault_sizes(path: Path = DEFAULT_SIZES, tests: Sequence[str] = ()) -> dict[str, float]:
+    """Minimal detectable size per fault id from a TOML file with a [sizes] table.
+
+    With `tests` (the table's MSO labels, e.g. "MSO433"): where the file's `[per_test.<fault>]` tables (written
+    by `fdi-analyze fault-sizes` for the generated table) state sizes for some of those tests, the fault's
+    minimal detectable size is the smallest of them (the size at which the most sensitive test reacts);
+    [sizes] stays the value of faults without such a statement."""
     try:
         doc = tomllib.loads(Path(path).read_text(encoding="utf-8"))
     except FileNotFoundError as exc:
@@ -137,6 +142,11 @@ def load_fault_sizes(path: Path = DEFAULT_SIZES) -> dict[str, float]:
         if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or v <= 0:
             raise QualityError(f"{path}: size of {fid} must be a positive number, got {v!r}")
         out[fid] = float(v)
+    per_test = doc.get("per_test", {})
+    for fid, row in per_test.items() if tests else ():
+        stated = [float(v) for t, v in row.items() if t in tests and isinstance(v, int | float) and v > 0]
+        if fid in FAULT_IDS and stated:
+            out[fid] = min(stated)
     return out
 
 
@@ -235,7 +245,7 @@ def fault_cases(cfg: SuiteConfig, table: TableInfo, sizes: dict[str, float]) -> 
 def run_suite(cfg: SuiteConfig, progress: Callable[[str], None] | None = None) -> SuiteResult:
     """Run every case and the fault-free drives of `cfg`; `progress(text)` after each unit of work."""
     table = table_info(cfg.table)
-    sizes = load_fault_sizes(cfg.sizes_file)
+    sizes = load_fault_sizes(cfg.sizes_file, [f"MSO{m}" for m in table.mso_ids] if cfg.table != "kin" else ())
     faults, skipped = fault_cases(cfg, table, sizes)
     result = SuiteResult(cfg, table, sizes, not_in_table=skipped)
     db = RomoDatabase()

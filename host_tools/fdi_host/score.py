@@ -15,12 +15,19 @@ structural isolability classes of the diagnosis table (`TableClasses`). Per inje
 * a fault that no test of the table is sensitive to is "not detectable" by the table (expected: no alarm;
   alarms in its window are reported, its isolation is not judged).
 
+Gaps (`fdi_host.monitor_gaps`: the ECU's diagnosis stream or the simulator's sensor frames silent): a
+gap is never a detection (there are no diagnosis frames in a diagnosis gap, and the frames of a sensor gap,
+where the ECU's inputs time out, are not used to detect); a fault whose window overlaps a gap and that was
+not detected is "not evaluable" (its missed detection is explained by the gap, and reported as such), and
+each fault records how long its window ``[start, end + grace)`` was inside gaps.
+
 False alarms: alarm episodes (steps with a non-empty alarm mask, consecutive steps merged) that start
 outside every ``[start, end + grace)`` window; their count and the total time in false alarm.
 """
 
 from __future__ import annotations
 
+import math
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
@@ -28,6 +35,7 @@ from itertools import pairwise
 from typing import Any
 
 from fdi_host.faults import FAULT_IDS
+from fdi_host.monitor_gaps import Gap, overlap
 
 
 @dataclass(frozen=True)
@@ -116,6 +124,8 @@ class FaultScore:
     verdict: str = "-"  # majority candidate set while in alarm
     isolation_correct: bool | None = None  # None: nothing to judge (not detected)
     wrong_isolation: bool = False  # the verdict is not empty and does not contain the fault
+    gap_overlap: float = 0.0  # time of [start, end + grace) inside gaps [s]
+    not_evaluable: bool = False  # not detected, and the window overlaps a gap: the miss is not a verdict
 
 
 @dataclass
@@ -131,6 +141,7 @@ class Score:
     false_alarms: list[FalseAlarm] = field(default_factory=list)
     steps: int = 0
     duration: float = 0.0
+    gaps: list[Gap] = field(default_factory=list)
 
     @property
     def false_alarm_time(self) -> float:
@@ -144,6 +155,8 @@ class Score:
             "false_alarms": [asdict(f) for f in self.false_alarms],
             "false_alarm_count": len(self.false_alarms),
             "false_alarm_time": self.false_alarm_time,
+            "gaps": [g.to_json() for g in self.gaps],
+            "gap_count": {s: sum(1 for g in self.gaps if g.stream == s) for s in ("diagnosis", "sensors")},
         }
 
 
@@ -159,17 +172,25 @@ def score_run(
     windows: Sequence[FaultWindow],
     classes: TableClasses,
     grace: float = 1.0,
+    gaps: Sequence[Gap] = (),
 ) -> Score:
-    """Score `records` (time ordered) against `windows`; `grace` [s] after a fault's end still counts."""
+    """Score `records` (time ordered) against `windows`; `grace` [s] after a fault's end still counts;
+    `gaps`: silences of the diagnosis or sensor stream seen by the monitor."""
     recs = sorted(records, key=lambda r: r.t)
     dt = _step_time(recs)
-    out = Score([], [], len(recs), (recs[-1].t - recs[0].t + dt) if recs else 0.0)
+    out = Score([], [], len(recs), (recs[-1].t - recs[0].t + dt) if recs else 0.0, list(gaps))
+    sensor_gaps = [g for g in gaps if g.stream == "sensors"]
+
+    def in_sensor_gap(t: float) -> bool:
+        return any(g.start < t < g.end for g in sensor_gaps)
+
     for w in windows:
         det = classes.detectable(w.fault)
         fs = FaultScore(w.fault, w.start, w.end, det, fault_names(classes.class_of(w.fault)) if det else "-")
         # The grace period ends where the next fault (starting after this one ended) begins.
         until = min([w.end + grace, *(o.start for o in windows if o.start >= w.end)])
-        inside = [r for r in recs if w.start <= r.t < until]
+        fs.gap_overlap = overlap(w.start, until, gaps)
+        inside = [r for r in recs if w.start <= r.t < until and not in_sensor_gap(r.t)]
         alarmed = [r for r in inside if r.alarm_mask != 0]
         if alarmed:
             fs.detected = True
@@ -184,14 +205,23 @@ def score_run(
             if det:  # a fault no test can see has no isolation to judge (alarms then come from elsewhere)
                 fs.isolation_correct = verdict == classes.class_of(w.fault)
                 fs.wrong_isolation = verdict != 0 and not verdict & w.bit
+        else:
+            fs.not_evaluable = fs.gap_overlap > 0.0
         out.faults.append(fs)
 
     def covered(t: float) -> bool:
         return any(w.start <= t < w.end + grace for w in windows)
 
+    diag_gaps = [g for g in gaps if g.stream == "diagnosis"]
     episode: FalseAlarm | None = None
     tests = 0
+    prev_t = -math.inf
     for r in recs:
+        if episode is not None and any(prev_t <= g.start and g.end <= r.t for g in diag_gaps):
+            episode.tests = _test_list(tests, classes)  # the ECU was down in between: a new episode
+            out.false_alarms.append(episode)
+            episode = None
+        prev_t = r.t
         if r.alarm_mask != 0:
             if episode is None and not covered(r.t):
                 episode, tests = FalseAlarm(r.t, r.t + dt, ""), 0

@@ -21,6 +21,7 @@ import numpy as np
 from fdi_host.faults import FAULT_IDS
 from fdi_host.live_ecu import StepRecord
 from fdi_host.monitor_frames import FrameStats
+from fdi_host.monitor_gaps import WHAT, Gap, gap_summary
 from fdi_host.score import DiagRecord, FaultWindow, Score, TableClasses
 
 
@@ -36,21 +37,29 @@ def score_table(score: Score) -> str:
     for f in score.faults:
         iso = ("-" if f.isolation_correct is None else "ok" if f.isolation_correct else "WRONG" if f.wrong_isolation
                else "unexplained" if f.verdict == "-" else "not isolated")
+        if f.not_evaluable:
+            iso = f"not evaluable: {f.gap_overlap:.2f} s of its window in gaps"
+        elif f.gap_overlap > 0.0:
+            iso += f" ({f.gap_overlap:.2f} s of its window in gaps)"
         win = f"{f.start:.2f}-{f.end:.2f}"
+        det = _ms(f.detection_delay) if f.detected else "not eval." if f.not_evaluable else "missed"
         lines.append(f"{f.fault:6s} {win:>13s} {'yes' if f.detectable else 'no':>10s} "
-                     f"{_ms(f.detection_delay) if f.detected else 'missed':>10s} {f.expected_class:>9s} "
+                     f"{det:>10s} {f.expected_class:>9s} "
                      f"{_ms(f.isolation_delay):>10s} {100 * f.isolated_fraction:5.0f} {f.verdict:>9s} {iso}")
     lines.append(f"false alarms: {len(score.false_alarms)} episodes, {score.false_alarm_time:.2f} s "
                  f"(over {score.duration:.1f} s, {score.steps} diagnosis steps)")
+    lines.append(gap_summary(score.gaps))
+    lines += [f"  {g.describe()}" for g in score.gaps]
     return "\n".join(lines)
 
 
 def frame_table(stats: FrameStats) -> str:
-    head = f"{'id':>5s} {'message':16s} {'received':>8s} {'lost':>5s} {'late':>5s} {'e2e err':>7s} {'max late':>9s}"
+    head = (f"{'id':>5s} {'message':16s} {'received':>8s} {'lost':>5s} {'late':>5s} {'e2e err':>7s} {'max late':>9s} "
+            f"{'gaps':>4s} {'gap time':>8s}")
     lines = [head, "-" * len(head)]
     for fid, m in sorted(stats.messages.items()):
         lines.append(f"0x{fid:03X} {m.name:16s} {m.received:8d} {m.lost:5d} {m.late:5d} {m.e2e_errors:7d} "
-                     f"{m.max_lateness * 1e3:7.2f}ms")
+                     f"{m.max_lateness * 1e3:7.2f}ms {m.gaps:4d} {m.gap_time:7.2f}s")
     return "\n".join(lines)
 
 
@@ -64,6 +73,12 @@ def write_reports(out_dir: Path, score: Score, stats: FrameStats | None, extra: 
     if score.false_alarms:
         md += ["## False alarms", "", "| start [s] | end [s] | tests |", "|---|---|---|"]
         md += [f"| {fa.start:.3f} | {fa.end:.3f} | {fa.tests} |" for fa in score.false_alarms]
+        md.append("")
+    if score.gaps:
+        md += ["## Gaps (silences on the bus)", "", "| stream | what | start [s] | end [s] | duration [s] | resumed |",
+               "|---|---|---|---|---|---|"]
+        md += [f"| {g.stream} | {WHAT.get(g.stream, g.stream)} | {g.start:.3f} | {g.end:.3f} | {g.duration:.3f} | "
+               f"{'yes' if g.resumed else 'no'} |" for g in score.gaps]
         md.append("")
     if stats is not None:
         md += ["## Frames per message", "", "```", frame_table(stats), "```", ""]
@@ -113,8 +128,8 @@ def plot_residuals(path: Path, steps: Sequence[StepRecord], windows: Sequence[Fa
 
 
 def plot_diagnosis(path: Path, records: Sequence[DiagRecord], windows: Sequence[FaultWindow],
-                   classes: TableClasses) -> Path | None:
-    """Alarmed tests and candidate faults over time, as two raster panels."""
+                   classes: TableClasses, gaps: Sequence[Gap] = ()) -> Path | None:
+    """Alarmed tests and candidate faults over time, as two raster panels; gaps hatched in grey."""
     if not records:
         return None
     t = np.array([r.t for r in records])
@@ -134,7 +149,15 @@ def plot_diagnosis(path: Path, records: Sequence[DiagRecord], windows: Sequence[
     a2.set_title("candidate faults")
     for ax in (a1, a2):
         _shade(ax, windows)
+        for k, g in enumerate(gaps):
+            ax.axvspan(g.start, g.end, facecolor="none", edgecolor="0.4", hatch="//", lw=0,
+                       label=("gap" if k == 0 and ax is a1 else None))
+            if ax is a1:
+                ax.text(0.5 * (g.start + g.end), 1.01, "ECU down" if g.stream == "diagnosis" else "sim down",
+                        transform=ax.get_xaxis_transform(), ha="center", va="bottom", fontsize=7)
         ax.grid(alpha=0.3)
+    if gaps:
+        a1.legend(loc="upper right", fontsize=7)
     a2.set_xlabel("time [s]")
     a2.set_xlim(min(0.0, float(t[0])), float(t[-1]))
     fig.tight_layout()

@@ -114,6 +114,22 @@ def test_model_without_redundancy_says_no_residual_exists(tmp_path: Path) -> Non
     assert not s.isolability.detectable.any()
 
 
+@pytest.mark.parametrize("command", [["mso"], ["select"], ["select", "--candidates", "mtes"],
+                                     ["export-c", "--thresholds", "analysis/models/romo_thresholds.toml", "--out"]])
+def test_commands_that_need_tests_refuse_a_model_without_redundancy(
+    tmp_path: Path, command: list[str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    from fdi_analysis.cli import main
+
+    text = HEAD + var("unknown", "x") + var("known", "u") + var("fault", "f1") + eq("e1", 'expr = "x = u + f1"')
+    model = str(write(tmp_path, text))
+    argv = [command[0], model, *command[1:]] + ([str(tmp_path / "out")] if command[-1] == "--out" else [])
+    assert main([*argv, "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "error: no structural redundancy" in err and "add measurements" in err and "Traceback" not in err
+    assert not (tmp_path / "out").exists()
+
+
 def test_good_model_has_no_problems(tmp_path: Path) -> None:
     text = (HEAD + var("unknown", "x") + var("known", "u", "y") + var("fault", "f1", "f2")
             + eq("e1", 'expr = "x = u + f1"') + eq("e2", 'expr = "y = x + f2"'))

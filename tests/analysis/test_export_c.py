@@ -16,6 +16,7 @@ from fdi_analysis.model_loader import load_model
 
 MODEL = Path("analysis/models/romo_grouped.toml")
 THRESHOLDS = Path("analysis/models/romo_thresholds.toml")
+SIZES = Path("host_tools/scenarios/fault_sizes.toml")
 OUT = Path("fw/generated")
 NAME = "fdi_romo_table"
 
@@ -40,7 +41,7 @@ def generated_files(repo: Path) -> dict[str, str]:
     cwd = os.getcwd()
     os.chdir(repo)
     try:
-        return generate_all(MODEL, THRESHOLDS, OUT, NAME, workers=2, progress=False)
+        return generate_all(MODEL, THRESHOLDS, OUT, NAME, workers=2, progress=False, sizes_path=SIZES)
     finally:
         os.chdir(cwd)
 
@@ -69,7 +70,8 @@ def compile_and_check(repo: Path, folder: Path) -> str:
     gens = folder / f"{GENERATORS}.c"
     if not gens.is_file():
         gens = repo / OUT / f"{GENERATORS}.c"  # the table alone links against the committed generators
-    includes = [f"-I{repo / 'fw/include'}", f"-I{repo / 'fw/src'}", f"-I{folder}", f"-I{gens.parent}"]
+    includes = [f"-I{repo / 'fw/include'}", f"-I{repo / 'fw/src'}", f"-I{folder}", f"-I{gens.parent}",
+                f"-I{repo / OUT}"]  # the kinematic table's calibration header (fdi_kin_calibration.h)
     subprocess.run([cc, *flags, *includes, str(main),
                     str(folder / f"{NAME}.c"), str(gens), *sorted(str(p) for p in (repo / "fw/src").glob("*.c")),
                     "-lm", "-o", str(exe)], check=True)

@@ -102,3 +102,40 @@ def test_selected_msos_keep_structural_isolability(st: Structure) -> None:
                 for j in range(st.nf):
                     if structural.isolable[i, j] or structural.isolable[j, i]:
                         assert sig[i] != sig[j]
+
+
+@FAST
+@given(candidate_sets(), hst.sampled_from(["A", "B"]))
+def test_greedy_on_the_reduced_problem_is_the_papers_greedy(case: tuple[int, list[Candidate]], method: Method) -> None:
+    from fdi_analysis.selection import _greedy_columns, cheapest_per_signature
+    from fdi_analysis.selection_exact import cover_matrix, reduce_problem
+
+    nf, tests = case
+    cands = cheapest_per_signature(tests)
+    problem = reduce_problem([t.faults for t in cands], [t.cost for t in cands], nf, method)
+    index = {c: i for i, c in enumerate(problem.columns)}
+    expected = set()
+    for t in greedy(cands, nf, method).tests:
+        mask = 0
+        for k in range(nf):
+            if t.faults >> k & 1:
+                mask |= 1 << problem.item_of_fault[k]
+        expected.add(index[mask])
+    assert set(_greedy_columns(problem, cands, cover_matrix(problem))) == expected
+
+
+@settings(max_examples=40, deadline=None)
+@given(candidate_sets(), hst.sampled_from(["A", "B"]))
+def test_fallback_without_sat_gives_the_same_optimum(case: tuple[int, list[Candidate]], method: Method) -> None:
+    """Without python-sat the code search decides; count and cost must equal the SAT answer."""
+    from unittest import mock
+
+    from fdi_analysis import selection_sat
+
+    nf, tests = case
+    with_sat = optimal(tests, nf, method, time_limit_s=10.0)
+    with mock.patch.object(selection_sat, "HAVE_SAT", False):
+        without = optimal(tests, nf, method, time_limit_s=10.0)
+    assert with_sat.proven and without.proven
+    assert len(with_sat.tests) == len(without.tests)
+    assert with_sat.total_cost == without.total_cost

@@ -11,12 +11,13 @@ import pytest
 from residual_harness import build_harness, run_harness
 
 from fdi_analysis.candidates import mso_candidates
+from fdi_analysis.fault_matrix import Candidate, fault_matrix
 from fdi_analysis.model import Model
 from fdi_analysis.model_loader import load_model
 from fdi_analysis.residuals.causality import NotRealizableError, synthesize
 from fdi_analysis.residuals.evaluate import evaluable_segments, in_domain, residual
 from fdi_analysis.residuals.generator import DOMAIN_FACTOR
-from fdi_analysis.residuals.realizability import realizable_candidates
+from fdi_analysis.residuals.realizability import realizable_candidates, why_not_realizable
 from fdi_analysis.residuals.simulate import drive
 from fdi_analysis.residuals.solvability import Solution, Solver
 
@@ -60,7 +61,10 @@ def test_open_loop_integration_is_rejected_with_a_reason(model: Model) -> None:
         "W3.Fx", "W4.Fx", "W1.dyn", "W2.dyn", "W3.dyn", "W4.dyn", "W1.D", "W2.D", "W3.D", "W4.D", "S1", "S2", "S3",
         "S5",
     ]
-    with pytest.raises(NotRealizableError, match=r"^not realizable: .*integrating"):
+    why = why_not_realizable(model, Solver(model), eqs, observer=False)
+    assert why is not None and "integrating" in why
+    # vx and the four wheel speeds: one observer state per generator only
+    with pytest.raises(NotRealizableError, match=r"^not realizable: needs 5 observer states \(vx, omega1, "):
         synthesize(model, eqs, "T4")
 
 
@@ -84,6 +88,23 @@ def test_realizable_candidates_still_detect_every_fault(model: Model) -> None:
     for c in keep:
         covered |= c.faults
     assert covered == (1 << st.nf) - 1
+    # the observer path (one state by integral causality) adds candidates and recovers fault-matrix
+    # elements: without it the wheel-speed sensor faults f22..f25 cannot be told from the steering and tyre
+    # faults of their wheel; with it only the steering / tyre-force pairs of each wheel (f6/f18, ...) stay
+    plain, plain_reasons = realizable_candidates(model, cands, observer=False)
+    assert {c.label for c in plain} < {c.label for c in keep}
+    assert not any("observer" in k for k in plain_reasons)
+    full = fault_matrix([c.faults for c in cands], st.nf, "B")
+    names = ("none", *st.faults)
+
+    def lost(kept: list[Candidate]) -> set[tuple[str, str]]:
+        reached = fault_matrix([c.faults for c in kept], st.nf, "B")
+        return {(names[i], names[j]) for i, j in np.argwhere(reached & ~full)}
+
+    wheel_pairs = {(f"f{6 + w}", f"f{18 + w}") for w in range(4)}
+    wheel_pairs |= {(b, a) for a, b in wheel_pairs}
+    assert lost(keep) == wheel_pairs
+    assert wheel_pairs < lost(plain) and {("f6", "f22"), ("f18", "f22")} <= lost(plain)
 
 
 def test_generator_reproduces_handwritten_arr3_arr4(repo: Path, model: Model, tmp_path: Path) -> None:

@@ -12,8 +12,9 @@
  *  - alarm within evaluable; a test is evaluable only if it has a generator and all its inputs are valid
  *    and finite in this step; residuals of evaluable tests are finite, ratios >= 0 and not NaN (+Inf for
  *    a huge residual, documented in fdi_eval.c);
- *  - no candidate outside the table's faults; nothing alarms -> nothing detected, no candidate, not
- *    isolated; candidates are whole isolability classes;
+ *  - no candidate outside the table's faults; alarms within the accused tests of the episode; detected iff
+ *    an episode is active; no episode -> no candidate, not isolated; every candidate explains the accused
+ *    tests; class_mask = the classes of the candidates;
  *  - with the kin table and the default configuration, fault-free inputs never raise an alarm once the
  *    last edit is more than warm-up + 4 s in the past.
  */
@@ -37,6 +38,7 @@ typedef struct
     uint32_t sig[FDI_TABLE_MAX_FAULTS];
     uint32_t cls[FDI_TABLE_MAX_FAULTS];
     const char *names[FDI_TABLE_MAX_FAULTS];
+    float size[25U * FDI_DIAG_MAX_TESTS];
 } table_buf_t;
 
 static uint32_t low_bits(uint32_t n)
@@ -88,6 +90,15 @@ static void random_table(table_buf_t *b, const fdi_table_t *design_from, fuzz_in
     b->t.tests = b->tests;
     b->t.fault_signature = b->sig;
     b->t.iso_class = b->cls;
+    b->t.exoneration_margin = 1.0f + (float)(fz_u8(in) % 4U);
+    for (j = 0U; j < nf; ++j)
+    {
+        for (i = 0U; i < nt; ++i)
+        {
+            b->size[(j * nt) + i] = (((b->sig[j] >> i) & 1U) != 0U) ? (float)(fz_u8(in) % 4U) : 0.0f;
+        }
+    }
+    b->t.test_size = b->size;
 }
 
 static fdi_diag_config_t good_config(const fdi_table_t *t)
@@ -102,6 +113,8 @@ static fdi_diag_config_t good_config(const fdi_table_t *t)
     c.clear_count = 100U;
     c.warmup_steps = 400U; /* > the settling time of the kin design point (300 steps) */
     c.mode = FDI_ISO_EXONERATION;
+    c.iso_settle_steps = 300U;
+    c.episode_clear_steps = 300U;
     return c;
 }
 
@@ -187,6 +200,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     c.clear_count = (uint16_t)fz_u8(&in);
     c.warmup_steps = (uint16_t)(fz_u32(&in) & 0x0FFFU);
     c.mode = (fdi_iso_mode_t)(fz_u8(&in) % 3U);
+    c.iso_settle_steps = (uint16_t)(fz_u32(&in) & 0x03FFU);
+    c.episode_clear_steps = (uint16_t)fz_u8(&in);
     bool good_cfg = false;
     if (fdi_diag_init(&d, &c) != FDI_OK)
     {
@@ -269,8 +284,23 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 }
             }
             FUZZ_CHECK((res.iso.candidates & ~low_bits(table->n_faults)) == 0U, "candidate outside faults");
-            FUZZ_CHECK(res.iso.class_mask == res.iso.candidates, "candidates not whole classes");
-            if (res.alarm_mask == 0U)
+            {
+                uint32_t classes = 0U;
+                uint32_t j;
+                for (j = 0U; j < table->n_faults; ++j)
+                {
+                    classes |= ((res.iso.candidates >> j) & 1U) ? table->iso_class[j] : 0U;
+                    if ((res.iso.candidates >> j) & 1U)
+                    {
+                        FUZZ_CHECK((res.accused_mask & ~table->fault_signature[j]) == 0U,
+                                   "candidate f%u does not explain the accused tests", j + 1U);
+                    }
+                }
+                FUZZ_CHECK(res.iso.class_mask == classes, "class mask is not the candidates' classes");
+            }
+            FUZZ_CHECK((res.alarm_mask & ~res.accused_mask) == 0U, "alarm not accused");
+            FUZZ_CHECK(res.iso.detected == (res.accused_mask != 0U), "detected != episode active");
+            if (res.accused_mask == 0U)
             {
                 FUZZ_CHECK(res.iso.candidates == 0U && !res.iso.detected && !res.iso.isolated,
                            "isolated or detected with no alarm");

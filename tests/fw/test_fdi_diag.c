@@ -34,6 +34,8 @@ static fdi_diag_config_t config(fdi_iso_mode_t mode)
     c.clear_count = 100U;
     c.warmup_steps = WARMUP;
     c.mode = mode;
+    c.iso_settle_steps = 0U; /* memoryless isolation unless a test sets the episode rules */
+    c.episode_clear_steps = 1U;
     return c;
 }
 
@@ -69,6 +71,9 @@ static void test_bad_args(void **state)
     assert_int_equal(fdi_diag_init(&d, &c), FDI_NOT_FINITE);
     c = config(FDI_ISO_EXONERATION);
     c.set_count = 0U;
+    assert_int_equal(fdi_diag_init(&d, &c), FDI_BAD_ARG);
+    c = config(FDI_ISO_EXONERATION);
+    c.episode_clear_steps = 0U;
     assert_int_equal(fdi_diag_init(&d, &c), FDI_BAD_ARG);
     c = config(FDI_ISO_EXONERATION);
     bad_table.format_version = 0U;
@@ -209,14 +214,19 @@ static void test_no_false_alarm(void **state)
 }
 
 /*
- * Drifting sensor faults from t = 30 s (rates: f1, f2 0.05 m/s^2 per s; f3 0.002 rad/s per s; f4, f5
- * 0.05 m/s per s), observed at t = 60 s. With exoneration the fault is isolated exactly (every fault has
- * a unique signature in Table II's kinematic rows); without exoneration it is among the candidates and
- * every candidate explains the alarms. Detection within 10 s of the fault start.
+ * Drifting sensor faults from t = 30 s (rates: f1, f2 0.05 m/s^2 per s; f3 0.01 rad/s per s, so that it
+ * passes MSO1's reaction size 0.15 rad/s of fdi_kin_calibration.h; f4, f5 0.05 m/s per s), observed at
+ * t = 60 s. Every test of the fault's signature alarms. With exoneration the fault is isolated exactly
+ * (every fault has a unique signature in Table II's kinematic rows), except f2: its alarms {MSO2, MSO3,
+ * MSO4} are also those of a yaw rate offset f3 below MSO1's reaction size (MSO1 sees f3 only as vy * f3),
+ * so the quiet MSO1 does not clear f3 and the candidates are {f2, f3} (never f3 alone: no wrong class).
+ * Without exoneration the fault is among the candidates and every candidate explains the alarms.
+ * Detection within 10 s of the fault start.
  */
 static void test_isolation_of_each_fault(void **state)
 {
-    static const double rate[5] = {0.05, 0.05, 0.002, 0.05, 0.05};
+    static const double rate[5] = {0.05, 0.05, 0.01, 0.05, 0.05};
+    static const uint32_t expect[5] = {0x01U, 0x06U, 0x04U, 0x08U, 0x10U};
     int j;
     (void)state;
     for (j = 0; j < 5; ++j)
@@ -227,10 +237,98 @@ static void test_isolation_of_each_fault(void **state)
         assert_int_equal(r.alarm_steps_before, 0U);
         assert_true((r.first_detect >= 0.0) && (r.first_detect < 10.0));
         assert_int_equal(r.end_ex.alarm_mask, fdi_kin_table.fault_signature[j]);
-        assert_int_equal(r.end_ex.iso.candidates, 1U << j);
-        assert_true(r.end_ex.iso.isolated);
-        assert_int_equal(r.end_ex.iso.class_mask, fdi_kin_table.iso_class[j]);
+        assert_int_equal(r.end_ex.iso.candidates, expect[j]);
+        assert_true(r.end_ex.iso.isolated == (expect[j] == (1U << j)));
         assert_int_equal(r.end_ne.iso.candidates & (1U << j), 1U << j);
+    }
+}
+
+/*
+ * Isolation episodes (settle 200 steps, episode end after 300 quiet steps): each sensor fault as a 0.5 s
+ * burst of a large offset from t = 20 s, then healthy again. At every step: the accused tests contain the
+ * alarmed ones and only grow within an episode; the true fault is never exonerated; `detected` equals
+ * "episode active". Within the settle window no quiet test clears anything (candidates = no-exoneration
+ * candidates of the accused tests); after it the candidates narrow to the fault ({f2, f3} for the f2 burst),
+ * and stay so after the burst (the accused tests are latched) until 300
+ * steps after the last alarm, when the episode ends.
+ */
+static void test_isolation_episodes(void **state)
+{
+    static const double size[5] = {1.0, 1.0, 0.3, 1.0, 1.0}; /* f3 above MSO1's reaction size (0.15 rad/s) */
+    /* f2: its alarms also fit a yaw rate offset f3 below MSO1's reaction size (test_isolation_of_each_fault) */
+    static const uint32_t expect[5] = {0x01U, 0x06U, 0x04U, 0x08U, 0x10U};
+    int j;
+    (void)state;
+    for (j = 0; j < 5; ++j)
+    {
+        fdi_diag_t d;
+        fdi_diag_result_t res;
+        fdi_inputs_t in;
+        fdi_diag_config_t c = config(FDI_ISO_EXONERATION);
+        veh_meas_cfg_t mc;
+        test_rng_t rng = {11ULL};
+        uint32_t prev_accused = 0U;
+        long k;
+        long episode_start = -1L;
+        long last_alarm = -1L;
+        long episode_end = -1L;
+        long first_exact = -1L;
+        c.iso_settle_steps = 200U;
+        c.episode_clear_steps = 300U;
+        noisy(&mc);
+        assert_int_equal(fdi_diag_init(&d, &c), FDI_OK);
+        for (k = 1L; k <= 5000L; ++k)
+        {
+            const double t = (double)k * DT;
+            fdi_iso_result_t ne;
+            mc.f[j] = ((t > 20.0) && (t <= 20.5)) ? size[j] : 0.0;
+            veh_measure(t, &mc, &rng, &in);
+            assert_int_equal(fdi_diag_step(&d, &in, FDI_SIGM_ALL), FDI_OK);
+            assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
+            assert_int_equal(res.alarm_mask & ~res.accused_mask, 0U);
+            assert_true(res.iso.detected == (res.accused_mask != 0U));
+            if (res.alarm_mask != 0U)
+            {
+                last_alarm = k;
+            }
+            if ((res.accused_mask != 0U) && (prev_accused == 0U))
+            {
+                assert_true(t > 20.0); /* no fault-free episode */
+                assert_int_equal(episode_start, -1L); /* one episode per burst */
+                episode_start = k;
+            }
+            if ((res.accused_mask == 0U) && (prev_accused != 0U))
+            {
+                episode_end = k;
+                assert_int_equal(k - last_alarm, 300L);
+            }
+            if (res.accused_mask != 0U)
+            {
+                assert_int_equal(res.accused_mask & prev_accused, prev_accused);
+                assert_true((res.iso.candidates >> j) & 1U);
+                assert_int_equal(fdi_iso_run(&fdi_kin_table, res.accused_mask, res.accused_mask,
+                                             FDI_ISO_NO_EXONERATION, &ne), FDI_OK);
+                if ((k - episode_start) < 199L)
+                {
+                    assert_int_equal(res.iso.candidates, ne.candidates);
+                }
+                else if (res.iso.candidates == expect[j])
+                {
+                    first_exact = (first_exact < 0L) ? k : first_exact;
+                }
+                else
+                {
+                    /* the accused set may still grow */
+                }
+            }
+            prev_accused = res.accused_mask;
+        }
+        print_message("f%d burst: episode %ld..%ld steps, last alarm %ld, exact from %ld\n", j + 1, episode_start,
+                      episode_end, last_alarm, first_exact);
+        assert_true(episode_start > 0L);
+        assert_true(episode_end > last_alarm);
+        assert_true((first_exact > 0L) && (first_exact < episode_end));
+        assert_true(first_exact > 2050L); /* after the burst: the latched accusations isolate it */
     }
 }
 
@@ -279,6 +377,7 @@ int main(void)
         cmocka_unit_test(test_bad_args),          cmocka_unit_test(test_warmup_and_validity),
         cmocka_unit_test(test_no_false_alarm),    cmocka_unit_test(test_isolation_of_each_fault),
         cmocka_unit_test(test_kind_none),         cmocka_unit_test(test_long_run),
+        cmocka_unit_test(test_isolation_episodes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

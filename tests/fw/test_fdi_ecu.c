@@ -340,7 +340,8 @@ static void test_reject_reasons(void **state)
     }
 }
 
-/* The alive counter wraps 14 -> 0; with max_delta_counter 2 one lost frame is tolerated. */
+/* The alive counter wraps 14 -> 0; with max_delta_counter 2 one lost frame is tolerated; a restarted sender
+   costs one frame. */
 static void test_counter_wrap_and_delta(void **state)
 {
     fdi_ecu_t e;
@@ -370,6 +371,15 @@ static void test_counter_wrap_and_delta(void **state)
     assert_int_equal(cnt.msg[FDI_ECU_MSG_IMU].accepted, 39U);
     assert_int_equal(cnt.rejected[FDI_ECU_REJ_COUNTER_JUMP], 1U);
     assert_int_equal(cnt.rejected[FDI_ECU_REJ_REPEATED_COUNTER], 0U);
+    /* the sender restarts: silent for longer than the IMU timeout (15 ms), then its counter starts anywhere:
+       the first frame is a jump and the new reference, the next one in sequence is accepted */
+    imu_frame(d, &in, 3U, 0U);
+    assert_int_equal(fdi_ecu_rx(&e, ID_IMU, 8U, d, 40U * 5000U + 15001U), FDI_OK);
+    imu_frame(d, &in, 4U, 0U);
+    assert_int_equal(fdi_ecu_rx(&e, ID_IMU, 8U, d, 40U * 5000U + 20001U), FDI_OK);
+    assert_int_equal(fdi_ecu_counters(&e, &cnt), FDI_OK);
+    assert_int_equal(cnt.msg[FDI_ECU_MSG_IMU].accepted, 40U);
+    assert_int_equal(cnt.rejected[FDI_ECU_REJ_COUNTER_JUMP], 2U);
 }
 
 /* Steps at t_first + k * 10 ms, run by the first call with t > T_k; one frame per poll; catch-up limit. */

@@ -4,7 +4,8 @@
  * non-finite inputs, the exported table accepted, and the generated MSO3 generator equal to -r3 of the
  * hand-written FDI_GEN_KIN_ARR3 on the analytic reference vehicle (same filters, same relation times w^2),
  * and the operating domain: a tyre-law test is "not evaluable" in fdi_diag below its minimum speed and
- * restarts with a warm-up when the speed returns, while the kinematic tests stay evaluable.
+ * restarts with a warm-up when the speed returns, while the kinematic tests stay evaluable; the observer
+ * building blocks (fdi_gen_obs_predict/store, heaviside, sign) against the exact solution of x' = J x + b.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -20,6 +21,7 @@
 #include "fdi_romo_table.h"
 #include "fdi_table.h"
 #include "fdi_test_util.h"
+#include "../../fw/src/fdi_gen_internal.h" /* observer building blocks of the generated generators */
 
 #define DT 0.01
 
@@ -202,7 +204,7 @@ static void test_operating_domain(void **state)
     fdi_diag_t d;
     fdi_diag_result_t res;
     const fdi_diag_config_t cfg = {&fdi_romo_table, (float)VEH_DX, (float)VEH_DY, 1.5f, 150.0f, 1U, 1U, 300U,
-                                   FDI_ISO_EXONERATION};
+                                   FDI_ISO_EXONERATION, 0U, 1U};
     const uint32_t all = ((uint32_t)1U << fdi_romo_table.n_tests) - 1U;
     uint32_t low;
     int n;
@@ -256,6 +258,50 @@ static void test_operating_domain(void **state)
     assert_int_equal(res.evaluable_mask, all);
 }
 
+static void test_observer_building_blocks(void **state)
+{
+    /* x' = J x + b with constant b: one predict step is the exact exp(J dt) solution, for a slow, a stiff
+     * (J dt = -4, where forward Euler diverges) and a zero pole (then phi = dt) */
+    const float poles[3] = {-12.566f, -400.0f, 0.0f};
+    const float b = 3.0f;
+    fdi_gen_param_t p;
+    fdi_gen_t g;
+    uint32_t i;
+    (void)state;
+    params(&p);
+    assert_int_equal(fdi_gen_init(&g, FDI_GEN_KIN_X_DERIV), FDI_OK);
+    for (i = 0U; i < 3U; ++i)
+    {
+        const double jac = (double)poles[i];
+        double x = 2.0;
+        int n;
+        g.obs.xh = 2.0f;
+        g.obs.g_prev = (poles[i] * 2.0f) + b;
+        for (n = 0; n < 50; ++n)
+        {
+            const float g1 = (poles[i] * g.obs.xh) + b;
+            const float xh = fdi_gen_obs_predict(&g, &p, g1, poles[i]);
+            const double e = exp(jac * DT);
+            x = (fabs(jac) > 0.0) ? ((e * x) + (((e - 1.0) / jac) * (double)b)) : (x + (DT * (double)b));
+            assert_true(fabs((double)xh - x) < (1e-4 * (1.0 + fabs(x))));
+            assert_int_equal(fdi_gen_obs_store(&g, xh, (poles[i] * xh) + b), FDI_OK);
+        }
+    }
+    assert_true(fabs((double)fdi_gen_obs_predict(NULL, &p, 1.0f, -1.0f) - (double)0.0f) <= 0.0);
+    assert_true(fabs((double)fdi_gen_obs_predict(&g, NULL, 1.0f, -1.0f) - (double)0.0f) <= 0.0);
+    g.obs.xh = 1.0f;
+    assert_int_equal(fdi_gen_obs_store(&g, NAN, 0.0f), FDI_NOT_FINITE);
+    assert_int_equal(fdi_gen_obs_store(&g, 0.0f, INFINITY), FDI_NOT_FINITE);
+    assert_true(fabs((double)g.obs.xh - (double)1.0f) <= 0.0); /* nothing stored */
+    assert_int_equal(fdi_gen_obs_store(NULL, 0.0f, 0.0f), FDI_BAD_ARG);
+    assert_true(fabs((double)fdi_gen_heaviside(0.5f) - (double)1.0f) <= 0.0);
+    assert_true(fabs((double)fdi_gen_heaviside(0.0f) - (double)0.0f) <= 0.0);
+    assert_true(fabs((double)fdi_gen_heaviside(-2.0f) - (double)0.0f) <= 0.0);
+    assert_true(fabs((double)fdi_gen_sign(-3.0f) - (double)-1.0f) <= 0.0);
+    assert_true(fabs((double)fdi_gen_sign(0.0f) - (double)0.0f) <= 0.0);
+    assert_true(fabs((double)fdi_gen_sign(7.0f) - (double)1.0f) <= 0.0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -263,6 +309,7 @@ int main(void)
         cmocka_unit_test(test_unlinked_and_bad_inputs),
         cmocka_unit_test(test_generated_mso3_equals_handwritten_arr3),
         cmocka_unit_test(test_operating_domain),
+        cmocka_unit_test(test_observer_building_blocks),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

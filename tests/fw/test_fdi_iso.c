@@ -1,16 +1,19 @@
 /*
  * test_fdi_iso.c - isolation by signature matching: the kinematic table (every fault uniquely
  * isolable), a table with a non-trivial isolability class, not-evaluable tests, bad arguments, and a
- * brute-force cross-check of every alarm/evaluable pattern against the set definitions.
+ * brute-force cross-check of every alarm/evaluable pattern against the set definitions, exoneration by
+ * reaction sizes (weak tests accuse, never clear), and the true fault kept under ideal responses.
  */
 #include <setjmp.h>
 #include <stdarg.h>
+#include <math.h>
 #include <stddef.h>
 
 #include <cmocka.h>
 
 #include "fdi_iso.h"
 #include "fdi_kin_table.h"
+#include "fdi_romo_table.h"
 #include "fdi_test_util.h"
 
 #define F(n) (1U << ((n) - 1))
@@ -70,8 +73,87 @@ static const fdi_test_desc_t tests2[2] = {
 };
 static const uint32_t sig4[4] = {0x3U, 0x3U, 0x1U, 0x2U};
 static const uint32_t class4[4] = {0x3U, 0x3U, 0x4U, 0x8U};
+static const float size4[4 * 2] = {1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 0.0f, 0.0f, 1.0f}; /* classic */
 static const fdi_table_t table4 = {FDI_TABLE_FORMAT_VERSION, {0.01f, 0.5f, 0.7071f, 2.0f}, 4U, 2U, names4,
-                                   tests2, sig4, class4};
+                                   tests2, sig4, class4, size4, 1.0f};
+
+/*
+ * Reaction sizes: 3 faults, 3 tests, all faults in every test (one class), but
+ *   f1: test 0 reacts at 1, test 1 at 10, test 2 never (weak);
+ *   f2: test 0 at 5, test 1 at 1, test 2 at 1;
+ *   f3: test 0 at 2, test 1 at 2, test 2 at 2.
+ * Margin 2.
+ */
+static const char *const names3[3] = {"a", "b", "c"};
+static const fdi_test_desc_t tests3[3] = {
+    {20U, FDI_GEN_KIN_X_DERIV, 0x7U, FDI_SIGM_ALL, 5.0f, 1.0f, "t0"},
+    {21U, FDI_GEN_KIN_Y_DERIV, 0x7U, FDI_SIGM_ALL, 5.0f, 1.0f, "t1"},
+    {22U, FDI_GEN_KIN_ARR3, 0x7U, FDI_SIGM_ALL, 5.0f, 1.0f, "t2"},
+};
+static const uint32_t sig3[3] = {0x7U, 0x7U, 0x7U};
+static const uint32_t class3[3] = {0x7U, 0x7U, 0x7U};
+static const float size3[3 * 3] = {1.0f, 10.0f, 0.0f, 5.0f, 1.0f, 1.0f, 2.0f, 2.0f, 2.0f};
+static const fdi_table_t table3 = {FDI_TABLE_FORMAT_VERSION, {0.01f, 0.5f, 0.7071f, 2.0f}, 3U, 3U, names3,
+                                   tests3, sig3, class3, size3, 2.0f};
+
+static void test_reaction_sizes(void **state)
+{
+    fdi_iso_result_t r;
+    (void)state;
+    assert_int_equal(fdi_table_check(&table3), FDI_OK);
+    /* only test 0 alarms: f1 (implied >= 1; test 1 needs 10, test 2 never) stays; f2 implied >= 5, and tests
+       1, 2 react at 1 (2 * 1 <= 5): cleared; f3 implied >= 2, tests 1, 2 need 2 (2 * 2 > 2): stays */
+    r = iso(&table3, 0x1U, 0x7U, FDI_ISO_EXONERATION);
+    assert_int_equal(r.candidates, 0x5U);
+    /* tests 0 and 1 alarm, test 2 quiet: f1 implied >= 10, test 2 never reacts to f1: f1 stays; f2
+       implied >= 5 and test 2 reacts at 1: cleared; f3 implied >= 2, test 2 at 2: stays */
+    r = iso(&table3, 0x3U, 0x7U, FDI_ISO_EXONERATION);
+    assert_int_equal(r.candidates, 0x5U);
+    /* test 2 (weak for f1) alarms alone: for f1 the implied size is beyond every stated one, so quiet tests
+       0 and 1 clear it; f2 implied >= 1: test 1 at 1 needs 2; f3 implied 2: tests 0, 1 at 2 need 4 */
+    r = iso(&table3, 0x4U, 0x7U, FDI_ISO_EXONERATION);
+    assert_int_equal(r.candidates, 0x6U);
+    /* without exoneration every fault explains any alarm here */
+    r = iso(&table3, 0x4U, 0x7U, FDI_ISO_NO_EXONERATION);
+    assert_int_equal(r.candidates, 0x7U);
+}
+
+/*
+ * The true fault is never exonerated by an ideal response: fault j of any size m makes exactly the tests
+ * with 0 < s(j, i) <= m alarm, every other test is quiet; j must stay a candidate. Checked on the generated
+ * ROMO table for every fault and sizes from 0.001 to 10,000 (every decade in 20 steps).
+ */
+static void test_true_fault_never_exonerated(void **state)
+{
+    const fdi_table_t *t = &fdi_romo_table;
+    const uint32_t nt = (uint32_t)t->n_tests;
+    const uint32_t all = (nt >= 32U) ? 0xFFFFFFFFU : ((1U << nt) - 1U);
+    uint32_t j;
+    (void)state;
+    assert_int_equal(fdi_table_check(t), FDI_OK);
+    for (j = 0U; j < (uint32_t)t->n_faults; ++j)
+    {
+        int k;
+        for (k = -60; k <= 80; ++k)
+        {
+            const float m = powf(10.0f, (float)k / 20.0f);
+            uint32_t alarm = 0U;
+            uint32_t i;
+            fdi_iso_result_t r;
+            for (i = 0U; i < nt; ++i)
+            {
+                const float s = t->test_size[(j * nt) + i];
+                alarm |= ((s > 0.0f) && (s <= m)) ? (1U << i) : 0U;
+            }
+            if (alarm == 0U)
+            {
+                continue;
+            }
+            r = iso(t, alarm, all, FDI_ISO_EXONERATION);
+            assert_true((r.candidates >> j) & 1U);
+        }
+    }
+}
 
 static void test_isolability_class(void **state)
 {
@@ -102,12 +184,42 @@ static void test_bad_args(void **state)
     assert_int_equal(fdi_iso_run(&fdi_kin_table, 0U, 0U, (fdi_iso_mode_t)7, &r), FDI_BAD_ARG);
 }
 
+/* Reference of the exoneration rule (fdi_iso.h), in double: does a quiet test of `quiet` clear fault f? */
+static int ref_cleared(const fdi_table_t *t, uint32_t f, uint32_t alarm, uint32_t quiet)
+{
+    double implied = 0.0;
+    int beyond = 0;
+    int cleared = 0;
+    uint32_t i;
+    for (i = 0U; i < t->n_tests; ++i)
+    {
+        const double s = (double)t->test_size[(f * t->n_tests) + i];
+        if ((alarm & (1U << i)) != 0U)
+        {
+            beyond |= (s <= 0.0) ? 1 : 0;
+            implied = (s > implied) ? s : implied;
+        }
+    }
+    for (i = 0U; i < t->n_tests; ++i)
+    {
+        const double s = (double)t->test_size[(f * t->n_tests) + i];
+        const int sees = ((t->tests[i].fault_mask >> f) & 1U) != 0U;
+        if (((quiet & (1U << i)) != 0U) && sees && (s > 0.0) &&
+            ((beyond != 0) || (((double)t->exoneration_margin * s) <= implied)))
+        {
+            cleared = 1;
+        }
+    }
+    return cleared;
+}
+
 /*
- * Every (alarm, evaluable) pair of both tables, both modes, against the definition written per test
- * (a fault is a candidate iff it is in every alarmed test's fault set and, with exoneration, in no quiet
- * evaluable test's fault set); candidates are always whole classes; exoneration only removes candidates.
+ * Every (alarm, evaluable) pair of a table, both modes, against the definition written per test (a fault
+ * is a candidate iff it is in every alarmed test's fault set and, with exoneration, no quiet evaluable test
+ * clears it by the reaction-size rule; for the classic tables (sizes 1, margin 1): no quiet evaluable test
+ * sees it); without exoneration candidates are whole classes; exoneration only removes candidates.
  */
-static void brute_force(const fdi_table_t *t)
+static void brute_force(const fdi_table_t *t, int classic)
 {
     const uint32_t all_tests = (1U << t->n_tests) - 1U;
     uint32_t ev;
@@ -117,7 +229,8 @@ static void brute_force(const fdi_table_t *t)
         for (al = 0U; al <= all_tests; ++al)
         {
             uint32_t expect_ne;
-            uint32_t expect_ex;
+            uint32_t expect_ex = 0U;
+            uint32_t expect_classic;
             uint32_t f;
             fdi_iso_result_t rn;
             fdi_iso_result_t rx;
@@ -126,25 +239,37 @@ static void brute_force(const fdi_table_t *t)
                 continue;
             }
             expect_ne = (al != 0U) ? ((1U << t->n_faults) - 1U) : 0U;
-            expect_ex = expect_ne;
+            expect_classic = expect_ne;
             for (f = 0U; f < t->n_tests; ++f)
             {
                 const uint32_t bit = 1U << f;
                 if ((al & bit) != 0U)
                 {
                     expect_ne &= t->tests[f].fault_mask;
-                    expect_ex &= t->tests[f].fault_mask;
+                    expect_classic &= t->tests[f].fault_mask;
                 }
                 else if ((ev & bit) != 0U)
                 {
-                    expect_ex &= ~t->tests[f].fault_mask;
+                    expect_classic &= ~t->tests[f].fault_mask;
+                }
+            }
+            for (f = 0U; f < t->n_faults; ++f)
+            {
+                if (((expect_ne >> f) & 1U) && !ref_cleared(t, f, al, ev & ~al))
+                {
+                    expect_ex |= 1U << f;
                 }
             }
             rn = iso(t, al, ev, FDI_ISO_NO_EXONERATION);
             rx = iso(t, al, ev, FDI_ISO_EXONERATION);
             assert_int_equal(rn.candidates, expect_ne);
             assert_int_equal(rx.candidates, expect_ex);
+            if (classic)
+            {
+                assert_int_equal(rx.candidates, expect_classic);
+            }
             assert_int_equal(rx.candidates & ~rn.candidates, 0U);
+            assert_int_equal(expect_classic & ~rx.candidates, 0U); /* sizes never clear more than classic */
             for (f = 0U; f < t->n_faults; ++f)
             {
                 if ((rn.candidates & (1U << f)) != 0U)
@@ -160,8 +285,10 @@ static void brute_force(const fdi_table_t *t)
 static void test_brute_force(void **state)
 {
     (void)state;
-    brute_force(&fdi_kin_table);
-    brute_force(&table4);
+    brute_force(&fdi_kin_table, 0);
+    brute_force(&fdi_romo_table, 0);
+    brute_force(&table4, 1);
+    brute_force(&table3, 0);
 }
 
 int main(void)
@@ -171,6 +298,8 @@ int main(void)
         cmocka_unit_test(test_isolability_class),
         cmocka_unit_test(test_bad_args),
         cmocka_unit_test(test_brute_force),
+        cmocka_unit_test(test_reaction_sizes),
+        cmocka_unit_test(test_true_fault_never_exonerated),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -15,6 +15,7 @@ static fdi_test_desc_t tests_copy[4];
 static uint32_t sig_copy[5];
 static uint32_t class_copy[5];
 static const char *names_copy[5];
+static float size_copy[5 * 4];
 static fdi_table_t t;
 
 /* A writable copy of the kinematic table. */
@@ -33,10 +34,15 @@ static int setup(void **state)
         class_copy[i] = fdi_kin_table.iso_class[i];
         names_copy[i] = fdi_kin_table.fault_names[i];
     }
+    for (i = 0; i < 5 * 4; ++i)
+    {
+        size_copy[i] = fdi_kin_table.test_size[i];
+    }
     t.tests = tests_copy;
     t.fault_signature = sig_copy;
     t.iso_class = class_copy;
     t.fault_names = names_copy;
+    t.test_size = size_copy;
     return 0;
 }
 
@@ -79,6 +85,12 @@ static void test_corruptions(void **state)
     EXPECT_BAD(tests_copy[0].fault_mask &= ~0x08U);    /* fault masks != signatures */
     EXPECT_BAD(class_copy[0] = 0x03U);                 /* f1, f2 have different signatures */
     EXPECT_BAD(class_copy[4] = 0x00U);                 /* a class must contain its fault */
+    EXPECT_BAD(t.test_size = NULL);
+    EXPECT_BAD(size_copy[1] = 0.5f);                   /* f1 is not in test 1's fault set */
+    EXPECT_BAD(size_copy[0] = -1.0f);
+    EXPECT_BAD(size_copy[0] = NAN);
+    EXPECT_BAD(t.exoneration_margin = 0.5f);           /* a margin below 1 would exonerate the true fault */
+    EXPECT_BAD(t.exoneration_margin = INFINITY);
 }
 
 /* A test without a generator yet (kind NONE) is valid data. */

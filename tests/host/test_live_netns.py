@@ -18,8 +18,10 @@ from fdi_host.netns import check_unshare
 
 pytest.importorskip("msgpack", reason="python-can's udp_multicast interface needs msgpack")
 
-FAULT = ("f4", 4.0, 7.0)
-DURATION = 10.0
+# In the steady turn of the cornering scenario (yaw rate 0.3 rad/s from 5 s) every test of f4's signature
+# reacts; 4.5 s of fault: the ECU exonerates a quiet test (isolation) only after 3 s of alarm.
+FAULT = ("f4", 5.5, 10.0)
+DURATION = 13.0  # the fault's end + the 3 s grace
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +31,7 @@ def live_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
         pytest.skip(f"no private network namespace for udp_multicast: {chk.reason}")
     out = tmp_path_factory.mktemp("live")
     f, a, b = FAULT
-    cmd = [sys.executable, "-m", "fdi_host.live_runner", "--transport", "netns", "--scenario", "fig6",
+    cmd = [sys.executable, "-m", "fdi_host.live_runner", "--transport", "netns", "--scenario", "cornering",
            "--no-scenario-faults", "--fault", f"{f}@{a}s:0.5:end={b}s", "--duration", str(DURATION),
            "--table", "kin", "--out-dir", str(out), "--channel", "239.74.163.7"]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=240, check=False)

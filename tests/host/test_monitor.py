@@ -192,3 +192,115 @@ def test_merged_diagnosis_steps_count_one_late_frame(db: RomoDatabase) -> None:
     st = mon.stats.messages[512]
     assert st.received == 200 and st.lost == 0 and st.late == 1
     assert st.max_lateness == pytest.approx(0.03, abs=1e-9)
+
+
+def _run_with_silences(db: RomoDatabase, duration: float, imu_off: tuple[float, float] | None,
+                       diag_off: tuple[float, float] | None, plan: list[tuple[float, float, int, int]] = (),
+                       restart_counter: int = 9) -> Monitor:
+    """IMU frames every 5 ms and diagnosis frames every 10 ms (alarms per `plan`), each stream silent over
+    its `*_off` interval [a, b) of the drive's clock; after a silence the stream's counter restarts at
+    `restart_counter` (a restarted sender). Drive t = 0 at wall time 1000 s (the first IMU frame)."""
+    mon = Monitor(db, KIN)
+    events: list[tuple[float, int, bytes]] = []
+    for fid, cycle, off in ((128, 0.005, imu_off), (512, DT, diag_off)):
+        c, silent_before = 0, False
+        for k in range(round(duration / cycle)):
+            t = k * cycle
+            if off is not None and off[0] <= t < off[1]:
+                silent_before = True
+                continue
+            if silent_before:
+                c, silent_before = restart_counter, False
+            if fid == 128:
+                data = db.encode("IMU_Motion", {"IMU_AccelX": 0.1}, c)
+                events.append((1000.0 + t, fid, data))
+            else:
+                alarm, cand = 0, 0
+                for a, b, am, cm in plan:
+                    if a <= t < b:
+                        alarm, cand = am, cm
+                events.append((1000.0 + t + 0.0007, fid, _diag_frame(db, alarm, cand, c)))
+            c = e2e.next_counter(c)
+    for t, fid, data in sorted(events, key=lambda e: e[0]):
+        mon.on_frame(fid, data, t)
+    return mon
+
+
+def test_ecu_and_simulator_silences_are_gaps_not_lost_frames(db: RomoDatabase) -> None:
+    mon = _run_with_silences(db, 10.0, imu_off=(6.0, 7.5), diag_off=(2.0, 3.2))
+    assert [(g.stream, g.resumed) for g in mon.gaps.gaps] == [("diagnosis", True), ("sensors", True)]
+    d, s = mon.gaps.gaps
+    # The gap runs from the last frame before the silence to the first after it.
+    assert d.start == pytest.approx(1.9907, abs=1e-6) and d.end == pytest.approx(3.2007, abs=1e-6)
+    assert d.duration == pytest.approx(1.21, abs=1e-6)
+    assert s.start == pytest.approx(5.995, abs=1e-6) and s.duration == pytest.approx(1.505, abs=1e-6)
+    imu, diag = mon.stats.messages[128], mon.stats.messages[512]
+    # Counters restarting at 9 after the silence: not lost frames, and the nominal times start afresh.
+    assert (imu.gaps, imu.lost, imu.late, imu.repeated) == (1, 0, 0, 0)
+    assert (diag.gaps, diag.lost, diag.late, diag.repeated) == (1, 0, 0, 0)
+    assert imu.gap_time == pytest.approx(1.505, abs=1e-6) and diag.gap_time == pytest.approx(1.21, abs=1e-6)
+    assert [g.stream for g in mon.new_gaps] == ["diagnosis", "sensors"]
+    # Live table while a silence lasts, and after.
+    assert mon.silence_note(1000.0 + 10.5) == "DIAGNOSIS SILENT for 0.5 s  SENSORS SILENT for 0.5 s"
+    assert mon.silence_note(1000.0 + 9.0) == "" and mon.table(1000.0 + 9.0)[-2].startswith("  gap: ECU silent")
+
+
+def test_short_jitter_is_no_gap(db: RomoDatabase) -> None:
+    mon = _run_with_silences(db, 3.0, imu_off=(1.0, 1.2), diag_off=(2.0, 2.2))  # 0.2 s < 0.25 s threshold
+    assert mon.gaps.gaps == [] and mon.finish_gaps(3.0) == []
+    assert mon.stats.messages[128].gaps == 0
+
+
+def test_silences_that_never_end(db: RomoDatabase) -> None:
+    # The ECU dies at 6 s and never comes back while the drive goes on to 10 s: an open diagnosis gap.
+    mon = _run_with_silences(db, 10.0, imu_off=None, diag_off=(6.0, 99.0))
+    (g,) = mon.finish_gaps(10.0)
+    assert g.stream == "diagnosis" and not g.resumed and g.end == pytest.approx(9.995, abs=1e-6)
+    # The simulator dies at 7 s of a 10 s drive: an open sensor gap up to the drive's end; the ECU's frames
+    # go on meanwhile (its timer), so the diagnosis stream has no gap.
+    mon = _run_with_silences(db, 10.0, imu_off=(7.0, 99.0), diag_off=None)
+    (g,) = mon.finish_gaps(10.0)
+    assert g.stream == "sensors" and not g.resumed and g.duration == pytest.approx(3.005, abs=1e-6)
+    # The normal end of a drive is no gap.
+    assert _run_with_silences(db, 10.0, None, None).finish_gaps(10.0) == []
+
+
+def test_gaps_in_scoring_and_reports(db: RomoDatabase, tmp_path: Path) -> None:
+    plan = [(8.5, 9.5, 0b0111, F["f4"])]  # f4's second window detected; the alarm before the gap is false
+    plan.append((1.0, 1.95, 0b0001, 0))
+    mon = _run_with_silences(db, 10.0, imu_off=(4.0, 5.0), diag_off=(1.95, 3.0), plan=plan)
+    # f1 falls into the ECU's gap, f2 into the simulator's, f4 after both; f5 overlaps nothing and is missed.
+    truth = _truth([("f1", 2.0, 2.5), ("f2", 4.2, 4.6), ("f4", 8.4, 9.0), ("f5", 6.0, 6.5)], 10.0)
+    s = mon.score(truth, grace=0.5)
+    by = {f.fault: f for f in s.faults}
+    assert by["f1"].not_evaluable and not by["f1"].detected and by["f1"].gap_overlap == pytest.approx(1.0, abs=0.02)
+    assert by["f2"].not_evaluable and by["f2"].gap_overlap == pytest.approx(0.8, abs=0.02)
+    assert by["f4"].detected and not by["f4"].not_evaluable and by["f4"].gap_overlap == 0.0
+    assert not by["f5"].detected and not by["f5"].not_evaluable  # a plain miss stays a miss
+    assert [g.stream for g in s.gaps] == ["diagnosis", "sensors"]
+    table = score_table(s)
+    assert table.count("not eval.") == 2 and "missed" in table and "gaps: diagnosis 1" in table
+    assert "ECU silent (no FDI_Diagnosis) from 1.94 s to 3.00 s" in table
+    write_reports(tmp_path, s, mon.stats, {"table": "kin"})
+    doc = json.loads((tmp_path / "report.json").read_text())
+    assert doc["score"]["gap_count"] == {"diagnosis": 1, "sensors": 1}
+    assert [round(g["duration"], 2) for g in doc["score"]["gaps"]] == [1.06, 1.0]
+    assert doc["frames"]["messages"]["0x080"]["gaps"] == 1
+    assert "## Gaps" in (tmp_path / "report.md").read_text()
+    assert plot_diagnosis(tmp_path / "d.png", mon.records, windows_from_truth(truth), KIN, s.gaps) is not None
+
+
+def test_a_gap_is_not_a_detection() -> None:
+    """Alarms of diagnosis frames inside a sensor gap are not a detection (the ECU's inputs are stale);
+    a false-alarm episode does not run on across an ECU gap."""
+    from fdi_host.monitor_gaps import Gap
+
+    recs = [DiagRecord(k * DT, 0b0111 if 200 <= k < 260 else 0, F["f4"] if 200 <= k < 260 else 0)
+            for k in range(500)]
+    gaps = [Gap("sensors", 1.9, 2.7)]
+    s = score_run(recs, [FaultWindow("f4", 1.95, 2.5)], KIN, 0.1, gaps)
+    assert not s.faults[0].detected and s.faults[0].not_evaluable
+    assert score_run(recs, [FaultWindow("f4", 1.95, 2.5)], KIN, 0.1).faults[0].detected  # without the gap
+    recs = [r for r in recs if not 2.2 <= r.t < 2.5]
+    split = score_run(recs, [], KIN, 0.1, [Gap("diagnosis", 2.19, 2.5)])
+    assert len(split.false_alarms) == 2 and len(score_run(recs, [], KIN, 0.1).false_alarms) == 1

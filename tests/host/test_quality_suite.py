@@ -33,7 +33,7 @@ def result(t: float, candidates: int = 0, alarm: int = 0) -> EcuResult:
     iso = candidates != 0 and candidates in (1, 2, 4, 8, 16)
     return EcuResult(
         step=int(t * 100), t_us=round(t * 1e6), status=3 if iso else (2 if alarm else 1), validity=0x7FFFF,
-        alarm_mask=alarm, evaluable_mask=0xF, candidates=candidates, class_mask=candidates,
+        alarm_mask=alarm, evaluable_mask=0xF, accused_mask=alarm, candidates=candidates, class_mask=candidates,
         n_classes=1 if iso else (0 if candidates == 0 else 2), detected=alarm != 0, isolated=iso,
         iso_class=0, test_status=("ok",) * 4, residuals=(0.0,) * 4, ratios=(0.0,) * 4, test_names=("",) * 4,
     )
@@ -83,6 +83,13 @@ def test_fault_sizes_file(tmp_path: Path) -> None:
             load_fault_sizes(p)
     with pytest.raises(QualityError, match="unknown fault shape"):
         SuiteConfig(shapes=("sine",))
+    # per-test statements of the table's own tests: the most sensitive test's size; other tests are ignored
+    p = tmp_path / "s.toml"
+    p.write_text('[sizes]\nf1 = 1.0\nf2 = 2.0\n[per_test.f1]\nMSO3 = 0.5\nMSO9 = 0.1\nMSO4 = "not detectable"\n'
+                 '[per_test.f2]\nMSO9 = 0.2\n', encoding="utf-8")
+    assert load_fault_sizes(p) == {"f1": 1.0, "f2": 2.0}
+    assert load_fault_sizes(p, ["MSO3", "MSO4"]) == {"f1": 0.5, "f2": 2.0}
+    assert load_fault_sizes(p, ["MSO3", "MSO9"]) == {"f1": 0.1, "f2": 0.2}
 
 
 def test_quick_suite_kin_table(tmp_path: Path) -> None:

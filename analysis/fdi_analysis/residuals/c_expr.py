@@ -55,6 +55,10 @@ def to_c(e: sympy.Basic, name: Callable[[sympy.Symbol], str]) -> str:
         for a in reversed(args[:-1]):
             out = f"{fn}({a}, {out})"
         return out
+    if isinstance(e, sympy.Heaviside):  # derivative of Max: 1 for x > 0, else 0 (the value at 0 is immaterial)
+        return f"fdi_gen_heaviside({to_c(e.args[0], name)})"
+    if isinstance(e, sympy.sign):
+        return f"fdi_gen_sign({to_c(e.args[0], name)})"
     for f, cname in _FUNCS.items():
         if isinstance(e, f):
             return f"{cname}({to_c(e.args[0], name)})"

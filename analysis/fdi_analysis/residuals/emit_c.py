@@ -13,7 +13,7 @@ from collections.abc import Sequence
 import sympy
 
 from fdi_analysis.residuals.c_expr import c_float, to_c
-from fdi_analysis.residuals.generator import DOMAIN_SIGNAL, Generator
+from fdi_analysis.residuals.generator import DOMAIN_SIGNAL, XHAT, Generator
 from fdi_analysis.residuals.signals import Node, node_of
 
 MAX_FILTERS = 16  # FDI_GEN_MAX_FILTERS of fw/include/fdi_gen.h
@@ -59,21 +59,59 @@ def _function(g: Generator, slot: int) -> str:
     for k, f in enumerate(g.filters):
         step = f"fdi_gen_filter_step(g, par, {k}U, {_node_c(g, f)}, reset, &o{k})"
         lines.append(f"    st = fdi_gen_status_worst(st, {step});")
-    subs, red = sympy.cse(g.expr, symbols=sympy.numbered_symbols("t"), order="canonical")
-    tmp = {str(s) for s, _ in subs}
-
-    def name(s: sympy.Symbol) -> str:
-        return str(s) if str(s) in tmp else _node_c(g, node_of(s))
-
-    lines.append("    {")
-    for s, e in subs:
-        lines.append(f"        const float {s} = {to_c(e, name)};")
-    lines.append(f"        const float value = {to_c(red[0], name)};")
-    lines.append("        st = fdi_gen_finish(st, value, reset, r);")
-    lines.append("    }")
+    if g.observer is None:
+        lines.append("    {")
+        lines += _block(g, [("value", g.expr)], "        ")
+        lines.append("        st = fdi_gen_finish(st, value, reset, r);")
+        lines.append("    }")
+    else:
+        lines += _observer_block(g)
     lines.append("    return st;")
     lines.append("}")
     return "\n".join(lines)
+
+
+def _block(g: Generator, outputs: list[tuple[str, sympy.Expr]], indent: str, xh: str = "xh") -> list[str]:
+    """`const float <name> = <expr>;` for each output, common subexpressions shared (XHAT is `xh`)."""
+    subs, red = sympy.cse([e for _, e in outputs], symbols=sympy.numbered_symbols("t"), order="canonical")
+    tmp = {str(s) for s, _ in subs}
+
+    def name(s: sympy.Symbol) -> str:
+        if s == XHAT:
+            return xh
+        return str(s) if str(s) in tmp else _node_c(g, node_of(s))
+
+    lines = [f"{indent}const float {s} = {to_c(e, name)};" for s, e in subs]
+    lines += [f"{indent}const float {n} = {to_c(e, name)};" for (n, _), e in zip(outputs, red, strict=True)]
+    return lines
+
+
+def _observer_block(g: Generator) -> list[str]:
+    """The observer step of fdi_analysis.residuals.observer: predict xh from the previous estimate (state
+    update plus output injection, exponential of the error pole, input averaged), then the residual and
+    the next step's input at the new estimate."""
+    o = g.observer
+    assert o is not None
+
+    def raw_name(s: sympy.Symbol) -> str:
+        return _node_c(g, node_of(s))
+
+    if o.initial.free_symbols:
+        # the state's sensor is outside the MSO set (not in the input mask, not checked by the diagnoser):
+        # used only when finite, else 0 (an error of the reset value decays with the error pole)
+        x0 = to_c(o.initial, raw_name)
+        reset = [f"            const float x0 = {x0}; /* {o.state} from its sensor outside the MSO set */",
+                 "            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;"]
+    else:
+        reset = [f"            xh = {c_float(float(o.initial))};"]
+    lines = ["    {", "        float xh = 0.0f;", "        if (reset)", "        {", *reset,
+             "        }", "        else", "        {", "            const float xp = g->obs.xh;"]
+    lines += _block(g, [("f", o.update), ("l", o.gain), ("a", o.a), ("c", o.c), ("e", g.expr)], "            ", "xp")
+    lines += ["            xh = fdi_gen_obs_predict(g, par, f + (l * e), a + (l * c));", "        }", "        {"]
+    lines += _block(g, [("f", o.update), ("l", o.gain), ("value", g.expr)], "            ")
+    lines += ["            st = fdi_gen_status_worst(st, fdi_gen_obs_store(g, xh, f + (l * value)));",
+              "            st = fdi_gen_finish(st, value, reset, r);", "        }", "    }"]
+    return lines
 
 
 def render(generators: Sequence[Generator], name: str, command: str) -> tuple[str, str]:

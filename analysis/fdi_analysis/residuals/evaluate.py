@@ -12,7 +12,7 @@ import numpy as np
 import sympy
 from numpy.typing import NDArray
 
-from fdi_analysis.residuals.generator import DOMAIN_SIGNAL, Generator
+from fdi_analysis.residuals.generator import DOMAIN_SIGNAL, XHAT, Generator
 from fdi_analysis.residuals.signals import Node
 
 FloatArray = NDArray[np.float64]
@@ -70,12 +70,42 @@ def residual(g: Generator, signals: Mapping[str, FloatArray], design: FilterDesi
     design = design or FilterDesign()
     values = node_signals(g, signals, design)
     syms = [n.symbol for n in g.nodes]
+    if g.observer is not None:
+        return observer_residual(g, signals, values, design)
     fn = sympy.lambdify(syms, g.expr, modules="numpy")
     r = np.asarray(fn(*[values[n] for n in g.nodes]), dtype=float)
     if r.ndim == 0:
         r = np.full(len(next(iter(values.values()))), float(r))
     r = r.copy()
     r[0] = 0.0
+    return r
+
+
+def observer_residual(g: Generator, signals: Mapping[str, FloatArray], values: Mapping[Node, FloatArray],
+                      design: FilterDesign) -> FloatArray:
+    """The observer generator sample by sample (fdi_analysis.residuals.observer; same steps as the C)."""
+    from fdi_analysis.residuals.observer import SCALAR_MODULES, SMALL_JDT, initial_values
+
+    o = g.observer
+    assert o is not None
+    syms = [XHAT, *[n.symbol for n in g.nodes]]
+    fn = sympy.lambdify(syms, [o.update, o.gain, o.a, o.c, g.expr], modules=SCALAR_MODULES, cse=True)
+    fn_next = sympy.lambdify(syms, [o.update + o.gain * g.expr, g.expr], modules=SCALAR_MODULES, cse=True)
+    cols = [np.asarray(values[n], dtype=float).tolist() for n in g.nodes]
+    rows = list(zip(*cols, strict=True)) if cols else [()] * len(next(iter(signals.values())))
+    n = len(rows)
+    x0 = float(initial_values(g, {k: np.asarray(v)[:1] for k, v in signals.items()})[0])
+    x0 = x0 if math.isfinite(x0) else 0.0  # as the C: the sensor outside the MSO set is not checked
+    r = np.zeros(n)
+    xh, (g_prev, _) = x0, fn_next(x0, *rows[0])
+    dt = design.dt
+    for k in range(1, n):
+        f, gain, a, c, e = fn(xh, *rows[k])
+        g1 = f + gain * e
+        jac = a + gain * c
+        phi = math.expm1(jac * dt) / jac if abs(jac * dt) > SMALL_JDT else dt
+        xh = xh + phi * 0.5 * (g_prev + g1)
+        g_prev, r[k] = fn_next(xh, *rows[k])
     return r
 
 

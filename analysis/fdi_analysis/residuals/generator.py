@@ -13,20 +13,53 @@ DOMAIN_SIGNAL = "vx_m"  # measured signal of the operating-domain condition (lon
 # DOMAIN_FACTOR * v_eps: there the normaliser is the wheel's own speed with margin, and the relative error of
 # the filtered speeds (all delayed alike, but differentiated and divided) is small.
 DOMAIN_FACTOR = 4.0
+# Observer error pole: OBSERVER_POLE_FACTOR x the derivative filters' bandwidth 2 pi f_c (f_c = 1 Hz of the
+# table design: lambda = 12.6 1/s, the estimate settles to 5 % in 3/lambda = 0.24 s, inside the 300 ms
+# detection goal and faster than the filtered signals it reads).
+OBSERVER_POLE_FACTOR = 2.0
+# Regularisation of the run-time output injection L = -(lambda + a) c / (c^2 + eps): eps = (OBSERVER_EPS x
+# the output sensitivity |c| at the reference point)^2, so the pole is placed wherever the residual
+# equation sees the state at least a tenth as well as at the reference point, and the gain fades out (no
+# division by zero) where it does not.
+OBSERVER_EPS = 0.1
 
 
 @dataclass(frozen=True)
 class Step:
     var: str
     equation: str
-    kind: str  # "measured", "algebraic" or "derivative"
+    kind: str  # "measured", "algebraic", "derivative" or "observer" (the observer state; its update equation)
     level: int  # filter level of the computed value
     division: bool = False  # the solution divides by a signal
 
     def text(self) -> str:
         how = {"measured": "from the measurement", "algebraic": "solved from",
-               "derivative": "filtered derivative by"}[self.kind]
+               "derivative": "filtered derivative by", "observer": "estimated by an observer integrating"}[self.kind]
         return f"{self.var} {how} {self.equation}" + (" (divides by a signal)" if self.division else "")
+
+
+@dataclass(frozen=True)
+class Observer:
+    """Integral causality for one state x (estimate xh, symbol XHAT): the differential constraint gives the
+    update xh' = update + gain * r, with r = the generator's residual expr (a function of xh and nodes);
+    a = d(update)/dxh and c = d(expr)/dxh are the linearisation the gain and the discretisation use."""
+
+    state: str
+    equation: str  # the differential constraint dx = d/dt x integrated by the observer
+    update: sympy.Expr  # dx over XHAT and Node symbols (at the generator's level)
+    gain: sympy.Expr  # L over XHAT and Node symbols
+    a: sympy.Expr
+    c: sympy.Expr
+    pole: float  # lambda [1/s]: the error pole where the residual sees the state
+    eps: float  # regularisation of the gain (0: constant c, no regularisation)
+    initial: sympy.Expr  # xh at a reset: the state from its measurement outside the MSO set (raw nodes), else 0
+
+    def text(self) -> str:
+        how = "constant gain" if not self.gain.free_symbols else "run-time gain -max(lambda + a, 0) c / (c^2 + eps)"
+        return f"observer for {self.state} (integrates {self.equation}, {how}, lambda = {self.pole:.3g} 1/s)"
+
+
+XHAT = sympy.Symbol("xhat")  # the observer state in Observer and Generator expressions
 
 
 @dataclass(frozen=True)
@@ -44,6 +77,7 @@ class Generator:
     scaled_by: str = ""  # denominator cleared from the residual ("" if none)
     min_speed: float = 0.0  # operating domain: evaluable only while |DOMAIN_SIGNAL| >= min_speed (0: always)
     domain_reason: str = ""  # where min_speed comes from in the model
+    observer: Observer | None = None  # integral causality for one state (expr then depends on XHAT)
 
     def domain(self) -> str:
         if self.min_speed <= 0.0:
@@ -54,6 +88,8 @@ class Generator:
         der = [s.var for s in self.steps if s.kind == "derivative"]
         text = f"residual {self.residual_equation}; "
         text += ("derivative causality for " + ", ".join(der)) if der else "algebraic only"
+        if self.observer is not None:
+            text += "; " + self.observer.text()
         text += f"; {len(self.filters)} filters, level {self.level}"
         if self.scaled_by:
             text += f"; multiplied by {self.scaled_by}"

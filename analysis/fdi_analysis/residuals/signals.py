@@ -59,7 +59,8 @@ def node_of(sym: sympy.Basic) -> Node:
 
 
 def nodes_in(expr: sympy.Expr) -> set[Node]:
-    return {node_of(s) for s in expr.free_symbols}
+    """The filtered-signal nodes of `expr` (other symbols, such as an observer state, are not nodes)."""
+    return {node_of(s) for s in expr.free_symbols if _NAME.match(str(s))}
 
 
 def raw(signal: str) -> sympy.Symbol:

@@ -13,7 +13,8 @@
  *   dlc != 8 -> BAD_DLC; E2E profile 11 CRC (CRC8 SAE-J1850 over the data ID low, high byte and bytes 1..7)
  *   -> BAD_CRC; alive counter 15 or any raw signal outside its DBC range -> OUT_OF_RANGE; counter equal to
  *   the last accepted one -> REPEATED_COUNTER; counter advanced by more than max_delta_counter (mod 15) ->
- *   COUNTER_JUMP (the receiver re-synchronises on it); sender status nibble other than OK/DEGRADED ->
+ *   COUNTER_JUMP (the receiver re-synchronises on it: a restarted sender costs one frame per message, and a
+ *   sender whose counter keeps jumping is never accepted); sender status nibble other than OK/DEGRADED ->
  *   SENSOR_STATUS (the message's signals go invalid at once). Accepted frames are decoded with the
  *   cantools-generated code (fw/generated/can/romo_can.c), converted to SI (bar -> Pa) and update
  *   fdi_inputs_t; the message is then fresh.
@@ -186,7 +187,8 @@ typedef struct
 } fdi_ecu_t; /* opaque by convention */
 
 /* Defaults for `table`: diagnoser settings as validated in tests/fw/test_fdi_diag.c (CUSUM k 1.5, h 150,
-   set 10, clear 100, warm-up = settling time + 20 steps, exoneration), ROMO sensor position, timeouts 3x the
+   set 10, clear 100, warm-up = settling time + 20 steps, exoneration after a 3 s settle window, episodes
+   ending after 3 s without alarm), ROMO sensor position, timeouts 3x the
    DBC cycle times, max_delta_counter 1, max_catchup_steps 100. BAD_ARG on NULL; BAD_TABLE when the
    table's design point has no finite settling time. */
 fdi_status_t fdi_ecu_config_default(fdi_ecu_config_t *cfg, const fdi_table_t *table);

@@ -13,6 +13,11 @@
 #define STATUS_DEGRADED 1U
 #define BAR_TO_PA 1.0e5f
 #define WARMUP_MARGIN_STEPS 20U
+/* Isolation episodes (fdi_diag.h): a quiet test exonerates only after 3 s, the response window in which the
+   analysis states the per-test fault sizes (fdi-analyze fault-sizes: alarm within a 3 s step); an episode
+   ends after 3 s without any alarm. */
+#define ISO_SETTLE_STEPS 300U
+#define EPISODE_CLEAR_STEPS 300U
 #define TIMEOUT_CYCLES 3U
 #define US_PER_MS 1000U
 
@@ -410,6 +415,8 @@ fdi_status_t fdi_ecu_config_default(fdi_ecu_config_t *cfg, const fdi_table_t *ta
                 cfg->diag.clear_count = 100U;
                 cfg->diag.warmup_steps = (uint16_t)((uint32_t)n + WARMUP_MARGIN_STEPS);
                 cfg->diag.mode = FDI_ISO_EXONERATION;
+                cfg->diag.iso_settle_steps = ISO_SETTLE_STEPS;
+                cfg->diag.episode_clear_steps = EPISODE_CLEAR_STEPS;
                 for (i = 0U; i < FDI_ECU_N_MSGS; ++i)
                 {
                     cfg->timeout_us[i] = TIMEOUT_CYCLES * (uint32_t)msg_desc[i].cycle_ms * US_PER_MS;

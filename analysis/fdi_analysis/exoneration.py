@@ -1,0 +1,68 @@
+"""Which quiet tests may exonerate which fault: the reaction sizes of the residual analysis.
+
+A test that is structurally sensitive to a fault but reacts to it only at sizes far above the size of the
+fault at hand stays quiet while that fault is present; if its quietness exonerated the fault, the isolation
+would clear the true fault and could name a wrong class. The table therefore carries, per (fault j, test i),
+the size of fault j at which test i reacts (the `[per_test.<fault>]` tables of
+host_tools/scenarios/fault_sizes.toml, written by `fdi-analyze fault-sizes`; 0 where the test does not react
+within the fault's physical limits). The firmware (fw/include/fdi_iso.h) lets a quiet test clear fault j only
+when the tests in alarm imply, were the fault j, a size of at least EXONERATION_MARGIN times the quiet
+test's reaction size.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+
+class FaultSizesError(ValueError):
+    """The fault sizes file is malformed."""
+
+
+@dataclass(frozen=True)
+class FaultSizes:
+    sizes: Mapping[str, float]  # fault -> stated minimal detectable size
+    per_test: Mapping[str, Mapping[str, float | str]]  # fault -> test label -> size, or why there is none
+    source: str
+
+    @staticmethod
+    def load(path: Path) -> FaultSizes:
+        try:
+            doc = tomllib.loads(path.read_text(encoding="utf-8"))
+        except (OSError, tomllib.TOMLDecodeError) as exc:
+            raise FaultSizesError(f"{path}: {exc}") from exc
+        sizes = doc.get("sizes")
+        if not isinstance(sizes, dict):
+            raise FaultSizesError(f"{path}: no [sizes] table")
+        bad = [f for f, v in sizes.items() if not isinstance(v, int | float) or not v > 0]
+        if bad:
+            raise FaultSizesError(f"{path}: [sizes] {bad[0]} must be a positive number")
+        per_test = doc.get("per_test", {})
+        for f, row in per_test.items():
+            for test, v in row.items():
+                if not isinstance(v, str) and not (isinstance(v, int | float) and v > 0):
+                    raise FaultSizesError(f"{path}: [per_test.{f}] {test} must be a positive number or a reason")
+        return FaultSizes({f: float(v) for f, v in sizes.items()}, per_test, str(path))
+
+    def reaction_size(self, fault: str, test: str) -> float:
+        """The size of `fault` at which `test` reacts; 0 when it does not (or was not measured)."""
+        v = self.per_test.get(fault, {}).get(test)
+        return float(v) if isinstance(v, int | float) else 0.0
+
+
+# The stated sizes are grid values above the first alarm of one scenario (cornering): a factor 2 covers the
+# grid step and a less exciting manoeuvre before a quiet test is taken as evidence.
+EXONERATION_MARGIN = 2.0
+
+
+def test_size_rows(faults: Sequence[str], labels: Sequence[str], signatures: Sequence[int],
+                   sizes: FaultSizes | None) -> tuple[list[list[float]], float]:
+    """(rows, margin): per fault j and test i (labels[i]) the reaction size, 0 off the signature. Without
+    sizes: 1 on the signature and margin 1, the classic rule (every quiet test of the signature exonerates)."""
+    if sizes is None:
+        return [[1.0 if sig >> i & 1 else 0.0 for i in range(len(labels))] for sig in signatures], 1.0
+    return ([[sizes.reaction_size(f, lab) if sig >> i & 1 else 0.0 for i, lab in enumerate(labels)]
+             for f, sig in zip(faults, signatures, strict=True)], EXONERATION_MARGIN)

@@ -1,0 +1,174 @@
+"""Integral causality through an observer: one state x of an MSO set that the plain sequence could only
+integrate open loop (dx = d/dt x with no measurement of x in the set).
+
+The estimate xh is treated as a known signal; the rest of the MSO is computed by the ordinary sequence, the
+differential constraint gives the state update dx = F(xh, u) and the equation left over is the residual
+e(xh, u) (u = the filtered measured signals). Observer and residual:
+
+    xh' = G(xh, u) = F(xh, u) + L(xh, u) * e(xh, u),      r = e(xh, u)
+
+With a = dF/dx and c = de/dx (sympy, through the sequence) the error pole of the linearisation is a + L c.
+The gain places it at -lambda where the residual sees the state and where the model's own dynamics are
+slower than that, and leaves the (faster) own dynamics alone otherwise:
+
+    L = -max(lambda + a, 0) * c / (c^2 + eps)       (constant when a and c are constants; eps = 0 then)
+
+eps = (OBSERVER_EPS * c_ref)^2 with c_ref the RMS of c on a fault-free reference drive, so the gain fades
+out instead of dividing by zero where the residual equation does not see the state.
+
+Discretisation for the step dt (the style of fdi_obs.h: exponential of the error pole, averaged input),
+stable for every pole J < 0 however fast (a wheel's own slip dynamics reach a ~ -400 1/s, J dt ~ -4, where
+forward Euler would diverge): with G(x, u) ~ J x + b(u) over one step,
+
+    G1 = G(xh[k-1], u[k]),  J = a + L c at (xh[k-1], u[k]),  phi = expm1(J dt) / J   (dt when |J dt| < 1e-6)
+    xh[k] = xh[k-1] + phi * (Gp + G1) / 2,   Gp = G(xh[k-1], u[k-1]) kept from the previous step
+    r[k]  = e(xh[k], u[k])
+
+which is exact for a linear G with the input b averaged over the step. At a reset xh = the state from its
+measurement outside the MSO set when the model has one (`initial_estimate`; a fault there only moves the
+initial error, which decays with the error pole inside the diagnoser's warm-up), else 0. That sensor is
+not among the generator's inputs (the test's signals stay those of its MSO set, so the diagnoser does not
+check it): a non-finite value gives 0.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Mapping
+from dataclasses import replace
+
+import numpy as np
+import sympy
+
+from fdi_analysis.model import Model
+from fdi_analysis.residuals.generator import OBSERVER_EPS, OBSERVER_POLE_FACTOR, XHAT, Generator
+from fdi_analysis.residuals.signals import nodes_in, raw
+from fdi_analysis.residuals.solvability import Solution, Solver
+
+REFERENCE_SCENARIO = "cornering"  # fault-free reference drive for c_ref (a steady drive would leave c = 0)
+REFERENCE_DURATION = 12.0
+DESIGN_CUTOFF_HZ = 1.0  # the table's filter design (FilterDesign, fdi_table_design_t)
+SMALL_JDT = 1e-6
+
+
+def pole(cutoff_hz: float = DESIGN_CUTOFF_HZ) -> float:
+    return OBSERVER_POLE_FACTOR * 2.0 * math.pi * cutoff_hz
+
+
+def align_with_state(update: sympy.Expr, residual: sympy.Expr) -> tuple[sympy.Expr, sympy.Expr, int]:
+    """Lift the nodes of the state update and of the residual to one common filter level (all inputs of the
+    observer delayed alike, as the signals of a plain residual)."""
+    nodes = nodes_in(update) | nodes_in(residual)
+    level = max((n.level for n in nodes), default=0)
+    sub = {n.symbol: n.at_level(level).symbol for n in nodes}
+    return update.xreplace(sub), residual.xreplace(sub), level
+
+
+def initial_estimate(model: Model, solver: Solver, state: str) -> sympy.Expr:
+    """x from the model's measurement equations alone (raw samples), e.g. omega3 = omega3_m, vx = vx_m -
+    d_y * psidot_m; 0 when the measurements do not determine x."""
+    known_sub = {sympy.Symbol(k.name): raw(k.name) for k in model.knowns}
+    value: dict[sympy.Symbol, sympy.Expr] = {}
+    eqs = [e for e in model.equations if e.knowns and e.differential is None]
+    progress = True
+    while progress and sympy.Symbol(state) not in value:
+        progress = False
+        for e in eqs:
+            todo = [u for u in e.unknowns if sympy.Symbol(u) not in value]
+            if len(todo) != 1:
+                continue
+            sol = solver.solve(e, todo[0])
+            if isinstance(sol, Solution) and not sol.coefficient.free_symbols:
+                value[sympy.Symbol(todo[0])] = sol.expr.xreplace(known_sub).xreplace(value)
+                progress = True
+    return value.get(sympy.Symbol(state), sympy.Integer(0))
+
+
+def _heaviside(v: float, h0: float = 0.0) -> float:
+    return 1.0 if v > 0.0 else 0.0
+
+
+def _sign(v: float) -> float:
+    return 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
+
+
+# Scalar functions for lambdify: the derivatives hold sign() and Heaviside() (as the C: 0 at 0)
+SCALAR_MODULES: list[object] = [{"Heaviside": _heaviside, "sign": _sign}, "math"]
+VECTOR_MODULES: list[object] = [{"Heaviside": lambda v, h0=0.0: np.where(np.asarray(v) > 0.0, 1.0, 0.0)}, "numpy"]
+
+
+def d_dstate(expr: sympy.Expr) -> sympy.Expr:
+    """d expr / d XHAT with every symbol taken real (Abs -> sign, Max -> Heaviside; no re/im terms)."""
+    syms = sorted(expr.free_symbols, key=str)
+    real = {s: sympy.Symbol(f"_r_{s}", real=True) for s in syms}
+    back = {v: k for k, v in real.items()}
+    d = sympy.diff(expr.xreplace(real), real.get(XHAT, XHAT))
+    return d.xreplace(back)
+
+
+def gain_expr(a: sympy.Expr, c: sympy.Expr, lam: float, eps: float) -> sympy.Expr:
+    k = sympy.Float(lam) + a
+    k = sympy.Float(max(float(k), 0.0)) if not k.free_symbols else sympy.Max(k, sympy.Integer(0))
+    if not c.free_symbols:
+        return sympy.Float(float(-k / c)) if not k.free_symbols else -k / c
+    return -k * c / (c**2 + sympy.Float(eps))
+
+
+@functools.lru_cache(maxsize=2)
+def _reference_drive() -> dict[str, np.ndarray]:
+    from fdi_analysis.residuals.simulate import drive
+
+    _, sig = drive(REFERENCE_SCENARIO, duration=REFERENCE_DURATION)
+    return sig
+
+
+def reference_sensitivity(g: Generator, reference: Mapping[str, np.ndarray] | None = None) -> float:
+    """RMS of c = de/dx on fault-free reference signals (default: the simulator's reference drive), inside
+    the operating domain and after the first quarter (at most 3 s), with x taken from its initial estimate
+    (the measurement, fault-free here)."""
+    from fdi_analysis.residuals.evaluate import FilterDesign, in_domain, node_signals
+
+    assert g.observer is not None
+    sig = dict(reference) if reference is not None else _reference_drive()
+    values = node_signals(g, sig, FilterDesign())
+    syms = [n.symbol for n in g.nodes]
+    xs = initial_values(g, sig)
+    fn = sympy.lambdify([XHAT, *syms], g.observer.c, modules=VECTOR_MODULES)
+    cv = np.asarray(fn(xs, *[values[n] for n in g.nodes]), dtype=float) * np.ones(len(xs))
+    ok = in_domain(g, sig)
+    ok[:min(300, len(ok) // 4)] = False
+    if not ok.any():
+        return 0.0
+    return float(np.sqrt(np.mean(cv[ok] ** 2)))
+
+
+def initial_values(g: Generator, signals: Mapping[str, np.ndarray]) -> np.ndarray:
+    assert g.observer is not None
+    n = len(next(iter(signals.values())))
+    init = g.observer.initial
+    if not init.free_symbols:
+        return np.full(n, float(init))
+    syms = sorted(init.free_symbols, key=str)
+    fn = sympy.lambdify(syms, init, modules="numpy")
+    return np.asarray(fn(*[np.asarray(signals[str(s).split("__L")[0]], dtype=float) for s in syms]),
+                      dtype=float) * np.ones(n)
+
+
+def design_observer(g: Generator, reference: Mapping[str, np.ndarray] | None = None,
+                    cutoff_hz: float = DESIGN_CUTOFF_HZ) -> Generator:
+    """Fill in the pole, eps and the gain of a synthesised observer generator (`reference`: fault-free
+    signals for c_ref, default the simulator's reference drive)."""
+    from fdi_analysis.residuals.causality import NotRealizableError
+
+    assert g.observer is not None
+    o = g.observer
+    lam = pole(cutoff_hz)
+    eps = 0.0
+    if o.c.free_symbols:
+        c_ref = reference_sensitivity(g, reference)
+        if not c_ref > 0.0:
+            raise NotRealizableError(f"{o.state} not observable from the residual equation {g.residual_equation} "
+                                     f"on the reference drive (d r / d {o.state} = 0 there)")
+        eps = (OBSERVER_EPS * c_ref) ** 2
+    return replace(g, observer=replace(o, gain=gain_expr(o.a, o.c, lam, eps), pole=lam, eps=eps))

@@ -1,0 +1,40 @@
+"""The kinematic table's calibration header (fw/generated/fdi_kin_calibration.h) is reproducible and up to date:
+the committed copy equals what `python -m fdi_host.kin_calibration` computes now (variances from fault-free
+simulated drives, reaction sizes from step faults, both through the C ECU core). ~4 min."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from fdi_host.kin_calibration import main
+
+HEADER = Path(__file__).resolve().parents[2] / "fw" / "generated" / "fdi_kin_calibration.h"
+
+
+def test_committed_header_is_up_to_date(capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["--check", str(HEADER)])
+    assert code == 0, capsys.readouterr().err
+    text = HEADER.read_text(encoding="utf-8")
+    variances = [float(v) for v in re.findall(r"#define FDI_KIN_VARIANCE_\d (\S+)f", text)]
+    assert len(variances) == 4 and all(v > 0 for v in variances)
+    # the known weak pair: MSO1 sees the yaw rate offset f3 only through vy * f3
+    sizes = re.search(r"0\.\d+f, 0\.\d+f, 0\.\d+f, 0\.\d+f, /\* f3 \*/", text)
+    assert sizes is not None
+
+
+def test_stale_header_is_reported(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    import fdi_host.kin_calibration as kc
+
+    monkeypatch.setattr(kc, "calibrations", lambda progress=None: [])
+    monkeypatch.setattr(kc, "variances", lambda cals: [])
+    monkeypatch.setattr(kc, "reaction_sizes", lambda variance, progress=None: [])
+    monkeypatch.setattr(kc, "render", lambda cals, sizes: "new text\n")
+    old = tmp_path / "h.h"
+    old.write_text("old text\n", encoding="utf-8")
+    assert main(["--check", str(old)]) == 1
+    assert "is stale: run python -m fdi_host.kin_calibration" in capsys.readouterr().err
+    assert main(["--out", str(old)]) == 0 and old.read_text(encoding="utf-8") == "new text\n"
