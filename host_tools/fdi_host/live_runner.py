@@ -28,6 +28,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from fdi_host.drive_options import add_drive_arguments
 from fdi_host.live_restart import Managed, RestartEvent, restart_schedule
 from fdi_host.live_sender import SendLog
 from fdi_host.netns import check_unshare, inside_private_netns, netns_command, vcan_available
@@ -52,11 +53,7 @@ report.md, report.json, diagnosis.png, residuals.png (monitor), ecu.txt / monito
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="fdi-live", description=__doc__.splitlines()[0] if __doc__ else None,
                                  epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--scenario", default="fig6", help="scenario name or TOML path")
-    ap.add_argument("--fault", action="append", default=[], metavar="SPEC", help="fault to inject (repeatable)")
-    ap.add_argument("--no-scenario-faults", action="store_true", help="ignore the faults of the scenario file")
-    ap.add_argument("--duration", type=float, help="override the scenario duration [s]")
-    ap.add_argument("--seed", type=int, help="override the noise seed")
+    add_drive_arguments(ap, noise=False)
     ap.add_argument("--table", choices=("romo", "kin"), default="romo",
                     help="ECU diagnosis table: romo (generated, default) or kin (hand-written kinematic tests)")
     ap.add_argument("--transport", choices=("auto", "vcan", "netns", "current"), default="auto",

@@ -26,6 +26,7 @@ from pathlib import Path
 import can
 
 from fdi_host.dbc import RomoDatabase
+from fdi_host.drive_options import add_drive_arguments
 from fdi_host.live_bus import StopFlag, add_bus_arguments, open_bus, try_realtime
 from fdi_host.live_sender import LOG_SUFFIXES, SendLog, TimedFrame, read_log_frames, resume_frames, send_paced
 
@@ -45,12 +46,7 @@ fdi-live starts all three in the right order (in a private network namespace whe
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="fdi-sim live", description=__doc__.splitlines()[0] if __doc__ else None,
                                  epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--scenario", default="fig6", help="scenario name in host_tools/scenarios or a TOML path")
-    ap.add_argument("--fault", action="append", default=[], metavar="SPEC", help="fault to inject (repeatable)")
-    ap.add_argument("--no-scenario-faults", action="store_true", help="ignore the faults of the scenario file")
-    ap.add_argument("--duration", type=float, help="override the scenario duration [s]")
-    ap.add_argument("--seed", type=int, help="override the noise seed")
-    ap.add_argument("--no-noise", action="store_true", help="switch sensor noise off")
+    add_drive_arguments(ap)
     ap.add_argument("--speed", type=float, default=1.0, help="times real time (default 1)")
     add_bus_arguments(ap)
     ap.add_argument("--out", type=Path, help="also write the frames sent as a CAN log (.log/.asc/.blf)")

@@ -17,6 +17,7 @@ from tqdm import tqdm
 
 from fdi_host import canlog, fig6
 from fdi_host.dbc import RomoDatabase
+from fdi_host.drive_options import add_drive_arguments
 from fdi_host.faults import FaultSpecError, ground_truth, parse_fault
 from fdi_host.plant import Plant
 from fdi_host.scenario import ScenarioError, available, load_scenario
@@ -48,17 +49,12 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    ap.add_argument("--scenario", default="fig6", help="scenario name in host_tools/scenarios or a TOML path")
-    ap.add_argument("--fault", action="append", default=[], metavar="SPEC", help="fault to inject (repeatable)")
-    ap.add_argument("--no-scenario-faults", action="store_true", help="ignore the faults of the scenario file")
+    add_drive_arguments(ap)
     ap.add_argument("--out", action="append", default=[], type=Path, metavar="FILE",
                     help="CAN log to write; format from the extension: .log .asc .blf (repeatable)")
     ap.add_argument("--truth", type=Path, help="ground-truth JSON (default: <first out>.truth.json)")
     ap.add_argument("--npz", type=Path, help="also write true and measured signals at 1 kHz as .npz")
     ap.add_argument("--plot", type=Path, help="PNG with the signals and the fault windows")
-    ap.add_argument("--duration", type=float, help="override the scenario duration [s]")
-    ap.add_argument("--seed", type=int, help="override the noise seed")
-    ap.add_argument("--no-noise", action="store_true", help="switch sensor noise off (quantisation stays)")
     ap.add_argument("--start-time", type=float, default=0.0, help="timestamp of t = 0 in the logs [s]")
     ap.add_argument("--list", action="store_true", help="list the scenarios and exit")
     ap.add_argument("--quiet", action="store_true", help="no progress bars")

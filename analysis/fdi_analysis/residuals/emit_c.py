@@ -8,7 +8,7 @@ diagnoser runs a generated generator as table kind FDI_GEN_GENERATED_1 + slot. D
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import sympy
 
@@ -71,19 +71,51 @@ def _function(g: Generator, slot: int) -> str:
     return "\n".join(lines)
 
 
-def _block(g: Generator, outputs: list[tuple[str, sympy.Expr]], indent: str, xh: str = "xh") -> list[str]:
-    """`const float <name> = <expr>;` for each output, common subexpressions shared (XHAT is `xh`)."""
-    subs, red = sympy.cse([e for _, e in outputs], symbols=sympy.numbered_symbols("t"), order="canonical")
-    tmp = {str(s) for s, _ in subs}
-
+def _names(g: Generator, tmp: set[str]) -> Callable[[sympy.Symbol], str]:
     def name(s: sympy.Symbol) -> str:
         if s == XHAT:
-            return xh
+            return "xh"
+        if s == _XPREV:
+            return "xp"
         return str(s) if str(s) in tmp else _node_c(g, node_of(s))
 
+    return name
+
+
+def _block(g: Generator, outputs: list[tuple[str, sympy.Expr]], indent: str) -> list[str]:
+    """`const float <name> = <expr>;` for each output, common subexpressions shared (XHAT is `xh`)."""
+    subs, red = sympy.cse([e for _, e in outputs], symbols=sympy.numbered_symbols("t"), order="canonical")
+    name = _names(g, {str(s) for s, _ in subs})
     lines = [f"{indent}const float {s} = {to_c(e, name)};" for s, e in subs]
     lines += [f"{indent}const float {n} = {to_c(e, name)};" for (n, _), e in zip(outputs, red, strict=True)]
     return lines
+
+
+_XPREV = sympy.Symbol("xprev")  # the previous estimate in the prediction's expressions
+
+
+def _observer_cse(g: Generator, predict: list[tuple[str, sympy.Expr]], at_new: list[tuple[str, sympy.Expr]]
+                  ) -> tuple[list[str], list[str], list[str]]:
+    """One common-subexpression pass over the prediction (at the previous estimate xp) and the outputs at the
+    new estimate xh, so that what depends on neither (the filtered signals' terms) is computed once per step:
+    (shared lines, prediction lines, lines at the new estimate)."""
+    exprs = [e.xreplace({XHAT: _XPREV}) for _, e in predict] + [e for _, e in at_new]
+    subs, red = sympy.cse(exprs, symbols=sympy.numbered_symbols("t"), order="canonical")
+    name = _names(g, {str(s) for s, _ in subs})
+    uses: dict[sympy.Symbol, set[sympy.Symbol]] = {}
+    shared: list[str] = []
+    before: list[str] = []
+    after: list[str] = []
+    for s, e in subs:
+        deps = {v for v in e.free_symbols if v in (_XPREV, XHAT)}
+        for v in e.free_symbols:
+            deps |= uses.get(v, set())
+        uses[s] = deps
+        line = f"const float {s} = {to_c(e, name)};"
+        (after if XHAT in uses[s] else before if _XPREV in uses[s] else shared).append(line)
+    outs = [n for n, _ in predict] + [n for n, _ in at_new]
+    lines = [f"const float {n} = {to_c(e, name)};" for n, e in zip(outs, red, strict=True)]
+    return shared, before + lines[: len(predict)], after + lines[len(predict):]
 
 
 def _observer_block(g: Generator) -> list[str]:
@@ -104,11 +136,14 @@ def _observer_block(g: Generator) -> list[str]:
                  "            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;"]
     else:
         reset = [f"            xh = {c_float(float(o.initial))};"]
-    lines = ["    {", "        float xh = 0.0f;", "        if (reset)", "        {", *reset,
-             "        }", "        else", "        {", "            const float xp = g->obs.xh;"]
-    lines += _block(g, [("f", o.update), ("l", o.gain), ("a", o.a), ("c", o.c), ("e", g.expr)], "            ", "xp")
+    shared, predict, at_new = _observer_cse(
+        g, [("f", o.update), ("l", o.gain), ("a", o.a), ("c", o.c), ("e", g.expr)],
+        [("f", o.update), ("l", o.gain), ("value", g.expr)])
+    lines = ["    {", *[f"        {x}" for x in shared], "        float xh = 0.0f;", "        if (reset)", "        {",
+             *reset, "        }", "        else", "        {", "            const float xp = g->obs.xh;"]
+    lines += [f"            {x}" for x in predict]
     lines += ["            xh = fdi_gen_obs_predict(g, par, f + (l * e), a + (l * c));", "        }", "        {"]
-    lines += _block(g, [("f", o.update), ("l", o.gain), ("value", g.expr)], "            ")
+    lines += [f"            {x}" for x in at_new]
     lines += ["            st = fdi_gen_status_worst(st, fdi_gen_obs_store(g, xh, f + (l * value)));",
               "            st = fdi_gen_finish(st, value, reset, r);", "        }", "    }"]
     return lines
