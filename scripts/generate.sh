@@ -6,9 +6,10 @@ set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$top"
 [ -x .venv/bin/fdi-analyze ] || bash scripts/bootstrap.sh
-# analysis/models/romo_thresholds.toml [generated]  <- fault-free simulated drives through the generators (~1 min)
+# analysis/models/romo_thresholds.toml [generated]  <- fault-free simulated drives, their CAN frames as the ECU's
+#   steps see them (fdi_host.ecu_view), through the generators (~1.5 min; checked by test_calibration_current.py)
 .venv/bin/fdi-analyze calibrate analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml
-# host_tools/scenarios/fault_sizes.toml [per_test.*]  <- step-fault sweep through the generators (~10 min; only
+# host_tools/scenarios/fault_sizes.toml [per_test.*]  <- step-fault sweep through the generators (~7 min; only
 # with FDI_SWEEP_SIZES=1; tests/analysis/test_residual_faults.py checks the committed sizes against the thresholds)
 if [ "${FDI_SWEEP_SIZES:-0}" = 1 ]; then
   .venv/bin/fdi-analyze fault-sizes analysis/models/romo_grouped.toml \

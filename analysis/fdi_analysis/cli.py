@@ -6,13 +6,13 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from fdi_analysis import cli_calibrate, cli_convert, cli_export, cli_mso, cli_report, cli_select
+from fdi_analysis import cli_calibrate, cli_convert, cli_export, cli_mso, cli_report, cli_residuals, cli_select
 from fdi_analysis.exoneration import FaultSizesError
 from fdi_analysis.export_c import ExportError
 from fdi_analysis.model import ModelError
 from fdi_analysis.structure import StructureError
 
-SUBCOMMANDS = (cli_report, cli_mso, cli_select, cli_export, cli_convert, cli_calibrate)
+SUBCOMMANDS = (cli_report, cli_mso, cli_select, cli_export, cli_convert, cli_calibrate, cli_residuals)
 
 EPILOG = """examples:
   fdi-analyze report analysis/models/romo_quasistatic.toml -o out/romo
@@ -21,6 +21,8 @@ EPILOG = """examples:
   fdi-analyze export-c analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \
       --fault-sizes host_tools/scenarios/fault_sizes.toml --out fw/generated
   fdi-analyze convert analysis/models/romo_grouped.toml --to-fdt out/romo_grouped_fdt.json
+  fdi-analyze residuals analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \
+      --log out/drive.blf --plot out/residuals.png --compare-ecu
 """
 
 

@@ -20,10 +20,11 @@ def register(sub: Any) -> None:
         "calibrate",
         help="calibrate the variances of the generated residual generators on fault-free simulated drives",
         description="Synthesise the residual generators of the selection (as export-c does), run them on "
-        "fault-free simulated drives of several scenarios and noise seeds, and write each residual's sigma (no "
-        "raw alarm of "
-        "the gate or the CUSUM in any drive inside each test's operating domain after the warm-up, times a "
-        "25 %% margin) into the [generated] table of the thresholds file (the rest of the file is kept).",
+        "fault-free simulated drives of several scenarios and noise seeds, as the ECU sees them (the drives' "
+        "CAN frames at their cycle times, held at the diagnosis steps, DBC quantisation; fdi_host.ecu_view), "
+        "and write each residual's sigma (no raw alarm of the gate or the CUSUM in any drive inside each test's "
+        "operating domain after the warm-up, times a 25 %% margin) into the [generated] table of the "
+        "thresholds file (the rest of the file is kept).",
         epilog=EXAMPLE,
     )
     p.add_argument("model", type=Path, help="model file (.toml)")
@@ -34,6 +35,8 @@ def register(sub: Any) -> None:
                    help="noise seeds of further drives per scenario besides the scenario's own (default 1001 1002)")
     p.add_argument("--warmup", type=float, default=3.0, help="seconds ignored at the start (default 3)")
     p.add_argument("--workers", type=int, default=2, help="worker processes of the MSO search (default 2)")
+    p.add_argument("--check", action="store_true",
+                   help="do not write: exit 1 when the file's [generated] table differs from the calibration now")
     p.set_defaults(func=run)
 
     q = sub.add_parser(
@@ -41,8 +44,9 @@ def register(sub: Any) -> None:
         help="sweep step faults on a simulated drive: the stated fault size of every (fault, test) pair",
         description="For every fault and every test of its signature, the smallest size on a 1-1.5-2-3-5-7 "
         "grid at which the test raises a raw alarm (gate or CUSUM, inside its operating domain) within 3 s of "
-        "the step; the stated size is the next grid value. Written below a marker line of the fault-size "
-        "file as [per_test.<fault>] tables (the hand-written [sizes] and [limits] above are kept); pairs that "
+        "the step (the drive as the ECU sees it, as for calibrate); the stated size is the next grid value. "
+        "Written below a marker line of the fault-size file as [per_test.<fault>] tables (the hand-written "
+        "[sizes] and [limits] above are kept); pairs that "
         "need more than the fault's [limits] value are written as 'not detectable by this test in practice'.",
         epilog="example: fdi-analyze fault-sizes analysis/models/romo_grouped.toml --thresholds "
         "analysis/models/romo_thresholds.toml --sizes host_tools/scenarios/fault_sizes.toml",
@@ -67,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     from fdi_analysis.residuals.evaluate import FilterDesign, evaluable_segments
     from fdi_analysis.residuals.export import selected_generators
     from fdi_analysis.residuals.simulate import drive
-    from fdi_analysis.residuals.thresholds_file import write_generated
+    from fdi_analysis.residuals.thresholds_file import with_generated
 
     th = Thresholds.load(args.thresholds)
     design = FilterDesign(th.design[0], th.design[1], th.design[2])
@@ -80,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
     for i, (sc, seed) in enumerate(runs):
         print(f"[{i + 1}/{len(runs)}] fault-free drive {sc} seed {seed or 'of the scenario'} "
               f"({args.duration:g} s) ...", file=sys.stderr)
-        _, sig = drive(sc, duration=args.duration, dt=design.dt, seed=seed)
+        _, sig = drive(sc, duration=args.duration, dt=design.dt, seed=seed, as_ecu_sees=True)
         for k, g in enumerate(gens):
             drives[k].extend(r for _, r in evaluable_segments(g, sig, skip, design))
     rows = []
@@ -91,9 +95,18 @@ def run(args: argparse.Namespace) -> int:
         print(f"{g.name}: sigma {c.sigma:.3g}  fault-free RMS {c.rms:.3g}  peak {c.peak:.3g}")
     provenance = (f"fdi-analyze calibrate {args.model.as_posix()} --scenarios {' '.join(args.scenarios)} "
                   f"--seeds {' '.join(map(str, args.seeds))} (and each scenario's own seed) --duration "
-                  f"{args.duration:g} --warmup {args.warmup:g}: in each test's operating domain, no raw "
-                  f"alarm (|r| > gate sigma or CUSUM k = 1.5, h = 150) in any fault-free drive, sigma times {MARGIN}")
-    write_generated(args.thresholds, rows, provenance)
+                  f"{args.duration:g} --warmup {args.warmup:g}, the drives' CAN frames as the ECU's steps see "
+                  f"them: in each test's operating domain, no raw alarm (|r| > gate sigma or CUSUM k = 1.5, "
+                  f"h = 150) in any fault-free drive, sigma times {MARGIN}")
+    old = args.thresholds.read_text(encoding="utf-8")
+    new = with_generated(old, rows, provenance)
+    if args.check:
+        if new != old:
+            print(f"{args.thresholds} is stale: run scripts/generate.sh (fdi-analyze calibrate)", file=sys.stderr)
+            return 1
+        print(f"{args.thresholds} is up to date")
+        return 0
+    args.thresholds.write_text(new, encoding="utf-8")
     print(f"wrote {args.thresholds}")
     return 0
 
@@ -125,14 +138,15 @@ def run_sizes(args: argparse.Namespace) -> int:
         return 2
 
     def run_drive(w: sweep.Windowed, seed: int) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        return drive(args.scenario, faults=list(w.faults), duration=w.duration, seed=seed)
+        return drive(args.scenario, faults=list(w.faults), duration=w.duration, seed=seed, as_ecu_sees=True)
 
     pairs = []
     for f in faults:
         pairs.extend(sweep.sweep_fault(gens, sigmas, th.gate, f, float(base[f]) / 10.0, float(limits[f]),
                                        run_drive, args.seeds, log=lambda s: print(s, file=sys.stderr)))
     provenance = (f"fdi-analyze fault-sizes {args.model.as_posix()} --scenario {args.scenario} "
-                  f"--seeds {' '.join(map(str, args.seeds))}\nsteps of {sweep.ON:g} s (then {sweep.OFF:g} s off) "
+                  f"--seeds {' '.join(map(str, args.seeds))} (CAN frames as the ECU's steps see them)\n"
+                  f"steps of {sweep.ON:g} s (then {sweep.OFF:g} s off) "
                   f"from {sweep.START:g} s, "
                   "sizes from [sizes] / 10 up to [limits] on the grid 1, 1.5, 2, 3, 5, 7 x 10^k;\n"
                   "raw alarm of the diagnoser with every seed (|r| > gate sigma or CUSUM k = 1.5, h = 150 from the "

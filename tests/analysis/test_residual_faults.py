@@ -1,4 +1,5 @@
-"""On simulated drives, as the diagnoser evaluates the generated residuals (inside each test's operating domain,
+"""On simulated drives as the ECU sees them (their CAN frames held at its steps, fdi_host.ecu_view), as the
+diagnoser evaluates the generated residuals (inside each test's operating domain,
 restarted with a 3 s warm-up on every entry, raw alarm = |r| > gate sigma or the two-sided CUSUM k = 1.5,
 h = 150 of fw/include/fdi_eval.h, sigma from the thresholds file):
   - the fault-free drives of all five scenarios of host_tools/scenarios raise no alarm (a noise realisation
@@ -59,7 +60,7 @@ def setup(repo: Path) -> Setup:
 @pytest.mark.parametrize("scenario", SCENARIOS)
 def test_fault_free_drives_stay_quiet(setup: Setup, scenario: str) -> None:
     gens, sigmas, gate, _ = setup
-    _, sig = drive(scenario, duration=20.0, seed=SEED)
+    _, sig = drive(scenario, duration=20.0, seed=SEED, as_ecu_sees=True)
     for g, s in zip(gens, sigmas, strict=True):
         segs = evaluable_segments(g, sig, WARMUP)
         for start, r in segs:
@@ -97,7 +98,7 @@ def test_every_pair_alarms_at_its_stated_size(setup: Setup) -> None:
         chunk = items[c:c + PER_DRIVE]
         onsets = [START + i * (ON + OFF) for i in range(len(chunk))]
         plan = [(f, t0, size, t0 + ON) for ((f, size), _), t0 in zip(chunk, onsets, strict=True)]
-        _, sig = drive(SCENARIO, faults=plan, duration=onsets[-1] + ON + OFF, seed=SEED)
+        _, sig = drive(SCENARIO, faults=plan, duration=onsets[-1] + ON + OFF, seed=SEED, as_ecu_sees=True)
         for name, (g, s) in by_name.items():
             mine = [(f, size, t0) for ((f, size), tests), t0 in zip(chunk, onsets, strict=True) if name in tests]
             if mine:

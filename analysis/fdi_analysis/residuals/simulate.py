@@ -1,4 +1,6 @@
-"""Simulated measured signals for the generators (fdi_host simulator, resampled to the design dt)."""
+"""Simulated measured signals for the generators: the simulator's samples at the design dt, or (as_ecu_sees)
+the signals the ECU's steps see on the drive's CAN frames (fdi_host.ecu_view: message cycle times and
+offsets, sample-and-hold, DBC quantisation), which is what thresholds and fault sizes are calibrated on."""
 
 from __future__ import annotations
 
@@ -11,8 +13,8 @@ FloatArray = NDArray[np.float64]
 
 
 def drive(scenario: str, faults: Sequence[tuple[str, float, float] | tuple[str, float, float, float]] = (),
-          duration: float | None = None, dt: float = 0.01,
-          seed: int | None = None) -> tuple[FloatArray, dict[str, FloatArray]]:
+          duration: float | None = None, dt: float = 0.01, seed: int | None = None,
+          as_ecu_sees: bool = False) -> tuple[FloatArray, dict[str, FloatArray]]:
     """(t, measured signals at dt) of a scenario with step faults (fault, onset s, size[, end s]); no faults
     given means fault-free (the scenario's own faults are not used)."""
     from fdi_host.faults import FaultSpec
@@ -21,5 +23,11 @@ def drive(scenario: str, faults: Sequence[tuple[str, float, float] | tuple[str, 
 
     specs = [FaultSpec(f[0], f[1], f[2], end=f[3] if len(f) > 3 else None) for f in faults]
     res = simulate(load_scenario(scenario), specs, duration=duration, seed=seed)
+    if as_ecu_sees:
+        from fdi_host.canlog import build_frames
+        from fdi_host.ecu_view import ecu_view
+
+        t, view = ecu_view(build_frames(res), dt)
+        return t, {k: view[k] for k in res.measured}
     step = max(1, round(dt / res.config.dt))
     return res.t[::step].copy(), {k: np.asarray(v[::step], dtype=float) for k, v in res.measured.items()}

@@ -1,0 +1,89 @@
+"""`fdi-analyze residuals`: the generated residuals computed offline on a CAN log equal the C ECU's, step by
+step; the ECU view of a log holds each message's last frame at the ECU's step times; bad logs are refused with
+the reason."""
+
+from __future__ import annotations
+
+import csv
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fdi_analysis.cli import main
+from fdi_host.canlog import Frame, build_frames, read_log, write_log
+from fdi_host.dbc import RomoDatabase
+from fdi_host.ecu_view import ecu_view, step_times
+from fdi_host.faults import FaultSpec
+from fdi_host.scenario import load_scenario
+from fdi_host.vehicle_sim import simulate
+
+MODEL = "analysis/models/romo_grouped.toml"
+THRESHOLDS = "analysis/models/romo_thresholds.toml"
+
+
+def test_step_times_and_sample_and_hold() -> None:
+    db = RomoDatabase()
+    sim = simulate(load_scenario("cornering"), [], duration=0.2, seed=5)
+    frames = build_frames(sim, db)
+    t = step_times(frames, 0.01)
+    assert t[0] == pytest.approx(frames[0].timestamp + 0.01) and np.allclose(np.diff(t), 0.01)
+    assert t[-1] < frames[-1].timestamp  # a step runs once a later frame has arrived
+    tv, view = ecu_view(frames, 0.01, db)
+    assert np.array_equal(tv, t)
+    # the brake message (20 ms cycle, 7 ms offset): the step at 0.05 s holds the frame of 0.047 s
+    brake = [f for f in frames if f.frame_id == 272]
+    k = int(np.argmin(np.abs(t - 0.05)))
+    held = db.decode_sim(272, next(f.data for f in brake if abs(f.timestamp - 0.047) < 1e-9))
+    assert view["P_f_m"][k] == held["P_f_m"]
+    with pytest.raises(ValueError, match="step must be positive"):
+        step_times(frames, 0.0)
+    assert step_times([], 0.01).size == 0 and step_times([Frame(1.0, 128, bytes(8))], 0.01).size == 0
+
+
+@pytest.fixture(scope="module")
+def faulty_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("log") / "drive.blf"
+    sim = simulate(load_scenario("cornering"), [FaultSpec("f10", 12.0, -120.0)], duration=18.0, seed=31)
+    write_log(build_frames(sim, t0=100.0), out)
+    return out
+
+
+def test_offline_residuals_equal_the_ecu(repo: Path, faulty_log: Path, tmp_path: Path,
+                                         capsys: pytest.CaptureFixture[str]) -> None:
+    table = tmp_path / "r.csv"
+    code = main(["residuals", str(repo / MODEL), "--thresholds", str(repo / THRESHOLDS), "--log", str(faulty_log),
+                 "--csv", str(table), "--plot", str(tmp_path / "r.png"), "--compare-ecu"])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    assert "agree: largest deviation" in out
+    with table.open(encoding="utf-8") as fh:
+        rows = list(csv.reader(fh))
+    names = rows[0][1:]
+    assert rows[0][0] == "t_s" and names and all(n.startswith("MSO") for n in names)
+    assert len(rows) - 1 == 1799  # steps of the 18 s log: 10 ms from its first frame, while frames follow
+    # a test sensitive to f10 (a wheel-1 current fault) alarms after its onset, and none before it
+    alarms = [float(m.group(1)) for m in re.finditer(r"^MSO\S+ .* ([0-9.]+) s$", out, re.MULTILINE)]
+    t_first = read_log(faulty_log)[0].timestamp  # the fault starts 12 s after the first frame
+    assert alarms and min(alarms) >= t_first + 12.0, out
+    assert (tmp_path / "r.png").stat().st_size > 10_000
+
+
+def test_bad_logs_are_refused_with_the_reason(repo: Path, faulty_log: Path, tmp_path: Path,
+                                              capsys: pytest.CaptureFixture[str]) -> None:
+    frames = read_log(faulty_log)
+    no_brake = tmp_path / "no_brake.log"
+    write_log([f for f in frames if f.frame_id != 272], no_brake)
+    args = ["residuals", str(repo / MODEL), "--thresholds", str(repo / THRESHOLDS), "--log"]
+    assert main([*args, str(no_brake)]) == 2
+    err = capsys.readouterr().err
+    assert "P_f_m" in err or "P_r_m" in err, err
+    empty = tmp_path / "empty.log"
+    empty.write_text("", encoding="utf-8")
+    assert main([*args, str(empty)]) == 2
+    assert "0 frame(s)" in capsys.readouterr().err
+    bad = tmp_path / "drive.xyz"
+    bad.write_text("x", encoding="utf-8")
+    assert main([*args, str(bad)]) == 2
+    assert "cannot read" in capsys.readouterr().err
