@@ -4,8 +4,13 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from fdi_analysis.residuals.on_log import LogResiduals
+    from fdi_host.canlog import Frame
 
 EXAMPLE = ("example: fdi-sim --scenario cornering --out out/drive.blf && fdi-analyze residuals "
            "analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml --log out/drive.blf "
@@ -90,7 +95,8 @@ def run(args: argparse.Namespace) -> int:
     return _compare(res, frames, warmup) if args.compare_ecu else 0
 
 
-def _compare(res: Any, frames: Any, warmup: int) -> int:
+def _compare(res: LogResiduals, frames: Sequence[Frame], warmup: int) -> int:
+    """Replay the frames through the C ECU core (generated table) and compare per step; 1 beyond tolerance."""
     import numpy as np
 
     from fdi_analysis.residuals.on_log import compare_with_ecu
