@@ -6,13 +6,22 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from fdi_analysis import cli_calibrate, cli_convert, cli_export, cli_mso, cli_report, cli_residuals, cli_select
+from fdi_analysis import (
+    cli_augment,
+    cli_calibrate,
+    cli_convert,
+    cli_export,
+    cli_mso,
+    cli_report,
+    cli_residuals,
+    cli_select,
+)
 from fdi_analysis.exoneration import FaultSizesError
 from fdi_analysis.export_c import ExportError
 from fdi_analysis.model import ModelError
 from fdi_analysis.structure import StructureError
 
-SUBCOMMANDS = (cli_report, cli_mso, cli_select, cli_export, cli_convert, cli_calibrate, cli_residuals)
+SUBCOMMANDS = (cli_report, cli_mso, cli_select, cli_export, cli_convert, cli_calibrate, cli_augment, cli_residuals)
 
 EPILOG = """examples:
   fdi-analyze report analysis/models/romo_quasistatic.toml -o out/romo
@@ -20,6 +29,8 @@ EPILOG = """examples:
   fdi-analyze select analysis/models/romo_grouped.toml -o out/grouped
   fdi-analyze export-c analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \
       --fault-sizes host_tools/scenarios/fault_sizes.toml --out fw/generated
+  fdi-analyze augment analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \
+      --sizes host_tools/scenarios/fault_sizes.toml
   fdi-analyze convert analysis/models/romo_grouped.toml --to-fdt out/romo_grouped_fdt.json
   fdi-analyze residuals analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \
       --log out/drive.blf --plot out/residuals.png --compare-ecu

@@ -13,6 +13,11 @@ EXAMPLE = ("example: fdi-analyze calibrate analysis/models/romo_grouped.toml "
 # All five scenarios of host_tools/scenarios; near standstill (low_speed) the tyre-law residuals are outside
 # their operating domain (Generator.min_speed) and not evaluated, as on the vehicle.
 DEFAULT_SCENARIOS = ("cornering", "fig6", "low_speed", "slalom", "straight")
+CALIBRATION_SEEDS = (1001, 1002)  # noise seeds of further drives per scenario besides the scenario's own
+CALIBRATION_DURATION = 30.0  # s per drive
+CALIBRATION_WARMUP = 3.0  # s ignored at the start
+SWEEP_SCENARIO = "cornering"  # fault-sizes: the fault-free drive the step faults are injected in
+SWEEP_SEEDS = (777, 778)  # fault-sizes: an alarm counts when the drives of every seed alarm
 
 
 def register(sub: Any) -> None:
@@ -30,10 +35,10 @@ def register(sub: Any) -> None:
     p.add_argument("model", type=Path, help="model file (.toml)")
     p.add_argument("--thresholds", type=Path, required=True, help="thresholds file to update")
     p.add_argument("--scenarios", nargs="+", default=list(DEFAULT_SCENARIOS), help="fault-free drives")
-    p.add_argument("--duration", type=float, default=30.0, help="seconds per drive (default 30)")
-    p.add_argument("--seeds", type=int, nargs="*", default=[1001, 1002],
+    p.add_argument("--duration", type=float, default=CALIBRATION_DURATION, help="seconds per drive (default 30)")
+    p.add_argument("--seeds", type=int, nargs="*", default=list(CALIBRATION_SEEDS),
                    help="noise seeds of further drives per scenario besides the scenario's own (default 1001 1002)")
-    p.add_argument("--warmup", type=float, default=3.0, help="seconds ignored at the start (default 3)")
+    p.add_argument("--warmup", type=float, default=CALIBRATION_WARMUP, help="seconds ignored at the start (default 3)")
     p.add_argument("--workers", type=int, default=2, help="worker processes of the MSO search (default 2)")
     p.add_argument("--check", action="store_true",
                    help="do not write: exit 1 when the file's [generated] table differs from the calibration now")
@@ -54,8 +59,8 @@ def register(sub: Any) -> None:
     q.add_argument("model", type=Path, help="model file (.toml)")
     q.add_argument("--thresholds", type=Path, required=True, help="thresholds file (gate, sigmas)")
     q.add_argument("--sizes", type=Path, required=True, help="fault-size file with [sizes] and [limits]")
-    q.add_argument("--scenario", default="cornering", help="fault-free scenario the faults are injected in")
-    q.add_argument("--seeds", type=int, nargs="+", default=[777, 778],
+    q.add_argument("--scenario", default=SWEEP_SCENARIO, help="fault-free scenario the faults are injected in")
+    q.add_argument("--seeds", type=int, nargs="+", default=list(SWEEP_SEEDS),
                    help="noise seeds of the sweep drives; an alarm counts when every seed alarms (default 777 778)")
     q.add_argument("--faults", nargs="*", help="only these faults (default: all of the selection)")
     q.add_argument("--workers", type=int, default=2, help="worker processes of the MSO search (default 2)")
@@ -63,30 +68,23 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import numpy as np
-
     from fdi_analysis.export_c import Thresholds
     from fdi_analysis.model_loader import load_model
     from fdi_analysis.residuals.calibrate import MARGIN, calibrate
-    from fdi_analysis.residuals.evaluate import FilterDesign, evaluable_segments
+    from fdi_analysis.residuals.evaluate import FilterDesign
     from fdi_analysis.residuals.export import selected_generators
-    from fdi_analysis.residuals.simulate import drive
+    from fdi_analysis.residuals.simulate import fault_free_drives, residual_segments
     from fdi_analysis.residuals.thresholds_file import with_generated
 
     th = Thresholds.load(args.thresholds)
     design = FilterDesign(th.design[0], th.design[1], th.design[2])
     model = load_model(args.model)
     print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
-    _, gens = selected_generators(model, workers=args.workers)
-    drives: list[list[np.ndarray]] = [[] for _ in gens]
+    _, gens = selected_generators(model, workers=args.workers, augment=th.augment)
+    signals = fault_free_drives(args.scenarios, [None, *args.seeds], args.duration, design.dt,
+                                log=lambda s: print(s, file=sys.stderr))
     skip = round(args.warmup / design.dt)
-    runs = [(sc, seed) for sc in args.scenarios for seed in [None, *args.seeds]]
-    for i, (sc, seed) in enumerate(runs):
-        print(f"[{i + 1}/{len(runs)}] fault-free drive {sc} seed {seed or 'of the scenario'} "
-              f"({args.duration:g} s) ...", file=sys.stderr)
-        _, sig = drive(sc, duration=args.duration, dt=design.dt, seed=seed, as_ecu_sees=True)
-        for k, g in enumerate(gens):
-            drives[k].extend(r for _, r in evaluable_segments(g, sig, skip, design))
+    drives = [residual_segments(g, signals, skip, design) for g in gens]
     rows = []
     for g, d in zip(gens, drives, strict=True):
         c = calibrate(d, th.gate)
@@ -127,7 +125,7 @@ def run_sizes(args: argparse.Namespace) -> int:
     base, limits = doc.get("sizes", {}), doc.get("limits", {})
     model = load_model(args.model)
     print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
-    _, gens = selected_generators(model, workers=args.workers)
+    _, gens = selected_generators(model, workers=args.workers, augment=th.augment)
     sigmas = [float(np.sqrt(th.generated[" ".join(g.equations)])) for g in gens]
     faults = sorted({f for g in gens for f in g.faults}, key=lambda f: int(f[1:]))
     if args.faults:

@@ -20,9 +20,11 @@ def register(sub: Any) -> None:
     p = sub.add_parser(
         "export-c",
         help="write the C diagnosis table (fdi_table_t) of the optimal method-B MSO selection",
-        description="Select the optimal MSO set of MODEL (method B, fewest tests then fewest unknowns) and "
-        "write NAME.h / NAME.c for fw/: tests with fault bitmasks, signals, generator kinds, gates and "
-        "variances, fault names, the signature matrix and the isolability classes.",
+        description="Select the optimal MSO set of MODEL (method B, fewest tests then fewest unknowns) among the "
+        "realizable candidates, append the tests of the thresholds file's [augment] table (fdi-analyze augment: "
+        "practical detectability), and write NAME.h / NAME.c for fw/ (tests with fault bitmasks, signals, "
+        "generator kinds, gates and variances, fault names, the signature matrix and the isolability classes) "
+        "and the residual generators of the tests.",
         epilog=EXAMPLE,
     )
     p.add_argument("model", type=Path, help="model file (.toml) or FDT structure (.json)")
@@ -57,8 +59,9 @@ def generate_all(model_path: Path, thresholds_path: Path, out: Path, name: str, 
     model = load_model(model_path)
     command = command_line(model_path, thresholds_path, out, name, sizes_path)
     sizes = FaultSizes.load(sizes_path) if sizes_path is not None else None
-    tests, gens = selected_generators(model, workers=workers, progress=progress)
-    header, source = render(model, tests, Thresholds.load(thresholds_path), name, command,
+    thresholds = Thresholds.load(thresholds_path)
+    tests, gens = selected_generators(model, workers=workers, progress=progress, augment=thresholds.augment)
+    header, source = render(model, tests, thresholds, name, command,
                             generated=[True] * len(tests), sizes=sizes)
     gname = generators_name(name)
     gh, gc = emit_c.render(gens, gname, command)

@@ -46,6 +46,7 @@ class Thresholds:
     variance: dict[str, float]
     source: str
     generated: dict[str, float] = field(default_factory=dict)  # by MSO equation set (space separated)
+    augment: tuple[str, ...] = ()  # equation sets of the tests added for practical detectability ([augment])
 
     @staticmethod
     def load(path: Path) -> Thresholds:
@@ -57,6 +58,7 @@ class Thresholds:
             variance={str(k): float(v) for k, v in doc["variance"].items()},
             source=str(path),
             generated={str(k): float(v) for k, v in doc.get("generated", {}).items()},
+            augment=tuple(str(t) for t in doc.get("augment", {}).get("tests", [])),
         )
 
 

@@ -704,6 +704,84 @@ static fdi_status_t gen_6(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_in
     return st;
 }
 
+/* MSO7: W2.FL W2.dyn W2.D S1 S2 S3 S4 S5 S.omega2
+ * residual W2.FL; derivative causality for domega2; 9 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
+ */
+static fdi_status_t gen_7(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_inputs_t *in, bool reset, float *r)
+{
+    fdi_svf_out_t o0 = {0.0f, 0.0f};
+    fdi_svf_out_t o1 = {0.0f, 0.0f};
+    fdi_svf_out_t o2 = {0.0f, 0.0f};
+    fdi_svf_out_t o3 = {0.0f, 0.0f};
+    fdi_svf_out_t o4 = {0.0f, 0.0f};
+    fdi_svf_out_t o5 = {0.0f, 0.0f};
+    fdi_svf_out_t o6 = {0.0f, 0.0f};
+    fdi_svf_out_t o7 = {0.0f, 0.0f};
+    fdi_svf_out_t o8 = {0.0f, 0.0f};
+    fdi_status_t st = FDI_OK;
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->ax_m, reset, &o0));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->ay_m, reset, &o1));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->psidot_m, reset, &o2));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->vx_m, reset, &o3));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, in->vy_m, reset, &o4));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, in->delta2_m, reset, &o5));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, in->iTM2_m, reset, &o6));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 7U, in->P_f_m, reset, &o7));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 8U, in->omega2_m, reset, &o8));
+    {
+        const float t0 = sinf(o5.y);
+        const float t1 = ((0.19900000000000007f * o2.y) + o4.y);
+        const float t2 = cosf(o5.y);
+        const float t3 = ((1.025f * o2.y) + o3.y);
+        const float t4 = ((t0 * t1) + (t2 * t3));
+        const float t5 = ((0.27f * o8.y) + (-t4));
+        const float t6 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o8.y)), fabsf(t4)));
+        const float t7 = (380.25f * (1.0f / (t6 * t6)));
+        const float value = ((5.925925925925926f * o6.y) + (-3.333333333333333f * o8.dy) + (-0.0003555555555555555f * o7.y * tanhf((2.0f * o8.y))) + (-19.5f * t5 * (1.0f / (t6)) * (2565.3149999999996f + (-109.04920767306088f * o0.y) + (180.34482758620692f * o1.y)) * (1.0f / sqrtf((1.0f + ((t5 * t5) * t7) + (t7 * (((-(t0 * t3)) + (t1 * t2)) * ((-(t0 * t3)) + (t1 * t2)))))))));
+        st = fdi_gen_finish(st, value, reset, r);
+    }
+    return st;
+}
+
+/* MSO8: W3.FL W3.dyn W3.D S1 S2 S3 S4 S5 S.omega3
+ * residual W3.FL; derivative causality for domega3; 9 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
+ */
+static fdi_status_t gen_8(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_inputs_t *in, bool reset, float *r)
+{
+    fdi_svf_out_t o0 = {0.0f, 0.0f};
+    fdi_svf_out_t o1 = {0.0f, 0.0f};
+    fdi_svf_out_t o2 = {0.0f, 0.0f};
+    fdi_svf_out_t o3 = {0.0f, 0.0f};
+    fdi_svf_out_t o4 = {0.0f, 0.0f};
+    fdi_svf_out_t o5 = {0.0f, 0.0f};
+    fdi_svf_out_t o6 = {0.0f, 0.0f};
+    fdi_svf_out_t o7 = {0.0f, 0.0f};
+    fdi_svf_out_t o8 = {0.0f, 0.0f};
+    fdi_status_t st = FDI_OK;
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->ax_m, reset, &o0));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->ay_m, reset, &o1));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->psidot_m, reset, &o2));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->vx_m, reset, &o3));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, in->vy_m, reset, &o4));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, in->delta3_m, reset, &o5));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, in->iTM3_m, reset, &o6));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 7U, in->P_r_m, reset, &o7));
+    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 8U, in->omega3_m, reset, &o8));
+    {
+        const float t0 = sinf(o5.y);
+        const float t1 = ((2.199f * o2.y) + (-o4.y));
+        const float t2 = (-t1);
+        const float t3 = cosf(o5.y);
+        const float t4 = ((0.425f * o2.y) + (-o3.y));
+        const float t5 = ((0.27f * o8.y) + (-(t0 * t2)) + (t3 * t4));
+        const float t6 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o8.y)), fabsf(((t0 * t1) + (t3 * t4)))));
+        const float t7 = (380.25f * (1.0f / (t6 * t6)));
+        const float value = ((5.925925925925926f * o6.y) + (-3.333333333333333f * o8.dy) + (-0.0003555555555555555f * o7.y * tanhf((2.0f * o8.y))) + (-19.5f * t5 * (1.0f / (t6)) * (2565.3149999999996f + (109.04920767306088f * o0.y) + (-180.34482758620692f * o1.y)) * (1.0f / sqrtf((1.0f + ((t5 * t5) * t7) + (t7 * (((t0 * t4) + (t2 * t3)) * ((t0 * t4) + (t2 * t3)))))))));
+        st = fdi_gen_finish(st, value, reset, r);
+    }
+    return st;
+}
+
 fdi_status_t fdi_gen_generated_step(uint32_t slot, fdi_gen_t *self, const fdi_gen_param_t *par,
                                     const fdi_inputs_t *in, bool reset, float *r)
 {
@@ -727,6 +805,12 @@ fdi_status_t fdi_gen_generated_step(uint32_t slot, fdi_gen_t *self, const fdi_ge
         break;
     case 5U:
         st = gen_6(self, par, in, reset, r);
+        break;
+    case 6U:
+        st = gen_7(self, par, in, reset, r);
+        break;
+    case 7U:
+        st = gen_8(self, par, in, reset, r);
         break;
     default:
         st = FDI_BAD_ARG;
@@ -758,6 +842,12 @@ uint32_t fdi_gen_generated_inputs(uint32_t slot)
     case 5U:
         m = FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA1_M | FDI_SIGM_DELTA3_M | FDI_SIGM_DELTA4_M | FDI_SIGM_ITM1_M | FDI_SIGM_P_F_M | FDI_SIGM_OMEGA3_M | FDI_SIGM_OMEGA4_M;
         break;
+    case 6U:
+        m = FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA2_M | FDI_SIGM_ITM2_M | FDI_SIGM_P_F_M | FDI_SIGM_OMEGA2_M;
+        break;
+    case 7U:
+        m = FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA3_M | FDI_SIGM_ITM3_M | FDI_SIGM_P_R_M | FDI_SIGM_OMEGA3_M;
+        break;
     default:
         m = 0U;
         break;
@@ -780,6 +870,12 @@ bool fdi_gen_generated_in_domain(uint32_t slot, const fdi_inputs_t *in)
         ok = fabsf(in->vx_m) >= 2.0f;
         break;
     case 5U: /* MSO2644: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
+        ok = fabsf(in->vx_m) >= 2.0f;
+        break;
+    case 6U: /* MSO7: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
+        ok = fabsf(in->vx_m) >= 2.0f;
+        break;
+    case 7U: /* MSO8: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
         ok = fabsf(in->vx_m) >= 2.0f;
         break;
     default:

@@ -8,10 +8,12 @@
  *   FDI_GEN_GENERATED_4  MSO2058: residual B1; derivative causality for dpsidot, dvx, dvy; observer for omega2 (integrates W2.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 10 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
  *   FDI_GEN_GENERATED_5  MSO2140: residual B1; derivative causality for dpsidot, dvy; observer for omega4 (integrates W4.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 11 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
  *   FDI_GEN_GENERATED_6  MSO2644: residual B1; derivative causality for dpsidot, dvx, dvy; observer for omega1 (integrates W1.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 10 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
+ *   FDI_GEN_GENERATED_7  MSO7: residual W2.FL; derivative causality for domega2; 9 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
+ *   FDI_GEN_GENERATED_8  MSO8: residual W3.FL; derivative causality for domega3; 9 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
  */
 #ifndef FDI_ROMO_GENERATORS_H
 #define FDI_ROMO_GENERATORS_H
 
-/* 6 generators, slots 0..5; the functions are declared in fdi_gen.h. */
+/* 8 generators, slots 0..7; the functions are declared in fdi_gen.h. */
 
 #endif /* FDI_ROMO_GENERATORS_H */

@@ -31,7 +31,7 @@ static const char *const fault_names[25] = {
     "f25 wheel speed sensor fault, wheel 4",
 };
 
-static const fdi_test_desc_t tests[6] = {
+static const fdi_test_desc_t tests[8] = {
     {3U, FDI_GEN_GENERATED_1, 0x0000000FU, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M,
      5.0f, 0.0001538f, "kinematics; measured ax_m, ay_m, psidot_m, vx_m"},
     {4U, FDI_GEN_GENERATED_2, 0x00000017U, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VY_M,
@@ -44,34 +44,38 @@ static const fdi_test_desc_t tests[6] = {
      5.0f, 20740.0f, "body dynamics; kinematics; wheel 2 (tyre); wheel 3 (tyre); wheel 4 (tyre, spin); measured ax_m, psidot_m, vx_m, vy_m, delta2_m, delta3_m, delta4_m, iTM4_m, P_r_m, omega2_m, omega3_m"},
     {2644U, FDI_GEN_GENERATED_6, 0x019A23BCU, FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA1_M | FDI_SIGM_DELTA3_M | FDI_SIGM_DELTA4_M | FDI_SIGM_ITM1_M | FDI_SIGM_P_F_M | FDI_SIGM_OMEGA3_M | FDI_SIGM_OMEGA4_M,
      5.0f, 13220.0f, "body dynamics; kinematics; wheel 1 (tyre, spin); wheel 3 (tyre); wheel 4 (tyre); measured psidot_m, vx_m, vy_m, delta1_m, delta3_m, delta4_m, iTM1_m, P_f_m, omega3_m, omega4_m"},
+    {7U, FDI_GEN_GENERATED_7, 0x0044445FU, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA2_M | FDI_SIGM_ITM2_M | FDI_SIGM_P_F_M | FDI_SIGM_OMEGA2_M,
+     5.0f, 4610.0f, "wheel 2 (tyre, spin); measured ax_m, ay_m, psidot_m, vx_m, vy_m, delta2_m, iTM2_m, P_f_m, omega2_m"},
+    {8U, FDI_GEN_GENERATED_8, 0x0088889FU, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA3_M | FDI_SIGM_ITM3_M | FDI_SIGM_P_R_M | FDI_SIGM_OMEGA3_M,
+     5.0f, 5227.0f, "wheel 3 (tyre, spin); measured ax_m, ay_m, psidot_m, vx_m, vy_m, delta3_m, iTM3_m, P_r_m, omega3_m"},
 };
 
 /* Row j: bit i set when test i is sensitive to fault j. */
 static const uint32_t fault_signature[25] = {
-    0x00000017U, /* f1 */
-    0x00000003U, /* f2 */
-    0x0000003FU, /* f3 */
-    0x0000003DU, /* f4 */
-    0x0000003EU, /* f5 */
+    0x000000D7U, /* f1 */
+    0x000000C3U, /* f2 */
+    0x000000FFU, /* f3 */
+    0x000000FDU, /* f4 */
+    0x000000FEU, /* f5 */
     0x0000002CU, /* f6 */
-    0x0000001CU, /* f7 */
-    0x0000003CU, /* f8 */
+    0x0000005CU, /* f7 */
+    0x000000BCU, /* f8 */
     0x00000034U, /* f9 */
     0x00000020U, /* f10 */
-    0x00000008U, /* f11 */
-    0x00000004U, /* f12 */
+    0x00000048U, /* f11 */
+    0x00000084U, /* f12 */
     0x00000010U, /* f13 */
     0x00000020U, /* f14 */
-    0x00000008U, /* f15 */
-    0x00000004U, /* f16 */
+    0x00000048U, /* f15 */
+    0x00000084U, /* f16 */
     0x00000010U, /* f17 */
     0x0000002CU, /* f18 */
-    0x0000001CU, /* f19 */
-    0x0000003CU, /* f20 */
+    0x0000005CU, /* f19 */
+    0x000000BCU, /* f20 */
     0x00000034U, /* f21 */
     0x0000000CU, /* f22 */
-    0x00000014U, /* f23 */
-    0x00000038U, /* f24 */
+    0x00000054U, /* f23 */
+    0x000000B8U, /* f24 */
     0x00000024U, /* f25 */
 };
 
@@ -105,57 +109,61 @@ static const uint32_t iso_class[25] = {
 };
 
 /* Row j, column i: size of fault j at which test i reacts (reaction sizes from host_tools/scenarios/fault_sizes.toml, 0 = no reaction within the fault's limits). */
-static const float test_size[25 * 6] = {
-    0.15f, 0.5f, 0.0f, 0.0f, 0.5f, 0.0f, /* f1 */
-    0.7f, 0.15f, 0.0f, 0.0f, 0.0f, 0.0f, /* f2 */
-    0.05f, 0.015f, 0.15f, 0.03f, 0.015f, 0.015f, /* f3 */
-    0.05f, 0.0f, 0.2f, 0.07f, 0.07f, 0.07f, /* f4 */
-    0.0f, 0.05f, 0.015f, 0.05f, 0.02f, 0.02f, /* f5 */
-    0.0f, 0.0f, 0.007f, 0.007f, 0.0f, 0.1f, /* f6 */
-    0.0f, 0.0f, 0.005f, 0.005f, 0.1f, 0.0f, /* f7 */
-    0.0f, 0.0f, 0.007f, 0.5f, 0.007f, 0.005f, /* f8 */
-    0.0f, 0.0f, 0.005f, 0.0f, 0.005f, 0.003f, /* f9 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, /* f10 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f11 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f12 */
-    0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, /* f13 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, /* f14 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f15 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f16 */
-    0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, /* f17 */
-    0.0f, 0.0f, 150.0f, 700.0f, 0.0f, 0.0f, /* f18 */
-    0.0f, 0.0f, 150.0f, 200.0f, 300.0f, 0.0f, /* f19 */
-    0.0f, 0.0f, 200.0f, 500.0f, 150.0f, 70.0f, /* f20 */
-    0.0f, 0.0f, 200.0f, 0.0f, 150.0f, 150.0f, /* f21 */
-    0.0f, 0.0f, 3.0f, 0.5f, 0.0f, 0.0f, /* f22 */
-    0.0f, 0.0f, 2.0f, 0.0f, 0.2f, 0.0f, /* f23 */
-    0.0f, 0.0f, 0.0f, 0.5f, 2.0f, 0.3f, /* f24 */
-    0.0f, 0.0f, 1.5f, 0.0f, 0.0f, 1.0f, /* f25 */
+static const float test_size[25 * 8] = {
+    0.15f, 0.5f, 0.0f, 0.0f, 0.5f, 0.0f, 0.0f, 0.0f, /* f1 */
+    0.7f, 0.15f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f2 */
+    0.05f, 0.015f, 0.15f, 0.03f, 0.015f, 0.015f, 0.07f, 0.5f, /* f3 */
+    0.05f, 0.0f, 0.2f, 0.07f, 0.07f, 0.07f, 0.05f, 0.1f, /* f4 */
+    0.0f, 0.05f, 0.015f, 0.05f, 0.02f, 0.02f, 0.0f, 0.0f, /* f5 */
+    0.0f, 0.0f, 0.007f, 0.007f, 0.0f, 0.1f, 0.0f, 0.0f, /* f6 */
+    0.0f, 0.0f, 0.005f, 0.005f, 0.1f, 0.0f, 0.15f, 0.0f, /* f7 */
+    0.0f, 0.0f, 0.007f, 0.5f, 0.007f, 0.005f, 0.0f, 0.2f, /* f8 */
+    0.0f, 0.0f, 0.005f, 0.0f, 0.005f, 0.003f, 0.0f, 0.0f, /* f9 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, /* f10 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, /* f11 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, /* f12 */
+    0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, 0.0f, /* f13 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, /* f14 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, /* f15 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, /* f16 */
+    0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, 0.0f, /* f17 */
+    0.0f, 0.0f, 150.0f, 700.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f18 */
+    0.0f, 0.0f, 150.0f, 200.0f, 300.0f, 0.0f, 200.0f, 0.0f, /* f19 */
+    0.0f, 0.0f, 200.0f, 500.0f, 150.0f, 70.0f, 0.0f, 300.0f, /* f20 */
+    0.0f, 0.0f, 200.0f, 0.0f, 150.0f, 150.0f, 0.0f, 0.0f, /* f21 */
+    0.0f, 0.0f, 3.0f, 0.5f, 0.0f, 0.0f, 0.0f, 0.0f, /* f22 */
+    0.0f, 0.0f, 2.0f, 0.0f, 0.2f, 0.0f, 0.2f, 0.0f, /* f23 */
+    0.0f, 0.0f, 0.0f, 0.5f, 2.0f, 0.3f, 0.0f, 0.3f, /* f24 */
+    0.0f, 0.0f, 1.5f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f, /* f25 */
 };
 
-const char *const fdi_romo_table_equations[6] = {
+const char *const fdi_romo_table_equations[8] = {
     "K1 K2 D1 D2 S1 S2 S3 S4",
     "K1 K2 D1 D2 S1 S2 S3 S5",
     "B2 K2 D2 W1.FL W2.FL W3.FL W4.FL W1.FS W2.FS W3.FS W4.FS W1.Fy W2.Fy W3.Fy W4.Fy W3.dyn W3.D S1 S3 S4 S5 S.omega1 S.omega2 S.omega4",
     "B1 B2 B3 D.psidot K1 K2 D1 D2 W1.FL W2.FL W3.FL W1.FS W2.FS W3.FS W1.Fx W2.Fx W3.Fx W1.Fy W2.Fy W3.Fy W2.dyn W2.D S3 S4 S5 S.omega1 S.omega3",
     "B1 B2 B3 D.psidot K1 K2 D2 W2.FL W3.FL W4.FL W2.FS W3.FS W4.FS W2.Fx W3.Fx W4.Fx W2.Fy W3.Fy W4.Fy W4.dyn W4.D S1 S3 S4 S5 S.omega2 S.omega3",
     "B1 B2 B3 D.psidot K1 K2 D1 D2 W1.FL W3.FL W4.FL W1.FS W3.FS W4.FS W1.Fx W3.Fx W4.Fx W1.Fy W3.Fy W4.Fy W1.dyn W1.D S3 S4 S5 S.omega3 S.omega4",
+    "W2.FL W2.dyn W2.D S1 S2 S3 S4 S5 S.omega2",
+    "W3.FL W3.dyn W3.D S1 S2 S3 S4 S5 S.omega3",
 };
 
-const char *const fdi_romo_table_unknowns[6] = {
+const char *const fdi_romo_table_unknowns[8] = {
     "vx vy psidot dvx dvy ax ay",
     "vx vy psidot dvx dvy ax ay",
     "vx vy psidot dvy ax ay FL1 FL2 FL3 FL4 FS1 FS2 FS3 FS4 Fy1 Fy2 Fy3 Fy4 omega1 omega2 omega3 omega4 domega3",
     "vx vy psidot dvx dvy ax ay FL1 FL2 FL3 FS1 FS2 FS3 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega1 omega2 omega3 domega2 dpsidot",
     "vx vy psidot dvx dvy ax ay FL2 FL3 FL4 FS2 FS3 FS4 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega2 omega3 omega4 domega4 dpsidot",
     "vx vy psidot dvx dvy ax ay FL1 FL3 FL4 FS1 FS3 FS4 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega1 omega3 omega4 domega1 dpsidot",
+    "vx vy psidot ax ay FL2 omega2 domega2",
+    "vx vy psidot ax ay FL3 omega3 domega3",
 };
 
 const fdi_table_t fdi_romo_table = {
     FDI_TABLE_FORMAT_VERSION,
     {0.01f, 1.0f, 0.7071f, 2.0f},
     25U,
-    6U,
+    8U,
     fault_names,
     tests,
     fault_signature,

@@ -4,10 +4,13 @@ offsets, sample-and-hold, DBC quantisation), which is what thresholds and fault 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
+
+from fdi_analysis.residuals.evaluate import FilterDesign, evaluable_segments
+from fdi_analysis.residuals.generator import Generator
 
 FloatArray = NDArray[np.float64]
 
@@ -31,3 +34,22 @@ def drive(scenario: str, faults: Sequence[tuple[str, float, float] | tuple[str, 
         return t, {k: view[k] for k in res.measured}
     step = max(1, round(dt / res.config.dt))
     return res.t[::step].copy(), {k: np.asarray(v[::step], dtype=float) for k, v in res.measured.items()}
+
+
+def fault_free_drives(scenarios: Sequence[str], seeds: Sequence[int | None], duration: float, dt: float,
+                      log: Callable[[str], None] | None = None) -> list[dict[str, FloatArray]]:
+    """The measured signals, as the ECU sees them, of fault-free drives: every scenario with every seed (None:
+    the scenario's own)."""
+    runs = [(sc, seed) for sc in scenarios for seed in seeds]
+    out = []
+    for i, (sc, seed) in enumerate(runs):
+        if log is not None:
+            log(f"[{i + 1}/{len(runs)}] fault-free drive {sc} seed {seed or 'of the scenario'} ({duration:g} s) ...")
+        out.append(drive(sc, duration=duration, dt=dt, seed=seed, as_ecu_sees=True)[1])
+    return out
+
+
+def residual_segments(g: Generator, drives: Sequence[dict[str, FloatArray]], warmup: int,
+                      design: FilterDesign) -> list[FloatArray]:
+    """The residual of `g` on every drive, in its operating domain after the warm-up (evaluable segments)."""
+    return [r for sig in drives for _, r in evaluable_segments(g, sig, warmup, design)]
