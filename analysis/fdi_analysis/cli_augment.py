@@ -45,8 +45,6 @@ def register(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     import tomllib
 
-    import numpy as np
-
     from fdi_analysis.export_c import Thresholds
     from fdi_analysis.model_loader import load_model
     from fdi_analysis.mso.results import bits
@@ -57,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     from fdi_analysis.residuals.evaluate import FilterDesign
     from fdi_analysis.residuals.export import realizable, structural_selection
     from fdi_analysis.residuals.generator import Generator
-    from fdi_analysis.residuals.simulate import drive, fault_free_drives, residual_segments
+    from fdi_analysis.residuals.simulate import fault_free_drives, residual_segments
     from fdi_analysis.residuals.solvability import Solver
     from fdi_analysis.residuals.thresholds_file import with_augment
 
@@ -88,8 +86,7 @@ def run(args: argparse.Namespace) -> int:
     def sigma_of(g: Generator) -> float:
         return calibrate(residual_segments(g, signals, skip, design), th.gate).sigma
 
-    def run_drive(w: sweep.Windowed, seed: int) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        return drive(SWEEP_SCENARIO, faults=list(w.faults), duration=w.duration, seed=seed, as_ecu_sees=True)
+    run_drive = sweep.scenario_drive(SWEEP_SCENARIO)
 
     def sweep_one(g: Generator, sigma: float, fault: str) -> sweep.PairLimit:
         (p,) = sweep.sweep_fault([g], [sigma], th.gate, fault, float(base[fault]) / 10.0, float(limits[fault]),

@@ -118,7 +118,6 @@ def run_sizes(args: argparse.Namespace) -> int:
     from fdi_analysis.model_loader import load_model
     from fdi_analysis.residuals import sweep
     from fdi_analysis.residuals.export import selected_generators
-    from fdi_analysis.residuals.simulate import drive
 
     th = Thresholds.load(args.thresholds)
     doc = tomllib.loads(args.sizes.read_text(encoding="utf-8"))
@@ -134,10 +133,7 @@ def run_sizes(args: argparse.Namespace) -> int:
     if missing:
         print(f"error: {args.sizes} lacks [sizes] or [limits] for {', '.join(missing)}", file=sys.stderr)
         return 2
-
-    def run_drive(w: sweep.Windowed, seed: int) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        return drive(args.scenario, faults=list(w.faults), duration=w.duration, seed=seed, as_ecu_sees=True)
-
+    run_drive = sweep.scenario_drive(args.scenario)
     pairs = []
     for f in faults:
         pairs.extend(sweep.sweep_fault(gens, sigmas, th.gate, f, float(base[f]) / 10.0, float(limits[f]),

@@ -97,6 +97,16 @@ class PairLimit:
 Drive = Callable[[Windowed, int], tuple[FloatArray, dict[str, FloatArray]]]
 
 
+def scenario_drive(scenario: str) -> Drive:
+    """The sweep's drive: the windowed step faults injected in `scenario`, its CAN frames as the ECU sees them."""
+    from fdi_analysis.residuals.simulate import drive
+
+    def run(w: Windowed, seed: int) -> tuple[FloatArray, dict[str, FloatArray]]:
+        return drive(scenario, faults=list(w.faults), duration=w.duration, seed=seed, as_ecu_sees=True)
+
+    return run
+
+
 def _hits(tests: Sequence[tuple[Generator, float]], gate: float, fault: str, sizes: Sequence[float], drive: Drive,
           seeds: Sequence[int], dt: float, warmup: int) -> dict[str, list[bool]]:
     """Per test: per size, an alarm in the drives of every seed."""
