@@ -9,7 +9,7 @@ cd "$top"
 # analysis/models/romo_thresholds.toml [generated]  <- fault-free simulated drives, their CAN frames as the ECU's
 #   steps see them (fdi_host.ecu_view), through the generators (~1.5 min; checked by test_calibration_current.py)
 .venv/bin/fdi-analyze calibrate analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml
-# host_tools/scenarios/fault_sizes.toml [per_test.*]  <- step-fault sweep through the generators (~9 min; only
+# host_tools/scenarios/fault_sizes.toml [per_test.*]  <- step-fault sweep through the generators (~10 min; only
 # with FDI_SWEEP_SIZES=1; tests/analysis/test_residual_faults.py checks the committed sizes against the thresholds);
 # then analysis/models/romo_thresholds.toml [augment]  <- tests added for the faults that no test of the structural
 # selection detects within its limit (~1 min); when that changed the tests, calibrate and sweep again

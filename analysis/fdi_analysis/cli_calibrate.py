@@ -14,7 +14,9 @@ EXAMPLE = ("example: fdi-analyze calibrate analysis/models/romo_grouped.toml "
 # their operating domain (Generator.min_speed) and not evaluated, as on the vehicle.
 DEFAULT_SCENARIOS = ("cornering", "fig6", "low_speed", "slalom", "straight")
 CALIBRATION_SEEDS = (1001, 1002)  # noise seeds of further drives per scenario besides the scenario's own
-CALIBRATION_DURATION = 30.0  # s per drive
+# Each drive as long as its scenario (as the quality suite's fault-free drives): a shorter drive would miss the
+# end of a profile, e.g. fig6's hardest transient at 34 s (sawtooth yaw-rate reset with a side-slip step).
+CALIBRATION_DURATION: float | None = None
 CALIBRATION_WARMUP = 3.0  # s ignored at the start
 SWEEP_SCENARIO = "cornering"  # fault-sizes: the fault-free drive the step faults are injected in
 SWEEP_SEEDS = (777, 778)  # fault-sizes: an alarm counts when the drives of every seed alarm
@@ -35,7 +37,8 @@ def register(sub: Any) -> None:
     p.add_argument("model", type=Path, help="model file (.toml)")
     p.add_argument("--thresholds", type=Path, required=True, help="thresholds file to update")
     p.add_argument("--scenarios", nargs="+", default=list(DEFAULT_SCENARIOS), help="fault-free drives")
-    p.add_argument("--duration", type=float, default=CALIBRATION_DURATION, help="seconds per drive (default 30)")
+    p.add_argument("--duration", type=float, default=CALIBRATION_DURATION,
+                   help="seconds per drive (default: each scenario's own duration)")
     p.add_argument("--seeds", type=int, nargs="*", default=list(CALIBRATION_SEEDS),
                    help="noise seeds of further drives per scenario besides the scenario's own (default 1001 1002)")
     p.add_argument("--warmup", type=float, default=CALIBRATION_WARMUP, help="seconds ignored at the start (default 3)")
@@ -92,8 +95,9 @@ def run(args: argparse.Namespace) -> int:
                                                          f"peak {c.peak:.3g})"))
         print(f"{g.name}: sigma {c.sigma:.3g}  fault-free RMS {c.rms:.3g}  peak {c.peak:.3g}")
     provenance = (f"fdi-analyze calibrate {args.model.as_posix()} --scenarios {' '.join(args.scenarios)} "
-                  f"--seeds {' '.join(map(str, args.seeds))} (and each scenario's own seed) --duration "
-                  f"{args.duration:g} --warmup {args.warmup:g}, the drives' CAN frames as the ECU's steps see "
+                  f"--seeds {' '.join(map(str, args.seeds))} (and each scenario's own seed) "
+                  + ("(each scenario's own duration)" if args.duration is None else f"--duration {args.duration:g}")
+                  + f" --warmup {args.warmup:g}, the drives' CAN frames as the ECU's steps see "
                   f"them: in each test's operating domain, no raw alarm (|r| > gate sigma or CUSUM k = 1.5, "
                   f"h = 150) in any fault-free drive, sigma times {MARGIN}")
     old = args.thresholds.read_text(encoding="utf-8")
@@ -146,8 +150,10 @@ def run_sizes(args: argparse.Namespace) -> int:
                   "raw alarm of the diagnoser with every seed (|r| > gate sigma or CUSUM k = 1.5, h = 150 from the "
                   "onset, sigma of "
                   f"{args.thresholds.as_posix()}) inside the test's operating domain;\n"
-                  "stated size = the grid value above the first alarm (tests/analysis/test_residual_faults.py "
-                  "checks every pair at it with another noise seed).")
+                  "stated size = the grid value above the first alarm, confirmed (raised along the grid until it "
+                  "alarms in a drive of its own with every seed and every seed + "
+                  f"{', '.join(map(str, sweep.CONFIRM_SEED_OFFSETS))});\n"
+                  "tests/analysis/test_residual_faults.py checks every pair at it with another noise seed.")
     section = sweep.render_section(pairs, provenance, [g.name for g in gens])
     if args.faults:
         print(section)

@@ -37,13 +37,13 @@ static const fdi_test_desc_t tests[8] = {
     {4U, FDI_GEN_GENERATED_2, 0x00000017U, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VY_M,
      5.0f, 0.0001346f, "kinematics; measured ax_m, ay_m, psidot_m, vy_m"},
     {351U, FDI_GEN_GENERATED_3, 0x017E89FDU, FDI_SIGM_AX_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA1_M | FDI_SIGM_DELTA2_M | FDI_SIGM_DELTA3_M | FDI_SIGM_DELTA4_M | FDI_SIGM_ITM3_M | FDI_SIGM_P_R_M | FDI_SIGM_OMEGA1_M | FDI_SIGM_OMEGA2_M | FDI_SIGM_OMEGA4_M,
-     5.0f, 3102.0f, "body dynamics; kinematics; wheel 1 (tyre); wheel 2 (tyre); wheel 3 (tyre, spin); wheel 4 (tyre); measured ax_m, psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta3_m, delta4_m, iTM3_m, P_r_m, omega1_m, omega2_m, omega4_m"},
+     5.0f, 7225.0f, "body dynamics; kinematics; wheel 1 (tyre); wheel 2 (tyre); wheel 3 (tyre, spin); wheel 4 (tyre); measured ax_m, psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta3_m, delta4_m, iTM3_m, P_r_m, omega1_m, omega2_m, omega4_m"},
     {2058U, FDI_GEN_GENERATED_4, 0x00AE44FCU, FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA1_M | FDI_SIGM_DELTA2_M | FDI_SIGM_DELTA3_M | FDI_SIGM_ITM2_M | FDI_SIGM_P_F_M | FDI_SIGM_OMEGA1_M | FDI_SIGM_OMEGA3_M,
      5.0f, 51980.0f, "body dynamics; kinematics; wheel 1 (tyre); wheel 2 (tyre, spin); wheel 3 (tyre); measured psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta3_m, iTM2_m, P_f_m, omega1_m, omega3_m"},
     {2140U, FDI_GEN_GENERATED_5, 0x00DD11DDU, FDI_SIGM_AX_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA2_M | FDI_SIGM_DELTA3_M | FDI_SIGM_DELTA4_M | FDI_SIGM_ITM4_M | FDI_SIGM_P_R_M | FDI_SIGM_OMEGA2_M | FDI_SIGM_OMEGA3_M,
-     5.0f, 20740.0f, "body dynamics; kinematics; wheel 2 (tyre); wheel 3 (tyre); wheel 4 (tyre, spin); measured ax_m, psidot_m, vx_m, vy_m, delta2_m, delta3_m, delta4_m, iTM4_m, P_r_m, omega2_m, omega3_m"},
+     5.0f, 25920.0f, "body dynamics; kinematics; wheel 2 (tyre); wheel 3 (tyre); wheel 4 (tyre, spin); measured ax_m, psidot_m, vx_m, vy_m, delta2_m, delta3_m, delta4_m, iTM4_m, P_r_m, omega2_m, omega3_m"},
     {2644U, FDI_GEN_GENERATED_6, 0x019A23BCU, FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA1_M | FDI_SIGM_DELTA3_M | FDI_SIGM_DELTA4_M | FDI_SIGM_ITM1_M | FDI_SIGM_P_F_M | FDI_SIGM_OMEGA3_M | FDI_SIGM_OMEGA4_M,
-     5.0f, 13220.0f, "body dynamics; kinematics; wheel 1 (tyre, spin); wheel 3 (tyre); wheel 4 (tyre); measured psidot_m, vx_m, vy_m, delta1_m, delta3_m, delta4_m, iTM1_m, P_f_m, omega3_m, omega4_m"},
+     5.0f, 28560.0f, "body dynamics; kinematics; wheel 1 (tyre, spin); wheel 3 (tyre); wheel 4 (tyre); measured psidot_m, vx_m, vy_m, delta1_m, delta3_m, delta4_m, iTM1_m, P_f_m, omega3_m, omega4_m"},
     {7U, FDI_GEN_GENERATED_7, 0x0044445FU, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA2_M | FDI_SIGM_ITM2_M | FDI_SIGM_P_F_M | FDI_SIGM_OMEGA2_M,
      5.0f, 4610.0f, "wheel 2 (tyre, spin); measured ax_m, ay_m, psidot_m, vx_m, vy_m, delta2_m, iTM2_m, P_f_m, omega2_m"},
     {8U, FDI_GEN_GENERATED_8, 0x0088889FU, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M | FDI_SIGM_DELTA3_M | FDI_SIGM_ITM3_M | FDI_SIGM_P_R_M | FDI_SIGM_OMEGA3_M,
@@ -112,29 +112,29 @@ static const uint32_t iso_class[25] = {
 static const float test_size[25 * 8] = {
     0.15f, 0.5f, 0.0f, 0.0f, 0.5f, 0.0f, 0.0f, 0.0f, /* f1 */
     0.7f, 0.15f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f2 */
-    0.05f, 0.015f, 0.15f, 0.03f, 0.015f, 0.015f, 0.07f, 0.5f, /* f3 */
-    0.05f, 0.0f, 0.2f, 0.07f, 0.07f, 0.07f, 0.05f, 0.1f, /* f4 */
-    0.0f, 0.05f, 0.015f, 0.05f, 0.02f, 0.02f, 0.0f, 0.0f, /* f5 */
-    0.0f, 0.0f, 0.007f, 0.007f, 0.0f, 0.1f, 0.0f, 0.0f, /* f6 */
-    0.0f, 0.0f, 0.005f, 0.005f, 0.1f, 0.0f, 0.15f, 0.0f, /* f7 */
-    0.0f, 0.0f, 0.007f, 0.5f, 0.007f, 0.005f, 0.0f, 0.2f, /* f8 */
-    0.0f, 0.0f, 0.005f, 0.0f, 0.005f, 0.003f, 0.0f, 0.0f, /* f9 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, /* f10 */
+    0.05f, 0.015f, 0.15f, 0.03f, 0.015f, 0.02f, 0.07f, 0.5f, /* f3 */
+    0.05f, 0.0f, 0.3f, 0.07f, 0.07f, 0.07f, 0.05f, 0.1f, /* f4 */
+    0.0f, 0.05f, 0.02f, 0.05f, 0.02f, 0.03f, 0.0f, 0.0f, /* f5 */
+    0.0f, 0.0f, 0.01f, 0.007f, 0.0f, 0.15f, 0.0f, 0.0f, /* f6 */
+    0.0f, 0.0f, 0.007f, 0.005f, 0.3f, 0.0f, 0.15f, 0.0f, /* f7 */
+    0.0f, 0.0f, 0.01f, 0.5f, 0.007f, 0.007f, 0.0f, 0.2f, /* f8 */
+    0.0f, 0.0f, 0.007f, 0.0f, 0.005f, 0.005f, 0.0f, 0.0f, /* f9 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 100.0f, 0.0f, 0.0f, /* f10 */
     0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, /* f11 */
     0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, /* f12 */
     0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, 0.0f, /* f13 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, /* f14 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 100.0f, 0.0f, 0.0f, /* f14 */
     0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, /* f15 */
     0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, /* f16 */
     0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, 0.0f, /* f17 */
-    0.0f, 0.0f, 150.0f, 700.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f18 */
-    0.0f, 0.0f, 150.0f, 200.0f, 300.0f, 0.0f, 200.0f, 0.0f, /* f19 */
-    0.0f, 0.0f, 200.0f, 500.0f, 150.0f, 70.0f, 0.0f, 300.0f, /* f20 */
-    0.0f, 0.0f, 200.0f, 0.0f, 150.0f, 150.0f, 0.0f, 0.0f, /* f21 */
-    0.0f, 0.0f, 3.0f, 0.5f, 0.0f, 0.0f, 0.0f, 0.0f, /* f22 */
-    0.0f, 0.0f, 2.0f, 0.0f, 0.2f, 0.0f, 0.2f, 0.0f, /* f23 */
-    0.0f, 0.0f, 0.0f, 0.5f, 2.0f, 0.3f, 0.0f, 0.3f, /* f24 */
-    0.0f, 0.0f, 1.5f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f, /* f25 */
+    0.0f, 0.0f, 300.0f, 700.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f18 */
+    0.0f, 0.0f, 300.0f, 200.0f, 300.0f, 0.0f, 200.0f, 0.0f, /* f19 */
+    0.0f, 0.0f, 300.0f, 500.0f, 150.0f, 150.0f, 0.0f, 300.0f, /* f20 */
+    0.0f, 0.0f, 300.0f, 0.0f, 150.0f, 200.0f, 0.0f, 0.0f, /* f21 */
+    0.0f, 0.0f, 5.0f, 0.5f, 0.0f, 0.0f, 0.0f, 0.0f, /* f22 */
+    0.0f, 0.0f, 3.0f, 0.0f, 0.2f, 0.0f, 0.2f, 0.0f, /* f23 */
+    0.0f, 0.0f, 0.0f, 0.5f, 2.0f, 0.5f, 0.0f, 0.3f, /* f24 */
+    0.0f, 0.0f, 2.0f, 0.0f, 0.0f, 1.5f, 0.0f, 0.0f, /* f25 */
 };
 
 const char *const fdi_romo_table_equations[8] = {

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import tomllib
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -115,3 +116,26 @@ def test_size_grid_and_section() -> None:
     doc = tomllib.loads(write_section("[sizes]\nf1 = 1.0\n", text))
     assert doc["sizes"] == {"f1": 1.0} and doc["per_test"]["f2"]["T1"] == 0.5
     assert doc["per_test"]["f2"]["T2"].startswith(NOT_DETECTABLE) and "50" in doc["per_test"]["f1"]["T2"]
+
+
+def test_confirmation_raises_sizes_that_not_every_seed_detects(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A stated size is raised along the grid until the test alarms at it with the sweep's seeds and the extra
+    confirmation seeds; a size that would pass the limit is not stated (sweep._confirmed, stubbed drives)."""
+    from fdi_analysis.residuals import sweep
+
+    calls: list[tuple[list[float], list[int]]] = []
+    reliable_from = {"T1": 0.2, "T2": 0.07, "T3": 1.0}  # every seed alarms from this size on
+
+    def hits(tests: Any, gate: float, fault: str, sizes: list[float], drive: Any, seeds: list[int], dt: float,
+             warmup: int) -> dict[str, list[bool]]:
+        calls.append((list(sizes), list(seeds)))
+        return {g.name: [v >= reliable_from[g.name] for v in sizes] for g, _ in tests}
+
+    monkeypatch.setattr(sweep, "_hits", hits)
+    tests = [(Generator(n, (), "", (), 0, 0, (), (), (), ("f1",)), 1.0)  # type: ignore[arg-type]
+             for n in ("T1", "T2", "T3")]
+    no_drive: Any = None  # the stubbed _hits simulates nothing
+    out = sweep._confirmed(tests, 5.0, "f1", {"T1": 0.15, "T2": 0.07, "T3": 0.5}, 0.7, no_drive, [777, 778], 0.01,
+                           300, None)
+    assert out == {"T1": 0.2, "T2": 0.07}  # T1 raised one step; T3 would need 1.0 > the limit 0.7
+    assert calls[0] == ([0.07, 0.15, 0.5], [777, 778, 877, 878, 977, 978, 1077, 1078])

@@ -36,15 +36,16 @@ def drive(scenario: str, faults: Sequence[tuple[str, float, float] | tuple[str, 
     return res.t[::step].copy(), {k: np.asarray(v[::step], dtype=float) for k, v in res.measured.items()}
 
 
-def fault_free_drives(scenarios: Sequence[str], seeds: Sequence[int | None], duration: float, dt: float,
+def fault_free_drives(scenarios: Sequence[str], seeds: Sequence[int | None], duration: float | None, dt: float,
                       log: Callable[[str], None] | None = None) -> list[dict[str, FloatArray]]:
     """The measured signals, as the ECU sees them, of fault-free drives: every scenario with every seed (None:
-    the scenario's own)."""
+    the scenario's own), `duration` seconds each (None: the scenario's own duration)."""
     runs = [(sc, seed) for sc in scenarios for seed in seeds]
     out = []
     for i, (sc, seed) in enumerate(runs):
         if log is not None:
-            log(f"[{i + 1}/{len(runs)}] fault-free drive {sc} seed {seed or 'of the scenario'} ({duration:g} s) ...")
+            length = "its own duration" if duration is None else f"{duration:g} s"
+            log(f"[{i + 1}/{len(runs)}] fault-free drive {sc} seed {seed or 'of the scenario'} ({length}) ...")
         out.append(drive(sc, duration=duration, dt=dt, seed=seed, as_ecu_sees=True)[1])
     return out
 
