@@ -43,17 +43,13 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import tomllib
-
     from fdi_analysis.export_c import Thresholds
     from fdi_analysis.model_loader import load_model
-    from fdi_analysis.mso.results import bits
     from fdi_analysis.residuals import sweep
     from fdi_analysis.residuals.augment import augment, undetected_faults
     from fdi_analysis.residuals.calibrate import calibrate
-    from fdi_analysis.residuals.causality import synthesize
     from fdi_analysis.residuals.evaluate import FilterDesign
-    from fdi_analysis.residuals.export import realizable, structural_selection
+    from fdi_analysis.residuals.export import generators, realizable, structural_selection
     from fdi_analysis.residuals.generator import Generator
     from fdi_analysis.residuals.simulate import fault_free_drives, residual_segments
     from fdi_analysis.residuals.solvability import Solver
@@ -64,17 +60,14 @@ def run(args: argparse.Namespace) -> int:
 
     th = Thresholds.load(args.thresholds)
     design = FilterDesign(th.design[0], th.design[1], th.design[2])
-    doc = tomllib.loads(args.sizes.read_text(encoding="utf-8"))
-    base, limits, per_test = doc.get("sizes", {}), doc.get("limits", {}), doc.get("per_test", {})
+    size_file = sweep.SizeFile.load(args.sizes)
     model = load_model(args.model)
     say(f"structural selection of {model.name} ...")
     solver = Solver(model)
     keep = realizable(model, args.workers, solver=solver)
     selection = structural_selection(model, keep)
-    names = [e.id for e in model.equations]
-    gens = [synthesize(model, [names[i] for i in bits(t.equations)], t.label, solver) for t in selection]
-    undetected = undetected_faults(per_test, gens)
-    missing = [f for f in undetected if f not in base or f not in limits]
+    undetected = undetected_faults(size_file.per_test, generators(model, selection, solver))
+    missing = size_file.lacking(undetected)
     if missing:
         print(f"error: {args.sizes} lacks [sizes] or [limits] for {', '.join(missing)}", file=sys.stderr)
         return 2
@@ -89,8 +82,7 @@ def run(args: argparse.Namespace) -> int:
     run_drive = sweep.scenario_drive(SWEEP_SCENARIO)
 
     def sweep_one(g: Generator, sigma: float, fault: str) -> sweep.PairLimit:
-        (p,) = sweep.sweep_fault([g], [sigma], th.gate, fault, float(base[fault]) / 10.0, float(limits[fault]),
-                                 run_drive, SWEEP_SEEDS)
+        (p,) = size_file.detection_limits([g], [sigma], th.gate, fault, run_drive, SWEEP_SEEDS)
         return p
 
     added, left = augment(model, keep, selection, undetected, sigma_of, sweep_one, args.tries, say, solver)

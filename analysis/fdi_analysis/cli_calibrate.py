@@ -114,7 +114,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def run_sizes(args: argparse.Namespace) -> int:
-    import tomllib
 
     import numpy as np
 
@@ -124,8 +123,7 @@ def run_sizes(args: argparse.Namespace) -> int:
     from fdi_analysis.residuals.export import selected_generators
 
     th = Thresholds.load(args.thresholds)
-    doc = tomllib.loads(args.sizes.read_text(encoding="utf-8"))
-    base, limits = doc.get("sizes", {}), doc.get("limits", {})
+    size_file = sweep.SizeFile.load(args.sizes)
     model = load_model(args.model)
     print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
     _, gens = selected_generators(model, workers=args.workers, augment=th.augment)
@@ -133,15 +131,15 @@ def run_sizes(args: argparse.Namespace) -> int:
     faults = sorted({f for g in gens for f in g.faults}, key=lambda f: int(f[1:]))
     if args.faults:
         faults = [f for f in faults if f in set(args.faults)]
-    missing = [f for f in faults if f not in base or f not in limits]
+    missing = size_file.lacking(faults)
     if missing:
         print(f"error: {args.sizes} lacks [sizes] or [limits] for {', '.join(missing)}", file=sys.stderr)
         return 2
     run_drive = sweep.scenario_drive(args.scenario)
     pairs = []
     for f in faults:
-        pairs.extend(sweep.sweep_fault(gens, sigmas, th.gate, f, float(base[f]) / 10.0, float(limits[f]),
-                                       run_drive, args.seeds, log=lambda s: print(s, file=sys.stderr)))
+        pairs.extend(size_file.detection_limits(gens, sigmas, th.gate, f, run_drive, args.seeds,
+                                                log=lambda s: print(s, file=sys.stderr)))
     provenance = (f"fdi-analyze fault-sizes {args.model.as_posix()} --scenario {args.scenario} "
                   f"--seeds {' '.join(map(str, args.seeds))} (CAN frames as the ECU's steps see them)\n"
                   f"steps of {sweep.ON:g} s (then {sweep.OFF:g} s off) "

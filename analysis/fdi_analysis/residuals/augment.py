@@ -20,8 +20,8 @@ from dataclasses import dataclass
 from fdi_analysis.exoneration import FaultSizesError
 from fdi_analysis.fault_matrix import Candidate
 from fdi_analysis.model import Model
-from fdi_analysis.mso.results import bits
-from fdi_analysis.residuals.causality import NotRealizableError, synthesize
+from fdi_analysis.residuals.causality import NotRealizableError
+from fdi_analysis.residuals.export import generators
 from fdi_analysis.residuals.generator import Generator
 from fdi_analysis.residuals.solvability import Solver
 from fdi_analysis.residuals.sweep import PairLimit
@@ -71,7 +71,6 @@ def augment(model: Model, candidates: Sequence[Candidate], selection: Sequence[C
     candidates in candidate order; `sigma_of` calibrates a generator, `sweep` finds a fault's detection limit
     in a generator with that sigma."""
     say = log or (lambda _s: None)
-    names = [e.id for e in model.equations]
     fault_names = list(model.structure().faults)
     used = {c.equations for c in selection}
     solver = solver or Solver(model)
@@ -85,7 +84,7 @@ def augment(model: Model, candidates: Sequence[Candidate], selection: Sequence[C
         found = None
         for c in pool:
             try:
-                g = synthesize(model, [names[i] for i in bits(c.equations)], c.label, solver)
+                (g,) = generators(model, [c], solver)
             except NotRealizableError as exc:
                 say(f"{f}: {c.label} skipped: {exc}")
                 continue

@@ -28,9 +28,14 @@ def selected_generators(model: Model, workers: int = 2, progress: bool = False,
     keep = realizable(model, workers, progress, solver)
     tests = structural_selection(model, keep)
     tests += augmented_tests(model, keep, tests, augment)
+    return tests, generators(model, tests, solver)
+
+
+def generators(model: Model, tests: Sequence[Candidate], solver: Solver | None = None) -> list[Generator]:
+    """The synthesised residual generator of each test (named by its label)."""
+    solver = solver or Solver(model)
     names = [e.id for e in model.equations]
-    gens = [synthesize(model, [names[i] for i in bits(t.equations)], t.label, solver) for t in tests]
-    return tests, gens
+    return [synthesize(model, [names[i] for i in bits(t.equations)], t.label, solver) for t in tests]
 
 
 def realizable(model: Model, workers: int = 2, progress: bool = False,

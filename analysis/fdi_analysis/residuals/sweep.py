@@ -19,8 +19,10 @@ practice".
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+import tomllib
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
@@ -189,6 +191,33 @@ def _confirmed(tests: Sequence[tuple[Generator, float]], gate: float, fault: str
             log(f"{fault}: not confirmed, raised: " + ", ".join(f"{n} {todo[n]:g} -> {v:g}" for n, v in raised.items()))
         todo = raised
     return out
+
+
+@dataclass(frozen=True)
+class SizeFile:
+    """The fault-size file as the sweep reads it: [sizes] (stated minimal sizes, the sweep starts at a tenth of
+    them), [limits] (physical limits, where it stops) and the generated [per_test.<fault>] tables."""
+
+    sizes: Mapping[str, float]
+    limits: Mapping[str, float]
+    per_test: Mapping[str, Mapping[str, float | str]]
+
+    @staticmethod
+    def load(path: Path) -> SizeFile:
+        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+        return SizeFile({f: float(v) for f, v in doc.get("sizes", {}).items()},
+                        {f: float(v) for f, v in doc.get("limits", {}).items()}, doc.get("per_test", {}))
+
+    def lacking(self, faults: Sequence[str]) -> list[str]:
+        """The faults without a [sizes] or a [limits] entry (they cannot be swept)."""
+        return [f for f in faults if f not in self.sizes or f not in self.limits]
+
+    def detection_limits(self, gens: Sequence[Generator], sigmas: Sequence[float], gate: float, fault: str,
+                         drive: Drive, seeds: Sequence[int],
+                         log: Callable[[str], None] | None = None) -> list[PairLimit]:
+        """`sweep_fault` from [sizes] / 10 up to [limits]."""
+        return sweep_fault(gens, sigmas, gate, fault, self.sizes[fault] / 10.0, self.limits[fault], drive, seeds,
+                           log=log)
 
 
 MARKER = "# ---- per-test stated sizes: written by `fdi-analyze fault-sizes`, do not edit below ----"
