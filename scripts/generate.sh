@@ -9,8 +9,9 @@ cd "$top"
 # analysis/models/romo_thresholds.toml [generated]  <- fault-free simulated drives, their CAN frames as the ECU's
 #   steps see them (fdi_host.ecu_view), through the generators (~1.5 min; checked by test_calibration_current.py)
 .venv/bin/fdi-analyze calibrate analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml
-# host_tools/scenarios/fault_sizes.toml [per_test.*]  <- step-fault sweep through the generators (~10 min; only
-# with FDI_SWEEP_SIZES=1; tests/analysis/test_residual_faults.py checks the committed sizes against the thresholds);
+# host_tools/scenarios/fault_sizes.toml [per_test.*]  <- step-fault sweep through the generators in cornering, the
+# pairs it leaves without a size in the other scenarios [per_test_scenario.*] (~25 min; only with FDI_SWEEP_SIZES=1;
+# tests/analysis/test_residual_faults.py checks the committed sizes against the thresholds);
 # then analysis/models/romo_thresholds.toml [augment]  <- tests added for the faults that no test of the structural
 # selection detects within its limit (~1 min); when that changed the tests, calibrate and sweep again
 if [ "${FDI_SWEEP_SIZES:-0}" = 1 ]; then
@@ -29,10 +30,11 @@ if [ "${FDI_SWEEP_SIZES:-0}" = 1 ]; then
   fi
 fi
 # fw/generated/fdi_romo_table.{h,c}, fdi_romo_generators.{h,c}  <- model + thresholds (realizable MSOs only)
-#   + the per-test fault sizes (which quiet tests may exonerate which fault)
+#   + the per-test fault sizes (which quiet tests may exonerate which fault); not committed: the generator report
+#   out/romo_grouped/generators.{md,json,png} (per test: residual equation, causality, inputs, stated fault sizes)
 .venv/bin/fdi-analyze export-c analysis/models/romo_grouped.toml \
   --thresholds analysis/models/romo_thresholds.toml --fault-sizes host_tools/scenarios/fault_sizes.toml \
-  --out fw/generated
+  --out fw/generated --report out/romo_grouped
 # fw/generated/fdi_kin_calibration.h  <- the hand-written kinematic table's variances and reaction sizes from
 #   simulated drives through the C ECU core (~4 min)
 .venv/bin/python -m fdi_host.kin_calibration --out fw/generated/fdi_kin_calibration.h

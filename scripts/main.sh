@@ -3,6 +3,7 @@
 #   1. structural analysis of the ROMO model (summary, DM, isolability)   -> out/romo_quasistatic/
 #   2. all MSO sets of the grouped model, fault matrices, minimal selections -> out/romo_grouped/
 #   3. generated C: diagnosis table + CAN codec (scripts/generate.sh)      -> fw/generated/
+#      and the generator report (per test: residual, causality, fault sizes) -> out/romo_grouped/generators.md
 #   4. build: the C library and ECU (CMake, build/main) and the Python bindings (pip install -e .)
 #   5. a simulated drive with the paper's faults f4, f5, f6 and ARR3/ARR4   -> out/fig6/
 #   6. a drive with a sequence of injected faults LIVE over the bus (vcan where the kernel has AF_CAN,

@@ -54,8 +54,11 @@ def register(sub: Any) -> None:
         "grid at which the test raises a raw alarm (gate or CUSUM, inside its operating domain) within 3 s of "
         "the step (the drive as the ECU sees it, as for calibrate); the stated size is the next grid value. "
         "Written below a marker line of the fault-size file as [per_test.<fault>] tables (the hand-written "
-        "[sizes] and [limits] above are kept); pairs that "
-        "need more than the fault's [limits] value are written as 'not detectable by this test in practice'.",
+        "[sizes] and [limits] above are kept). Pairs that "
+        "the sweep leaves without a stated size are then swept in the other scenarios, each driven whole with the "
+        "fault from 4 s on, one drive per size (up to the fault's [limits] value, the limit included), and "
+        "written as [per_test_scenario.<fault>] tables (scenario, size); pairs no scenario detects within the "
+        "limit are written as 'not detectable by this test in practice'.",
         epilog="example: fdi-analyze fault-sizes analysis/models/romo_grouped.toml --thresholds "
         "analysis/models/romo_thresholds.toml --sizes host_tools/scenarios/fault_sizes.toml",
     )
@@ -65,6 +68,10 @@ def register(sub: Any) -> None:
     q.add_argument("--scenario", default=SWEEP_SCENARIO, help="fault-free scenario the faults are injected in")
     q.add_argument("--seeds", type=int, nargs="+", default=list(SWEEP_SEEDS),
                    help="noise seeds of the sweep drives; an alarm counts when every seed alarms (default 777 778)")
+    q.add_argument("--other-scenarios", nargs="*", default=None,
+                   help="scenarios driven whole for the pairs the --scenario sweep leaves without a stated size "
+                   "(default: the other four of host_tools/scenarios, in that order for ties; none given: no such "
+                   "sweep)")
     q.add_argument("--faults", nargs="*", help="only these faults (default: all of the selection)")
     q.add_argument("--workers", type=int, default=2, help="worker processes of the MSO search (default 2)")
     q.set_defaults(func=run_sizes)
@@ -119,8 +126,11 @@ def run_sizes(args: argparse.Namespace) -> int:
 
     from fdi_analysis.export_c import Thresholds
     from fdi_analysis.model_loader import load_model
-    from fdi_analysis.residuals import sweep
+    from fdi_analysis.residuals import sweep, sweep_manoeuvres
     from fdi_analysis.residuals.export import selected_generators
+
+    def say(text: str) -> None:
+        print(text, file=sys.stderr)
 
     th = Thresholds.load(args.thresholds)
     size_file = sweep.SizeFile.load(args.sizes)
@@ -136,10 +146,20 @@ def run_sizes(args: argparse.Namespace) -> int:
         print(f"error: {args.sizes} lacks [sizes] or [limits] for {', '.join(missing)}", file=sys.stderr)
         return 2
     run_drive = sweep.scenario_drive(args.scenario)
-    pairs = []
+    others = [s for s in (DEFAULT_SCENARIOS if args.other_scenarios is None else args.other_scenarios)
+              if s != args.scenario]
+    whole_drive = sweep_manoeuvres.scenario_drive()
+    pairs: list[sweep.PairLimit] = []
+    elsewhere: list[sweep.ScenarioLimit] = []
     for f in faults:
-        pairs.extend(size_file.detection_limits(gens, sigmas, th.gate, f, run_drive, args.seeds,
-                                                log=lambda s: print(s, file=sys.stderr)))
+        mine = size_file.detection_limits(gens, sigmas, th.gate, f, run_drive, args.seeds, log=say)
+        pairs.extend(mine)
+        pending = [(g, s) for g, s in zip(gens, sigmas, strict=True)
+                   if any(p.test == g.name and p.stated is None for p in mine)]
+        if pending and others:
+            found = sweep_manoeuvres.sweep_scenarios(pending, th.gate, f, size_file.sizes[f] / 10.0,
+                                                     size_file.limits[f], whole_drive, args.seeds, others, log=say)
+            elsewhere.extend(found.values())
     provenance = (f"fdi-analyze fault-sizes {args.model.as_posix()} --scenario {args.scenario} "
                   f"--seeds {' '.join(map(str, args.seeds))} (CAN frames as the ECU's steps see them)\n"
                   f"steps of {sweep.ON:g} s (then {sweep.OFF:g} s off) "
@@ -151,12 +171,18 @@ def run_sizes(args: argparse.Namespace) -> int:
                   "stated size = the grid value above the first alarm, confirmed (raised along the grid until it "
                   "alarms in a drive of its own with every seed and every seed + "
                   f"{', '.join(map(str, sweep.CONFIRM_SEED_OFFSETS))});\n"
+                  "pairs without a stated size there: swept in "
+                  f"{', '.join(others) if others else '(no other scenario)'}, each driven whole with the fault from "
+                  f"{sweep_manoeuvres.ONSET:g} s on (an alarm after the onset with every seed, none in the seed's "
+                  "fault-free drive), sizes up to the limit included, the scenario of the first alarm refined and "
+                  "confirmed alike -> [per_test_scenario.<fault>];\n"
                   "tests/analysis/test_residual_faults.py checks every pair at it with another noise seed.")
-    section = sweep.render_section(pairs, provenance, [g.name for g in gens])
+    section = sweep.render_section(pairs, provenance, [g.name for g in gens], args.scenario, elsewhere, others)
     if args.faults:
         print(section)
         return 0
     args.sizes.write_text(sweep.write_section(args.sizes.read_text(encoding="utf-8"), section), encoding="utf-8")
-    nd = sum(p.stated is None for p in pairs)
-    print(f"wrote {args.sizes}: {len(pairs) - nd} pairs with a stated size, {nd} not detectable in practice")
+    n_primary = sum(p.stated is not None for p in pairs)
+    print(f"wrote {args.sizes}: {n_primary} pairs with a stated size in {args.scenario}, {len(elsewhere)} in another "
+          f"scenario, {len(pairs) - n_primary - len(elsewhere)} not detectable in practice")
     return 0

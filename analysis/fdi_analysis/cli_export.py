@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 from typing import Any
 
 from fdi_analysis.exoneration import FaultSizes
 from fdi_analysis.export_c import Thresholds, render
 from fdi_analysis.model_loader import load_model
-from fdi_analysis.residuals import emit_c
+from fdi_analysis.residuals import emit_c, report
 
 EXAMPLE = ("example: fdi-analyze export-c analysis/models/romo_grouped.toml "
            "--thresholds analysis/models/romo_thresholds.toml --fault-sizes host_tools/scenarios/fault_sizes.toml "
@@ -33,6 +34,9 @@ def register(sub: Any) -> None:
                    help="stated fault sizes per test (fdi-analyze fault-sizes); a test exonerates a fault only when "
                    "it reacts at the fault's stated size (default: every test of the signature exonerates)")
     p.add_argument("--out", type=Path, required=True, help="output folder (fw/generated)")
+    p.add_argument("--report", type=Path, default=None,
+                   help="also write generators.md / .json / .png here: per test its MSO set, residual equation, "
+                   "causality, inputs, domain, sigma and the stated fault sizes of --fault-sizes")
     p.add_argument("--name", default="fdi_romo_table", help="C name of the table (default fdi_romo_table)")
     p.add_argument("--workers", type=int, default=2, help="worker processes of the MSO search (default 2)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -52,8 +56,10 @@ def generate(model_path: Path, thresholds_path: Path, out: Path, name: str, work
 
 
 def generate_all(model_path: Path, thresholds_path: Path, out: Path, name: str, workers: int = 2,
-                 progress: bool = False, sizes_path: Path | None = None) -> dict[str, str]:
-    """The table and the generated residual generators of the optimal selection among realizable MSOs."""
+                 progress: bool = False, sizes_path: Path | None = None,
+                 report_dir: Path | None = None) -> dict[str, str]:
+    """The table and the generated residual generators of the optimal selection among realizable MSOs (and the
+    generator report in `report_dir`)."""
     from fdi_analysis.residuals.export import selected_generators
 
     model = load_model(model_path)
@@ -63,6 +69,12 @@ def generate_all(model_path: Path, thresholds_path: Path, out: Path, name: str, 
     tests, gens = selected_generators(model, workers=workers, progress=progress, augment=thresholds.augment)
     header, source = render(model, tests, thresholds, name, command,
                             generated=[True] * len(tests), sizes=sizes)
+    if report_dir is not None:
+        sigmas = [math.sqrt(thresholds.generated[" ".join(g.equations)]) for g in gens]
+        rows = report.rows(gens, sigmas, thresholds.gate, sizes, sizes.limits if sizes is not None else {})
+        for path in report.write(report_dir, name, rows, list(model.structure().faults),
+                                 sizes_path.as_posix() if sizes_path is not None else "(no fault-size file)"):
+            print(f"wrote {path}")
     gname = generators_name(name)
     gh, gc = emit_c.render(gens, gname, command)
     return {f"{name}.h": header, f"{name}.c": source, f"{gname}.h": gh, f"{gname}.c": gc}
@@ -74,7 +86,7 @@ def generators_name(table_name: str) -> str:
 
 def run(args: argparse.Namespace) -> int:
     files = generate_all(args.model, args.thresholds, args.out, args.name, args.workers, not args.no_progress,
-                         args.fault_sizes)
+                         args.fault_sizes, args.report)
     args.out.mkdir(parents=True, exist_ok=True)
     for fname, text in files.items():
         (args.out / fname).write_text(text, encoding="utf-8")

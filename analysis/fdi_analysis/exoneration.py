@@ -1,20 +1,21 @@
 """Which quiet tests may exonerate which fault: the reaction sizes of the residual analysis.
 
-A test that is structurally sensitive to a fault but reacts to it only at sizes far above the size of the
-fault at hand stays quiet while that fault is present; if its quietness exonerated the fault, the isolation
-would clear the true fault and could name a wrong class. The table therefore carries, per (fault j, test i),
-the size of fault j at which test i reacts (the `[per_test.<fault>]` tables of
-host_tools/scenarios/fault_sizes.toml, written by `fdi-analyze fault-sizes`; 0 where the test does not react
-within the fault's physical limits). The firmware (fw/include/fdi_iso.h) lets a quiet test clear fault j only
-when the tests in alarm imply, were the fault j, a size of at least EXONERATION_MARGIN times the quiet
-test's reaction size.
+A test that is structurally sensitive to a fault but reacts to it only at sizes far above the size of the fault at
+hand stays quiet while that fault is present; if its quietness exonerated the fault, the isolation would clear the
+true fault and could name a wrong class. The table therefore carries, per (fault j, test i), the size of fault j at
+which test i reacts (the `[per_test.<fault>]` tables of host_tools/scenarios/fault_sizes.toml, written by `fdi-
+analyze fault-sizes`; 0 where the test does not react within the fault's physical limits in the sweep's steady
+cornering, also when it reacts in another manoeuvre, [per_test_scenario.<fault>]: such a test stays quiet in a
+typical drive and must not clear the fault). The firmware (fw/include/fdi_iso.h) lets a quiet test clear fault j
+only when the tests in alarm imply, were the fault j, a size of at least EXONERATION_MARGIN times the quiet test's
+reaction size.
 """
 
 from __future__ import annotations
 
 import tomllib
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 
@@ -27,6 +28,10 @@ class FaultSizes:
     sizes: Mapping[str, float]  # fault -> stated minimal detectable size
     per_test: Mapping[str, Mapping[str, float | str]]  # fault -> test label -> size, or why there is none
     source: str
+    # fault -> test label -> (scenario, size): pairs stated in another manoeuvre ([per_test_scenario.<fault>]);
+    # not reaction sizes (the test stays quiet in the sweep's manoeuvre)
+    elsewhere: Mapping[str, Mapping[str, tuple[str, float]]] = field(default_factory=dict)
+    limits: Mapping[str, float] = field(default_factory=dict)  # fault -> physical limit ([limits])
 
     @staticmethod
     def load(path: Path) -> FaultSizes:
@@ -45,7 +50,17 @@ class FaultSizes:
             for test, v in row.items():
                 if not isinstance(v, str) and not (isinstance(v, int | float) and v > 0):
                     raise FaultSizesError(f"{path}: [per_test.{f}] {test} must be a positive number or a reason")
-        return FaultSizes({f: float(v) for f, v in sizes.items()}, per_test, str(path))
+        elsewhere: dict[str, dict[str, tuple[str, float]]] = {}
+        for f, row in doc.get("per_test_scenario", {}).items():
+            for test, v in row.items():
+                ok = (isinstance(v, dict) and isinstance(v.get("scenario"), str)
+                      and isinstance(v.get("size"), int | float) and v["size"] > 0)
+                if not ok:
+                    raise FaultSizesError(f"{path}: [per_test_scenario.{f}] {test} must be "
+                                          "{ scenario = <name>, size = <positive number> }")
+                elsewhere.setdefault(f, {})[test] = (v["scenario"], float(v["size"]))
+        limits = {f: float(v) for f, v in doc.get("limits", {}).items() if isinstance(v, int | float)}
+        return FaultSizes({f: float(v) for f, v in sizes.items()}, per_test, str(path), elsewhere, limits)
 
     def reaction_size(self, fault: str, test: str) -> float:
         """The size of `fault` at which `test` reacts; 0 when it does not (or was not measured)."""

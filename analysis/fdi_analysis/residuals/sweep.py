@@ -75,12 +75,12 @@ def windows(fault: str, sizes: Sequence[float]) -> Windowed:
 
 def alarms_in_windows(g: Generator, sigma: float, gate: float, signals: dict[str, FloatArray],
                       onsets: Sequence[float], dt: float, warmup: int,
-                      design: FilterDesign | None = None) -> list[bool]:
-    """Per window starting at each onset: a raw alarm of `g` within ON seconds (inside its domain)."""
+                      design: FilterDesign | None = None, on: float = ON) -> list[bool]:
+    """Per window starting at each onset: a raw alarm of `g` within `on` seconds (inside its domain)."""
     segs = evaluable_segments(g, signals, warmup, design)
     out = []
     for t0 in onsets:
-        i0, i1 = round(t0 / dt), round((t0 + ON) / dt)
+        i0, i1 = round(t0 / dt), round((t0 + on) / dt)
         hit = False
         for a, r in segs:
             b = a + len(r)
@@ -222,25 +222,55 @@ class SizeFile:
 
 MARKER = "# ---- per-test stated sizes: written by `fdi-analyze fault-sizes`, do not edit below ----"
 NOT_DETECTABLE = "not detectable by this test in practice"
+ELSEWHERE = "per_test_scenario"  # tables of the pairs stated in another manoeuvre (sweep_manoeuvres)
 
 
-def render_section(pairs: Sequence[PairLimit], provenance: str, test_order: Sequence[str]) -> str:
-    """The generated [per_test.<fault>] tables: test = stated size, or a string saying why there is none."""
+@dataclass(frozen=True)
+class ScenarioLimit:
+    """A pair the primary sweep does not state, stated in another scenario (sweep_manoeuvres)."""
+
+    fault: str
+    test: str
+    scenario: str
+    detected_at: float  # smallest grid size with an alarm with every seed
+    stated: float  # confirmed size
+
+
+def _reason(p: PairLimit) -> str:
+    """Why the primary sweep states no size for `p`."""
+    if p.detected_at is not None and next_grid(p.detected_at) <= p.limit:
+        return f"first alarm at {p.detected_at:g}, but no size up to the limit {p.limit:g} confirmed with every seed"
+    if p.detected_at is not None:
+        return f"first alarm at {p.detected_at:g}, stated size {next_grid(p.detected_at):g} above the limit {p.limit:g}"
+    return f"no alarm up to the limit {p.limit:g}"
+
+
+def render_section(pairs: Sequence[PairLimit], provenance: str, test_order: Sequence[str], scenario: str = "",
+                   elsewhere: Sequence[ScenarioLimit] = (), others: Sequence[str] = ()) -> str:
+    """The generated [per_test.<fault>] tables: test = stated size in the primary sweep's `scenario`, or a
+    string saying why there is none; the pairs stated in another scenario (`elsewhere`, swept in `others`)
+    are then listed in [per_test_scenario.<fault>] tables as {scenario, size}."""
     lines = [MARKER, *(f"# {p}" for p in provenance.splitlines())]
+    found = {(e.fault, e.test): e for e in elsewhere}
     faults = sorted({p.fault for p in pairs}, key=lambda f: int(f[1:]))
+    where = f"in {scenario}: " if scenario else ""
     for f in faults:
         lines.append(f"[per_test.{f}]")
         for p in sorted((p for p in pairs if p.fault == f), key=lambda p: test_order.index(p.test)):
             if p.stated is not None:
                 lines.append(f"{p.test} = {p.stated:g}  # first alarm at {p.detected_at:g}")
-            elif p.detected_at is not None and next_grid(p.detected_at) <= p.limit:
-                lines.append(f'{p.test} = "{NOT_DETECTABLE}: first alarm at {p.detected_at:g}, but no size up to '
-                             f'the limit {p.limit:g} confirmed with every seed"')
-            elif p.detected_at is not None:
-                lines.append(f'{p.test} = "{NOT_DETECTABLE}: first alarm at {p.detected_at:g}, stated size '
-                             f'{next_grid(p.detected_at):g} above the limit {p.limit:g}"')
+            elif (e := found.get((f, p.test))) is not None:
+                lines.append(f'{p.test} = "stated in {e.scenario} ([{ELSEWHERE}.{f}]); {where}{_reason(p)}"')
+            elif others:
+                lines.append(f'{p.test} = "{NOT_DETECTABLE}: {where}{_reason(p)}; in {", ".join(others)}: no size '
+                             f'up to the limit confirmed with every seed"')
             else:
-                lines.append(f'{p.test} = "{NOT_DETECTABLE}: no alarm up to the limit {p.limit:g}"')
+                lines.append(f'{p.test} = "{NOT_DETECTABLE}: {where}{_reason(p)}"')
+    for f in sorted({e.fault for e in elsewhere}, key=lambda f: int(f[1:])):
+        lines.append(f"[{ELSEWHERE}.{f}]")
+        for e in sorted((e for e in elsewhere if e.fault == f), key=lambda e: test_order.index(e.test)):
+            lines.append(f'{e.test} = {{ scenario = "{e.scenario}", size = {e.stated:g} }}  '
+                         f"# first alarm at {e.detected_at:g}")
     return "\n".join(lines) + "\n"
 
 
