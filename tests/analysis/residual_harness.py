@@ -55,7 +55,9 @@ int main(int argc, char **argv) {
 """
 
 
-def build_harness(repo: Path, folder: Path) -> Path:
+def build_harness(repo: Path, folder: Path, generators_c: Path | None = None) -> Path:
+    """The harness over fw/src and a generated generator file (default: the committed
+    fw/generated/fdi_romo_generators.c)."""
     cc = shutil.which("gcc") or shutil.which("cc")
     if cc is None:
         pytest.skip("no C compiler")
@@ -64,9 +66,9 @@ def build_harness(repo: Path, folder: Path) -> Path:
     exe = folder / "harness"
     srcs = sorted(str(p) for p in (repo / "fw/src").glob("*.c"))
     flags = ["-std=c99", "-O1", "-Wall", "-Wextra", "-Wconversion", "-Wdouble-promotion", "-Werror"]
+    gen = generators_c or repo / "fw/generated/fdi_romo_generators.c"
     subprocess.run([cc, *flags, f"-I{repo / 'fw/include'}", f"-I{repo / 'fw/src'}", f"-I{repo / 'fw/generated'}",
-                    str(main), *srcs, str(repo / "fw/generated/fdi_romo_generators.c"), "-lm", "-o", str(exe)],
-                   check=True)
+                    str(main), *srcs, str(gen), "-lm", "-o", str(exe)], check=True)
     return exe
 
 

@@ -3,12 +3,16 @@
 Structural part (`closure`): starting from the measured signals, repeatedly
   - solve an equation with exactly one not yet computed unknown for it (`solvability.Solver`), or
   - take a differential constraint dx = d/dt x whose x is computed: dx comes from the filtered derivative
-    (derivative causality; the level of dx is the level of x plus one filter).
-The set of computable unknowns does not depend on the order. When every unknown is computed, the equation
-left over is the residual equation. An MSO set is realizable when, for some residual equation, the rest is
-computed that way; otherwise the reason names what blocks it (an unknown only reachable by integrating a
-differential constraint without a measurement to correct it, i.e. open-loop simulation, or an equation that
-cannot be solved for its last unknown).
+    (derivative causality; the level of dx is the level of x plus one filter), or, when neither applies,
+  - solve an algebraic loop: the next just-determined block (Dulmage-Mendelsohn) of k >= 2 equations in k
+    unknowns, jointly by Cramer's rule when they are linear in those unknowns (`Solver.solve_block`; a
+    tyre law in the loop, a singular or an unclearable determinant is rejected with the equation and
+    the variable). With no residual equation chosen yet a loop can sit in the overdetermined part; each
+    of its equations is then tried as the residual equation.
+When every unknown is computed, the equation left over is the residual equation. An MSO set is realizable
+when, for some residual equation, the rest is computed that way; otherwise the reason names what blocks it
+(an unknown only reachable by integrating a differential constraint without a measurement to correct it,
+i.e. open-loop simulation, an equation that cannot be solved for its last unknown, or a loop and why).
 
 Integral causality (`observer_closure`): when the only block is the open-loop integration of ONE state x,
 x becomes an observer estimate (known), its differential constraint the state update, and the closure runs
@@ -18,27 +22,36 @@ integrated open loop are rejected ("needs k observer states"). Plans without an 
 with one; `observer` designs the gain and the discretisation.
 
 Each equation of the MSO is tried as the residual equation; the one with the fewest filter levels, then the
-fewest derivatives, then the fewest divisions by signals wins (ties: model order). The symbolic part
-(`synthesize`) substitutes the sequence into the residual equation, lifts all signals to one filter level,
-and clears divisions by signals (the residual is multiplied by its denominator, as the paper's ARR3/ARR4).
+fewest derivatives, then the fewest divisions by signals wins (ties: model order). A state whose
+derivative that plan takes twice (`twice_differentiated`) may instead be estimated by an observer
+(`integral_alternative`); `synthesize` takes it when the residual equation sees the state uniformly
+(d r / d x a nonzero constant), and otherwise keeps the second derivative and records why in
+`Generator.note` (ROMO's MSO3/MSO4 = ARR3/ARR4: their observer alternative sees vy resp. vx only through
+the yaw rate). The symbolic part substitutes the sequence into the residual equation, lifts all signals to
+one filter level, and clears divisions by signals (the residual is multiplied by its denominator, as the
+paper's ARR3/ARR4).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+import functools
+from collections.abc import Container, Iterable, Mapping
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 import sympy
 from numpy.typing import NDArray
 
+from fdi_analysis.dm import dulmage_mendelsohn
 from fdi_analysis.model import Equation, Model
-from fdi_analysis.residuals.generator import DOMAIN_FACTOR, XHAT, Generator, Observer, Step
+from fdi_analysis.residuals.generator import DOMAIN_FACTOR, LOOP_JOIN, XHAT, Generator, Observer, Step
 from fdi_analysis.residuals.observer import align_with_state, d_dstate, design_observer, initial_estimate
 from fdi_analysis.residuals.signals import align, derivative, filter_bank, nodes_in, raw
-from fdi_analysis.residuals.solvability import Solution, Solver
+from fdi_analysis.residuals.solvability import BlockSolution, Solution, Solver
 
 FloatArray = NDArray[np.float64]
+Causality = Literal["auto", "derivative", "integral"]
 MAX_LEVEL = 2  # at most two filter stages (second derivatives), as the hand-written ARR3/ARR4
 
 
@@ -83,12 +96,41 @@ def closure(model: Model, solver: Solver, eq_ids: Iterable[str], residual: str |
     tainted: set[str] = set()  # values that hold a division by a signal
     from_obs: set[str] = set()  # values computed from the observer state
     singular = ""
+    loop_why = ""  # why an algebraic loop of the set is not solved
     steps: list[Step] = []
     used: set[str] = set()
     if observed is not None:
         level[observed] = 0
         from_obs.add(observed)
         steps.append(Step(observed, obs_eq, "observer", 0))
+
+    def accept(block: list[Equation], sols: dict[str, Solution], kind: str) -> bool:
+        """Take the step computing `sols` from `block` (one equation, or an algebraic loop solved jointly),
+        unless it would divide by a signal where that cannot be cleared; the reason then goes to `singular`."""
+        nonlocal singular
+        names = LOOP_JOIN.join(e.id for e in block)
+        inputs = {v for e in block for v in e.unknowns if v not in sols}
+        bad = [(e.id, v) for e in block for v in e.unknowns if v in tainted and not solver.rational_in(e, v)]
+        if bad:
+            singular = singular or (f"{bad[0][1]} holds a division by a signal and {bad[0][0]} is not rational "
+                                    f"in it (singular when the divisor vanishes)")
+            return False
+        div = any(bool(sol.coefficient.free_symbols) for sol in sols.values())
+        if observed is not None and (div or inputs & tainted):
+            singular = singular or (f"{names} solved for {', '.join(sols)} divides by a signal inside the "
+                                    "observer (singular when the divisor vanishes)")
+            return False
+        lv = max((level[v] for v in inputs), default=0)
+        for u in sols:
+            if div or inputs & tainted:
+                tainted.add(u)
+            if inputs & from_obs:
+                from_obs.add(u)
+            level[u] = lv
+            steps.append(Step(u, names, kind, lv, division=div))
+        used.update(e.id for e in block)
+        return True
+
     progress = True
     while progress and len(level) < len(unknowns):
         progress = False
@@ -111,32 +153,32 @@ def closure(model: Model, solver: Solver, eq_ids: Iterable[str], residual: str |
                 continue
             todo = [u for u in e.unknowns if u not in level]
             if len(todo) == 1 and solver.solvable(e, todo[0]):
-                u = todo[0]
-                sol = solver.solve(e, u)
+                sol = solver.solve(e, todo[0])
                 assert isinstance(sol, Solution)
-                bad = [v for v in e.unknowns if v in tainted and not solver.rational_in(e, v)]
-                if bad:
-                    singular = singular or (f"{bad[0]} holds a division by a signal and {e.id} is not rational "
-                                            f"in it (singular when the divisor vanishes)")
+                kind = "measured" if e.knowns and len(e.unknowns) == 1 else "algebraic"
+                progress = accept([e], {todo[0]: sol}, kind) or progress
+        if not progress and len(level) < len(unknowns):
+            for block, vars_ in _loops(solver, eqs, used, level):
+                blk = solver.solve_block(block, vars_)
+                if isinstance(blk, str):
+                    loop_why = loop_why or blk
                     continue
-                div = bool(sol.coefficient.free_symbols)
-                if observed is not None and (div or any(v in tainted for v in e.unknowns if v != u)):
-                    singular = singular or (f"{e.id} solved for {u} divides by a signal inside the observer "
-                                            "(singular when the divisor vanishes)")
-                    continue
-                if div or any(v in tainted for v in e.unknowns if v != u):
-                    tainted.add(u)
-                if any(v in from_obs for v in e.unknowns if v != u):
-                    from_obs.add(u)
-                lv = max((level[v] for v in e.unknowns if v != u), default=0)
-                level[u] = lv
-                steps.append(Step(u, e.id, "measured" if e.knowns and len(e.unknowns) == 1 else "algebraic", lv,
-                                  division=div))
-                used.add(e.id)
-                progress = True
+                if accept(block, dict(zip(blk.unknowns, blk.solutions, strict=True)), "loop"):
+                    progress = True
+                    break
     missing = [u for u in unknowns if u not in level]
     if missing:
-        return singular or _blocked(model, eqs, missing, used)
+        why = singular or _blocked(model, solver, eqs, missing, used, loop_why)
+        if residual is None and open_loop_states(model, why) is None:
+            # an algebraic loop inside the overdetermined part splits into blocks only once the residual
+            # equation is chosen: try each equation of that part that could close a solvable loop
+            for r in _loop_residuals(solver, eqs, used, missing):
+                q = closure(model, solver, ids, r, observed)
+                if isinstance(q, Plan):
+                    return q
+                if "algebraic loop" in q and "algebraic loop" not in why:
+                    why = q
+        return why
     if residual is None:
         left = [e.id for e in eqs if e.id not in used]
         if observed is not None:
@@ -240,11 +282,82 @@ def _closure_seeded(model: Model, solver: Solver, ids: list[str], residual: str 
                 progress = True
     missing = sorted(unknowns - known)
     if missing:
-        return _blocked(model, eqs, missing, used)
+        return _blocked(model, solver, eqs, missing, used)
     return "ok"
 
 
-def _blocked(model: Model, eqs: list[Equation], missing: list[str], used: set[str]) -> str:
+def _loops(solver: Solver, eqs: list[Equation], used: set[str],
+           known: Mapping[str, int]) -> list[tuple[list[Equation], list[str]]]:
+    """The algebraic loops that can be solved next: the just-determined blocks (Dulmage-Mendelsohn, in
+    solvable order) of two or more unused algebraic equations over the unknowns not yet computed, each
+    equation linear in the unknowns it still lacks and holding only computed unknowns and those of its block
+    (`_loopable`)."""
+    lack = _loopable(solver, eqs, used, known)
+    if len(lack) < 2:
+        return []
+    by_id = {e.id: e for e in eqs}
+    return [([by_id[e] for e in rows], list(cols))
+            for rows, cols in _square_blocks(tuple(sorted((e, frozenset(us)) for e, us in lack.items())))]
+
+
+@functools.lru_cache(maxsize=65536)
+def _square_blocks(lack: tuple[tuple[str, frozenset[str]], ...]) -> tuple[tuple[tuple[str, ...], tuple[str, ...]], ...]:
+    """The just-determined blocks of two or more equations of the structure `lack` (equation -> the unknowns
+    it lacks) that lack nothing outside the block, in solvable order (a pure function of the structure,
+    so many MSO sets share one decomposition)."""
+    cols = sorted({u for _, us in lack for u in us})
+    col = {u: j for j, u in enumerate(cols)}
+    inc = np.zeros((len(lack), len(cols)), dtype=bool)
+    for i, (_, us) in enumerate(lack):
+        for u in us:
+            inc[i, col[u]] = True
+    out = []
+    for rows, vs in dulmage_mendelsohn(inc).zero_blocks:
+        inside = {cols[j] for j in vs}
+        if len(rows) >= 2 and all(lack[i][1] <= inside for i in rows):
+            out.append((tuple(lack[i][0] for i in rows), tuple(cols[j] for j in vs)))
+    return tuple(out)
+
+
+def _loopable(solver: Solver, eqs: list[Equation], used: set[str], known: Container[str]) -> dict[str, set[str]]:
+    """The unused algebraic equations that may lie on a loop Cramer's rule solves, with the unknowns they
+    lack: each lacks two or more unknowns, is linear in each of them (not marked not_solvable_for it), and
+    every unknown it lacks is lacked by another such equation (in a strongly connected block of two or more
+    equations each unknown appears twice); pruned until that holds."""
+    lack: dict[str, set[str]] = {}
+    for e in eqs:
+        if e.id in used or e.differential is not None:
+            continue
+        todo = {u for u in e.unknowns if u not in known}
+        if len(todo) > 1 and todo <= solver.loop_unknowns(e):
+            lack[e.id] = todo
+    changed = True
+    while changed and lack:
+        count: dict[str, int] = {}
+        for us in lack.values():
+            for u in us:
+                count[u] = count.get(u, 0) + 1
+        drop = [k for k, us in lack.items() if any(count[u] < 2 for u in us)]
+        changed = bool(drop)
+        for k in drop:
+            del lack[k]
+    return lack
+
+
+def _loop_residuals(solver: Solver, eqs: list[Equation], used: set[str], missing: list[str]) -> list[str]:
+    """Residual equations worth trying when the plain closure stalls in the overdetermined part: when two or
+    more unused equations could form a loop (`_loopable`), the equations of the M+ part of what is left."""
+    gone = set(missing)
+    if len(_loopable(solver, eqs, used, {u for e in eqs for u in e.unknowns} - gone)) < 2:
+        return []
+    alg = [e for e in eqs if e.id not in used and e.differential is None and set(e.unknowns) & gone]
+    cols = sorted({u for e in alg for u in e.unknowns if u in gone})
+    inc = np.array([[u in e.unknowns for u in cols] for e in alg], dtype=bool)
+    return [alg[i].id for i in dulmage_mendelsohn(inc).plus_eqs]
+
+
+def _blocked(model: Model, solver: Solver, eqs: list[Equation], missing: list[str], used: set[str],
+             loop_why: str = "") -> str:
     for e in eqs:
         if e.id not in used and e.differential is not None and e.differential[1] in missing:
             return (f"{e.differential[1]} is reachable only by integrating {e.id} with no measurement of it in "
@@ -256,9 +369,20 @@ def _blocked(model: Model, eqs: list[Equation], missing: list[str], used: set[st
         todo = [u for u in e.unknowns if u in missing]
         if len(todo) == 1:
             reasons.append(f"{e.id} cannot be solved for {todo[0]}")
+    if loop_why:
+        return loop_why
     if reasons:
         return "; ".join(reasons[:3])
-    return f"algebraic loop in {', '.join(missing[:6])} (no equation with a single unknown left)"
+    why = ""
+    for e in eqs:  # the first equation of the loop that Cramer's rule cannot take, and why
+        if e.id in used or e.differential is not None:
+            continue
+        bad = [u for u in e.unknowns if u in missing and not solver.linear_in(e, u)]
+        if bad:
+            how = "is marked not_solvable_for" if bad[0] in e.not_solvable_for else "is not linear in"
+            why = f": {e.id} {how} {bad[0]}"
+            break
+    return f"algebraic loop in {', '.join(missing[:6])} (no equation with a single unknown left{why})"
 
 
 def plan(model: Model, solver: Solver, eq_ids: Iterable[str]) -> Plan:
@@ -282,17 +406,81 @@ def plan(model: Model, solver: Solver, eq_ids: Iterable[str]) -> Plan:
     return best
 
 
+def twice_differentiated(model: Model, p: Plan) -> list[str]:
+    """The states whose derivative the plan takes of a value that already holds a filtered derivative (a
+    second derivative of a measured signal, e.g. vy = (d/dt vx - ax) / psidot, then d/dt vy in ARR3)."""
+    out = []
+    for s in p.steps:
+        pair = model.equation(s.equation).differential if s.kind == "derivative" else None
+        if pair is not None and s.level >= 2 and pair[1] not in out:
+            out.append(pair[1])
+    pair = model.equation(p.residual).differential  # a residual dx - d/dt x differentiates x once more
+    if pair is not None and pair[1] not in out and any(s.var == pair[1] and s.level >= 1 for s in p.steps):
+        out.append(pair[1])
+    return out
+
+
+def integral_alternative(model: Model, solver: Solver, eq_ids: Iterable[str], p: Plan) -> Plan | None:
+    """The best plan that estimates, by an observer, a state `p` differentiates twice (integral causality
+    for that state instead of a second derivative), with fewer filter levels than `p`; None when there is
+    none (or `p` already has an observer state: one per generator)."""
+    if p.observer:
+        return None
+    ids = list(eq_ids)
+    best: Plan | None = None
+    for x in twice_differentiated(model, p):
+        for r in ids:
+            q = closure(model, solver, ids, r, x)
+            if isinstance(q, Plan) and q.level < p.level and (
+                    best is None or (q.level, q.derivatives, q.divisions) < (best.level, best.derivatives,
+                                                                             best.divisions)):
+                best = q
+    return best
+
+
 def synthesize(model: Model, eq_ids: Iterable[str], name: str, solver: Solver | None = None,
-               reference: Mapping[str, FloatArray] | None = None) -> Generator:
+               reference: Mapping[str, FloatArray] | None = None, causality: Causality = "auto") -> Generator:
     """The residual generator of the MSO set `eq_ids` (raises NotRealizableError). `reference`: fault-free
     measured signals for the gain design of an observer generator (default: the simulator's reference
-    drive, `observer.reference_sensitivity`)."""
+    drive, `observer.reference_sensitivity`).
+
+    Causality: filtered derivatives for measured signals; an observer for a state only the integration of
+    its differential constraint reaches; for a state whose derivative would be taken twice (`causality`):
+    "auto" estimates it by an observer when the residual equation sees it uniformly (d r / d x a nonzero
+    constant), else keeps the second derivative and says why in the generator's `note` (an estimate the
+    output does not see somewhere integrates open loop there); "integral" always takes the observer where
+    there is one, "derivative" never."""
     solver = solver or Solver(model)
     ids = [e.id for e in model.equations if e.id in set(eq_ids)]
     p = plan(model, solver, ids)
+    alt = integral_alternative(model, solver, ids, p) if causality != "derivative" else None
+    note = ""
+    if alt is not None:
+        g_alt = _assemble(model, solver, ids, alt, name)
+        assert g_alt.observer is not None
+        c = g_alt.observer.c
+        if causality == "integral" or (not c.free_symbols and c != 0):
+            return design_observer(g_alt, reference)
+        twice = ", ".join(twice_differentiated(model, p))
+        note = (f"an observer for {alt.observer} (residual {alt.residual}) instead of the second derivative "
+                f"of {twice}: d r / d {alt.observer} = {_readable(c)} vanishes in some manoeuvres, where the "
+                "estimate would integrate open loop")
+    g = _assemble(model, solver, ids, p, name, note)
+    return g if g.observer is None else design_observer(g, reference)
+
+
+def _readable(expr: sympy.Expr) -> str:
+    """An expression over filtered-signal nodes with the signals' names (psidot_m__L1d0 -> psidot_m)."""
+    names = {n.symbol: sympy.Symbol(n.signal if n.order == 0 else f"d{n.order}_{n.signal}") for n in nodes_in(expr)}
+    return str(sympy.sstr(expr.xreplace(names)))
+
+
+def _assemble(model: Model, solver: Solver, ids: list[str], p: Plan, name: str, note: str = "") -> Generator:
+    """The generator of plan `p` (an observer generator without its gain: `design_observer` adds it)."""
     known_sub = {sympy.Symbol(k.name): raw(k.name) for k in model.knowns}
     value: dict[sympy.Symbol, sympy.Expr] = {}
     inverses: dict[sympy.Symbol, sympy.Expr] = {}  # placeholder 1/c for a division by the signal c
+    loop_inverse: dict[str, sympy.Symbol] = {}  # one placeholder per algebraic loop (its determinant)
     if p.observer:
         value[sympy.Symbol(p.observer)] = XHAT
     for s in p.steps:
@@ -302,15 +490,26 @@ def synthesize(model: Model, eq_ids: Iterable[str], name: str, solver: Solver | 
             pair = model.equation(s.equation).differential
             assert pair is not None
             value[sympy.Symbol(s.var)] = derivative(value[sympy.Symbol(pair[1])], inverses)
+            continue
+        if s.kind == "loop":
+            block = [model.equation(e) for e in s.equations]
+            blk = solver.solve_block(block, [t.var for t in p.steps if t.equation == s.equation])
+            assert isinstance(blk, BlockSolution)
+            sol = blk.solutions[blk.unknowns.index(s.var)]
         else:
-            sol = solver.solve(model.equation(s.equation), s.var)
-            assert isinstance(sol, Solution)
-            if sol.coefficient.free_symbols:
+            one = solver.solve(model.equation(s.equation), s.var)
+            assert isinstance(one, Solution)
+            sol = one
+        if sol.coefficient.free_symbols:
+            inv = loop_inverse.get(s.equation) if s.kind == "loop" else None
+            if inv is None:
                 inv = sympy.Symbol(f"inv{len(inverses)}")
                 inverses[inv] = sol.coefficient.xreplace(known_sub).xreplace(value)
-                value[sympy.Symbol(s.var)] = (sol.expr * sol.coefficient).xreplace(known_sub).xreplace(value) * inv
-            else:
-                value[sympy.Symbol(s.var)] = sol.expr.xreplace(known_sub).xreplace(value)
+                if s.kind == "loop":
+                    loop_inverse[s.equation] = inv
+            value[sympy.Symbol(s.var)] = (sol.expr * sol.coefficient).xreplace(known_sub).xreplace(value) * inv
+        else:
+            value[sympy.Symbol(s.var)] = sol.expr.xreplace(known_sub).xreplace(value)
     req = model.equation(p.residual)
     if req.differential is not None:
         dx, x = req.differential
@@ -326,7 +525,12 @@ def synthesize(model: Model, eq_ids: Iterable[str], name: str, solver: Solver | 
             raise NotRealizableError(f"residual {p.residual} is not polynomial in a quotient by a signal") from exc
         degs = [max(m[i] for m in poly.monoms()) for i in range(len(invs))]
         scale = sympy.Mul(*[inverses[v] ** d for v, d in zip(invs, degs, strict=True)])
-        expr = sympy.expand(expr.xreplace({v: 1 / inverses[v] for v in invs}) * scale)
+        # the residual times the divisors to their highest powers; a divisor that is a sum (the determinant of
+        # an algebraic loop) stands for a symbol of its own until the powers have cancelled
+        stand = {v: sympy.Dummy(f"d_{v}") for v in invs}
+        expr = sympy.expand(expr.xreplace({v: 1 / stand[v] for v in invs})
+                            * sympy.Mul(*[stand[v] ** d for v, d in zip(invs, degs, strict=True)]))
+        expr = sympy.expand(expr.xreplace({stand[v]: inverses[v] for v in invs}))
         scaled_by = sympy.sstr(scale)
     observer: Observer | None = None
     if p.observer:
@@ -347,10 +551,10 @@ def synthesize(model: Model, eq_ids: Iterable[str], name: str, solver: Solver | 
         raise NotRealizableError(f"residual of {p.residual} is identically {expr}")
     nodes = nodes_in(expr) | (nodes_in(observer.update) if observer is not None else set())
     order = [k.name for k in model.knowns]
-    used_eqs = {s.equation for s in p.steps} | {p.residual}
+    used_eqs = {e for s in p.steps for e in s.equations} | {p.residual}
     faults = sorted({f for e in used_eqs for f in model.equation(e).faults}, key=[f.name for f in model.faults].index)
     min_speed, why = operating_domain(model, sorted(used_eqs))
-    g = Generator(
+    return Generator(
         name=name,
         equations=tuple(ids),
         residual_equation=p.residual,
@@ -365,8 +569,8 @@ def synthesize(model: Model, eq_ids: Iterable[str], name: str, solver: Solver | 
         min_speed=min_speed,
         domain_reason=why,
         observer=observer,
+        note=note,
     )
-    return g if observer is None else design_observer(g, reference)
 
 
 def operating_domain(model: Model, eq_ids: Iterable[str]) -> tuple[float, str]:

@@ -24,16 +24,23 @@ OBSERVER_POLE_FACTOR = 2.0
 OBSERVER_EPS = 0.1
 
 
+LOOP_JOIN = "+"  # Step.equation of an algebraic loop: its equations joined
+
+
 @dataclass(frozen=True)
 class Step:
     var: str
-    equation: str
-    kind: str  # "measured", "algebraic", "derivative" or "observer" (the observer state; its update equation)
+    equation: str  # the equation used; for a loop its equations joined by LOOP_JOIN
+    kind: str  # "measured", "algebraic", "loop" (an algebraic loop solved jointly), "derivative" or "observer"
     level: int  # filter level of the computed value
     division: bool = False  # the solution divides by a signal
 
+    @property
+    def equations(self) -> tuple[str, ...]:
+        return tuple(self.equation.split(LOOP_JOIN))
+
     def text(self) -> str:
-        how = {"measured": "from the measurement", "algebraic": "solved from",
+        how = {"measured": "from the measurement", "algebraic": "solved from", "loop": "solved jointly from",
                "derivative": "filtered derivative by", "observer": "estimated by an observer integrating"}[self.kind]
         return f"{self.var} {how} {self.equation}" + (" (divides by a signal)" if self.division else "")
 
@@ -78,6 +85,7 @@ class Generator:
     min_speed: float = 0.0  # operating domain: evaluable only while |DOMAIN_SIGNAL| >= min_speed (0: always)
     domain_reason: str = ""  # where min_speed comes from in the model
     observer: Observer | None = None  # integral causality for one state (expr then depends on XHAT)
+    note: str = ""  # a causality the synthesis considered and did not take, and why ("" for none)
 
     def domain(self) -> str:
         if self.min_speed <= 0.0:
@@ -88,6 +96,10 @@ class Generator:
         der = [s.var for s in self.steps if s.kind == "derivative"]
         text = f"residual {self.residual_equation}; "
         text += ("derivative causality for " + ", ".join(der)) if der else "algebraic only"
+        loops = list(dict.fromkeys(s.equation for s in self.steps if s.kind == "loop"))
+        for loop in loops:
+            text += (f"; algebraic loop {loop} solved jointly for "
+                     + ", ".join(s.var for s in self.steps if s.equation == loop))
         if self.observer is not None:
             text += "; " + self.observer.text()
         text += f"; {len(self.filters)} filters, level {self.level}"

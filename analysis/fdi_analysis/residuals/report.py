@@ -42,6 +42,7 @@ class TestRow:
     sigma: float
     gate: float
     responses: tuple[Response, ...]
+    note: str = ""  # a causality considered and not taken, and why
 
 
 def rows(gens: Sequence[Generator], sigmas: Sequence[float], gate: float, sizes: FaultSizes | None,
@@ -60,7 +61,7 @@ def rows(gens: Sequence[Generator], sigmas: Sequence[float], gate: float, sizes:
                 resp.append(Response(f, None, "", limits.get(f), v if isinstance(v, str) else "not swept"))
         causality = g.causality().split("; domain ", 1)[0]  # the domain has a field of its own
         out.append(TestRow(g.name, g.equations, g.residual_equation, causality, g.knowns, g.domain(), s, gate,
-                           tuple(resp)))
+                           tuple(resp), g.note))
     return out
 
 
@@ -79,6 +80,7 @@ def markdown(table: str, test_rows: Sequence[TestRow], sizes_source: str) -> str
                      f"{resp} |")
     for r in test_rows:
         lines += ["", f"## {r.name}", "", f"- MSO set: {' '.join(r.equations)}", f"- causality: {r.causality}",
+                  *([f"- not taken: {r.note}"] if r.note else []),
                   f"- inputs: {', '.join(r.inputs)}", f"- operating domain: {r.domain}",
                   f"- sigma {r.sigma:.4g}, alarm at {r.gate:g} sigma or CUSUM", "",
                   "| fault | stated size | limit | scenario | note |", "|---|---|---|---|---|"]

@@ -6,12 +6,23 @@ An equation is solved for an unknown only when (a) the model does not list the u
 Max/Abs, tanh/sign of a brake torque, products of the unknown with itself), so no branch is ever chosen
 silently. The coefficient d(res)/dx may contain signals: the solution then divides by it, which
 `causality` records and clears from the final residual (multiplying by the denominator).
+
+An algebraic loop (k equations that share k unknowns, none of them with a single unknown left) is solved
+as one block (`solve_block`) when the equations are jointly linear in the k unknowns, none of them is
+marked `not_solvable_for` an unknown of the loop, and the determinant of the coefficient matrix (simplified
+by sympy, e.g. cos^2 + sin^2 of a steering rotation -> 1) is not identically zero: each unknown is then
+adj(J) (-b) / det(J) by Cramer's rule. A determinant that holds signals is a division by a signal, as the
+coefficient of a single equation. Anything else (a tyre law in the loop, a singular system) is rejected with
+the reason, and `causality` tries another residual equation.
 """
 
 from __future__ import annotations
 
+import random
+from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numpy as np
 import sympy
 
 from fdi_analysis.model import Equation, Model
@@ -23,6 +34,19 @@ class Solution:
     coefficient: sympy.Expr  # d(res)/dx; a non-constant one is a division by a signal
 
 
+MAX_LOOP = 6  # largest algebraic loop solved as one block (equations); larger ones are rejected
+
+
+@dataclass(frozen=True)
+class BlockSolution:
+    """An algebraic loop solved jointly: each unknown of `unknowns` as `solutions[k]` (with coefficient =
+    the determinant of the loop's coefficient matrix, shared by all of them)."""
+
+    equations: tuple[str, ...]
+    unknowns: tuple[str, ...]
+    solutions: tuple[Solution, ...]
+
+
 class Solver:
     """Cached solutions of the equations of one model (parameters substituted, faults set to zero)."""
 
@@ -32,6 +56,8 @@ class Solver:
         self.fault_zero = {sympy.Symbol(f.name): sympy.Integer(0) for f in model.faults}
         self._residuals: dict[str, sympy.Expr] = {}
         self._cache: dict[tuple[str, str], Solution | str] = {}
+        self._blocks: dict[tuple[str, str], BlockSolution | str] = {}
+        self._loop_unknowns: dict[str, frozenset[str]] = {}
 
     def residual(self, eq: Equation) -> sympy.Expr:
         """lhs - rhs of an algebraic equation with parameters and faults substituted."""
@@ -59,15 +85,90 @@ class Solver:
             self._cache[key] = Solution(sympy.Integer(0), sympy.Integer(1)) if ok else "not rational"
         return isinstance(self._cache[key], Solution)
 
-    def _solve(self, eq: Equation, var: str) -> Solution | str:
+    def linear_in(self, eq: Equation, var: str) -> bool:
+        """True when `eq` may take part in an algebraic loop over `var`: usable, not marked
+        not_solvable_for it, and linear in it."""
+        return var in self.loop_unknowns(eq)
+
+    def loop_unknowns(self, eq: Equation) -> frozenset[str]:
+        """The unknowns `eq` may be solved for inside an algebraic loop (`linear_in`), cached per equation."""
+        if eq.id not in self._loop_unknowns:
+            ok: set[str] = set()
+            if not self._unusable(eq):
+                res = self.residual(eq)
+                for u in eq.unknowns:
+                    x = sympy.Symbol(u)
+                    if u not in eq.not_solvable_for and not sympy.diff(res, x).has(x):
+                        ok.add(u)
+            self._loop_unknowns[eq.id] = frozenset(ok)
+        return self._loop_unknowns[eq.id]
+
+    def solve_block(self, eqs: Sequence[Equation], unknowns: Sequence[str]) -> BlockSolution | str:
+        """The joint solution of the algebraic loop `eqs` (k equations) for `unknowns` (k unknowns), or the
+        reason why it is not solved (cached per loop)."""
+        key = ("+".join(sorted(e.id for e in eqs)), "+".join(sorted(unknowns)))
+        if key not in self._blocks:
+            self._blocks[key] = self._solve_block(sorted(eqs, key=lambda e: e.id), sorted(unknowns))
+        return self._blocks[key]
+
+    def _solve_block(self, eqs: list[Equation], unknowns: list[str]) -> BlockSolution | str:
+        names = ", ".join(e.id for e in eqs)
+        if len(eqs) != len(unknowns):
+            return f"algebraic loop {names} is not square ({len(eqs)} equations, {len(unknowns)} unknowns)"
+        for e in eqs:
+            why = self._unusable(e)
+            if why:
+                return why
+            marked = [u for u in unknowns if u in e.not_solvable_for and u in e.unknowns]
+            if marked:
+                return f"algebraic loop {names}: {e.id} is marked not_solvable_for {marked[0]}"
+            nonlinear = [u for u in unknowns if u in e.unknowns and not self.linear_in(e, u)]
+            if nonlinear:
+                return (f"algebraic loop {names}: {e.id} is not linear in {nonlinear[0]} (non-invertible or "
+                        "multi-branch term)")
+        if len(eqs) > MAX_LOOP:
+            return f"algebraic loop {names} has {len(eqs)} equations (more than {MAX_LOOP} are not solved)"
+        xs = [sympy.Symbol(u) for u in unknowns]
+        res = [self.residual(e) for e in eqs]
+        jac = sympy.Matrix([[sympy.diff(r, x) for x in xs] for r in res])
+        for i, e in enumerate(eqs):  # jointly linear: no coefficient holds an unknown of the loop
+            for j, x in enumerate(xs):
+                held = sorted(str(v) for v in jac[i, j].free_symbols & set(xs))
+                if held:
+                    return (f"algebraic loop {names}: {e.id} is not linear in {', '.join(unknowns)} jointly "
+                            f"(its coefficient of {x} holds {', '.join(held)})")
+        det = _determinant(jac)
+        if det is None:
+            return (f"algebraic loop {names} divides by its determinant, which varies with "
+                    f"{', '.join(sorted(map(str, jac.free_symbols))[:4])} through non-polynomial terms (its zeros "
+                    "cannot be cleared)")
+        if det == 0:
+            return f"algebraic loop {names} is singular in {', '.join(unknowns)} (determinant identically 0)"
+        if det.free_symbols and not det.is_polynomial(*det.free_symbols):
+            return (f"algebraic loop {names} divides by its determinant, not a polynomial in "
+                    f"{', '.join(sorted(map(str, det.free_symbols))[:4])} (its zeros cannot be cleared)")
+        rest = sympy.Matrix([r.xreplace({x: 0 for x in xs}) for r in res])
+        num = jac.adjugate() * (-rest)
+        sols = tuple(Solution(expr=sympy.expand(num[k]) / det, coefficient=det) for k in range(len(xs)))
+        return BlockSolution(tuple(e.id for e in eqs), tuple(unknowns), sols)
+
+    @staticmethod
+    def _unusable(eq: Equation) -> str:
+        """Why an equation cannot be solved for anything ("" when it can be tried)."""
         if eq.differential is not None:
             return f"{eq.id} is a differential constraint"
         if eq.derivatives:
             return f"{eq.id} holds inline derivatives der(...), which the generator does not handle"
-        if var in eq.not_solvable_for:
-            return f"{eq.id} is marked not_solvable_for {var}"
         if eq.lhs is None:
             return f"{eq.id} has no expression"
+        return ""
+
+    def _solve(self, eq: Equation, var: str) -> Solution | str:
+        why = self._unusable(eq)
+        if why:
+            return why
+        if var in eq.not_solvable_for:
+            return f"{eq.id} is marked not_solvable_for {var}"
         x = sympy.Symbol(var)
         res = self.residual(eq)
         coef = sympy.diff(res, x)
@@ -80,3 +181,34 @@ class Solver:
                     "(its zeros cannot be cleared)")
         rest = res.subs(x, 0)
         return Solution(expr=-rest / coef, coefficient=coef)
+
+
+
+def _determinant(jac: sympy.Matrix, probes: int = 8, seed: int = 7) -> sympy.Expr | None:
+    """det(jac) of a loop's coefficient matrix: a number when it takes one value at `probes` random points
+    (cos(d)^2 + sin(d)^2 -> 1 without a trigonometric simplification, which can take minutes), the
+    symbolic determinant when every entry is a polynomial in its symbols, else None (a determinant that
+    varies through non-polynomial terms, e.g. of a tyre law, whose zeros cannot be cleared)."""
+    syms = sorted(jac.free_symbols, key=str)
+    if not syms:
+        return sympy.nsimplify(jac.det(method="berkowitz"))
+    rng = random.Random(seed)
+    values: list[float] = []
+    for _ in range(probes):
+        point = {x: sympy.Float(rng.gauss(0.0, 2.0)) for x in syms}
+        try:
+            num = np.array([[complex(v.xreplace(point).evalf()) for v in row] for row in jac.tolist()])
+        except (TypeError, ValueError, ZeroDivisionError):
+            continue
+        if np.all(np.isfinite(num)) and np.max(np.abs(num.imag)) == 0.0:
+            values.append(float(np.linalg.det(num.real)))
+    polynomial = all(v.is_polynomial(*syms) for v in jac)
+    if len(values) == probes:
+        v0 = values[0]
+        tol = 1e-9 * max(1.0, max(abs(v) for v in values))
+        if all(abs(v - v0) <= tol for v in values):
+            near = round(v0)
+            return sympy.Integer(near) if abs(v0 - near) <= tol else sympy.Float(v0)
+    if not polynomial:
+        return None
+    return sympy.expand(jac.det(method="berkowitz"))
