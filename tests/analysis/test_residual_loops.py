@@ -26,7 +26,7 @@ from fdi_analysis.residuals.emit_c import render
 from fdi_analysis.residuals.evaluate import residual
 from fdi_analysis.residuals.realizability import why_not_realizable
 from fdi_analysis.residuals.signals import raw
-from fdi_analysis.residuals.solvability import BlockSolution, Solver
+from fdi_analysis.residuals.solvability import BlockSolution, Solver, _determinant
 
 ROTATED = """
 [model]
@@ -200,3 +200,14 @@ def test_tyre_law_loops_of_romo_are_rejected_with_the_equation_and_variable(repo
     assert why is not None and "algebraic loop" in why
     assert "W1.FL" in why or "W2.FL" in why
     assert "not_solvable_for" in why or "not linear" in why
+
+
+def test_determinant_probe_is_relative_to_the_coefficients() -> None:
+    """A small but regular determinant is not taken for 0 (zero is judged against Hadamard's bound of the
+    rows), a singular one is 0 whatever the scale, a constant one is exact, a polynomial one symbolic."""
+    a, b = sympy.symbols("a b")
+    assert _determinant(sympy.Matrix([[1e-6, 0], [0, 1e-6]])) == pytest.approx(1e-12)
+    assert _determinant(sympy.Matrix([[1e6 * a, 2e6 * a], [1, 2]])) == 0
+    assert _determinant(sympy.Matrix([[sympy.cos(a), sympy.sin(a)], [-sympy.sin(a), sympy.cos(a)]])) == 1
+    assert sympy.expand(_determinant(sympy.Matrix([[a, 1], [1, b]])) - (a * b - 1)) == 0
+    assert _determinant(sympy.Matrix([[sympy.sqrt(a**2 + 1), 1], [1, b]])) is None  # varies, not polynomial

@@ -185,16 +185,16 @@ class Solver:
 
 
 def _determinant(jac: sympy.Matrix, probes: int = 8, seed: int = 7) -> sympy.Expr | None:
-    """det(jac) of a loop's coefficient matrix: a number when it takes one value at `probes` random points
-    (cos(d)^2 + sin(d)^2 -> 1 without a trigonometric simplification, which can take minutes), the
-    symbolic determinant when every entry is a polynomial in its symbols, else None (a determinant that
-    varies through non-polynomial terms, e.g. of a tyre law, whose zeros cannot be cleared)."""
+    """det(jac) of a loop's coefficient matrix: 0 when it vanishes at `probes` random points (relative to
+    the rows' norms), a number when it takes one value there (cos(d)^2 + sin(d)^2 -> 1 without a
+    trigonometric simplification, which can take minutes), the symbolic determinant when every entry is a
+    polynomial in its symbols, else None (a determinant that varies through non-polynomial terms, e.g. of a
+    tyre law, whose zeros cannot be cleared). Deterministic: the probes come from a fixed seed."""
     syms = sorted(jac.free_symbols, key=str)
-    if not syms:
-        return sympy.nsimplify(jac.det(method="berkowitz"))
     rng = random.Random(seed)
     values: list[float] = []
-    for _ in range(probes):
+    scales: list[float] = []
+    for _ in range(probes if syms else 1):
         point = {x: sympy.Float(rng.gauss(0.0, 2.0)) for x in syms}
         try:
             num = np.array([[complex(v.xreplace(point).evalf()) for v in row] for row in jac.tolist()])
@@ -202,13 +202,14 @@ def _determinant(jac: sympy.Matrix, probes: int = 8, seed: int = 7) -> sympy.Exp
             continue
         if np.all(np.isfinite(num)) and np.max(np.abs(num.imag)) == 0.0:
             values.append(float(np.linalg.det(num.real)))
-    polynomial = all(v.is_polynomial(*syms) for v in jac)
-    if len(values) == probes:
+            scales.append(float(np.prod(np.linalg.norm(num.real, axis=1))))  # Hadamard's bound of |det|
+    if values and len(values) == (probes if syms else 1):
+        if all(abs(v) <= 1e-10 * sc for v, sc in zip(values, scales, strict=True)):
+            return sympy.Integer(0)
         v0 = values[0]
-        tol = 1e-9 * max(1.0, max(abs(v) for v in values))
-        if all(abs(v - v0) <= tol for v in values):
+        if all(abs(v - v0) <= 1e-9 * abs(v0) for v in values):
             near = round(v0)
-            return sympy.Integer(near) if abs(v0 - near) <= tol else sympy.Float(v0)
-    if not polynomial:
+            return sympy.Integer(near) if abs(v0 - near) <= 1e-9 * abs(v0) else sympy.Float(v0)
+    if not all(v.is_polynomial(*syms) for v in jac):
         return None
     return sympy.expand(jac.det(method="berkowitz"))
