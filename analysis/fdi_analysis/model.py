@@ -7,6 +7,7 @@ expressions) carries the variable lists per equation instead.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -113,10 +114,11 @@ class Model:
         return all(e.lhs is not None or e.differential is not None for e in self.equations)
 
     def equation(self, eq_id: str) -> Equation:
-        for e in self.equations:
-            if e.id == eq_id:
-                return e
-        raise KeyError(eq_id)
+        return self._equations_by_id[eq_id]
+
+    @functools.cached_property
+    def _equations_by_id(self) -> dict[str, Equation]:
+        return {e.id: e for e in self.equations}
 
     def symbol(self, name: str) -> sympy.Symbol:
         return sympy.Symbol(name)

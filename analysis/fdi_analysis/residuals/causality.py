@@ -350,10 +350,17 @@ def _loop_residuals(solver: Solver, eqs: list[Equation], used: set[str], missing
     gone = set(missing)
     if len(_loopable(solver, eqs, used, {u for e in eqs for u in e.unknowns} - gone)) < 2:
         return []
-    alg = [e for e in eqs if e.id not in used and e.differential is None and set(e.unknowns) & gone]
-    cols = sorted({u for e in alg for u in e.unknowns if u in gone})
-    inc = np.array([[u in e.unknowns for u in cols] for e in alg], dtype=bool)
-    return [alg[i].id for i in dulmage_mendelsohn(inc).plus_eqs]
+    lack = tuple((e.id, frozenset(set(e.unknowns) & gone)) for e in eqs
+                 if e.id not in used and e.differential is None and set(e.unknowns) & gone)
+    return list(_overdetermined(lack))
+
+
+@functools.lru_cache(maxsize=65536)
+def _overdetermined(lack: tuple[tuple[str, frozenset[str]], ...]) -> tuple[str, ...]:
+    """The M+ equations of the structure `lack` (equation -> the unknowns it lacks), a pure function of it."""
+    cols = sorted({u for _, us in lack for u in us})
+    inc = np.array([[u in us for u in cols] for _, us in lack], dtype=bool)
+    return tuple(lack[i][0] for i in dulmage_mendelsohn(inc).plus_eqs)
 
 
 def _blocked(model: Model, solver: Solver, eqs: list[Equation], missing: list[str], used: set[str],
