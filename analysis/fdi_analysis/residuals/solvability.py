@@ -9,11 +9,12 @@ silently. The coefficient d(res)/dx may contain signals: the solution then divid
 
 An algebraic loop (k equations that share k unknowns, none of them with a single unknown left) is solved
 as one block (`solve_block`) when the equations are jointly linear in the k unknowns, none of them is
-marked `not_solvable_for` an unknown of the loop, and the determinant of the coefficient matrix (simplified
-by sympy, e.g. cos^2 + sin^2 of a steering rotation -> 1) is not identically zero: each unknown is then
-adj(J) (-b) / det(J) by Cramer's rule. A determinant that holds signals is a division by a signal, as the
-coefficient of a single equation. Anything else (a tyre law in the loop, a singular system) is rejected with
-the reason, and `causality` tries another residual equation.
+marked `not_solvable_for` an unknown of the loop, and the determinant of the coefficient matrix (found
+constant by probing where it is, e.g. cos^2 + sin^2 of a steering rotation -> 1) is not identically zero:
+each unknown is then adj(J) (-b) / det(J) by Cramer's rule. A determinant that holds signals is a division
+by a signal, as the coefficient of a single equation. Anything else (a tyre law in the loop, a singular
+system, more than MAX_LOOP equations) is rejected with the reason, and `causality` tries another residual
+equation.
 """
 
 from __future__ import annotations
@@ -181,7 +182,6 @@ class Solver:
                     "(its zeros cannot be cleared)")
         rest = res.subs(x, 0)
         return Solution(expr=-rest / coef, coefficient=coef)
-
 
 
 def _determinant(jac: sympy.Matrix, probes: int = 8, seed: int = 7) -> sympy.Expr | None:
