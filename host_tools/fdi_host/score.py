@@ -21,8 +21,15 @@ where the ECU's inputs time out, are not used to detect); a fault whose window o
 not detected is "not evaluable" (its missed detection is explained by the gap, and reported as such), and
 each fault records how long its window ``[start, end + grace)`` was inside gaps.
 
+Recovery: an alarm run (consecutive alarmed steps) that holds in a fault's window and goes on past it without
+a test joining that had not alarmed in the window is the fault's (typically the transient of the fault's
+removal through a filtered derivative, then the CUSUM's return below its threshold); each fault records how
+long after its end the alarm still held (``alarm_after_end``), and the report names the faults that held it
+longer than the grace.
+
 False alarms: alarm episodes (steps with a non-empty alarm mask, consecutive steps merged) that start
-outside every ``[start, end + grace)`` window; their count and the total time in false alarm.
+outside every ``[start, end + grace)`` window and are not such a continued run (or where a test joins
+it that had not alarmed in the window); their count and the total time in false alarm.
 """
 
 from __future__ import annotations
@@ -126,6 +133,7 @@ class FaultScore:
     wrong_isolation: bool = False  # the verdict is not empty and does not contain the fault
     gap_overlap: float = 0.0  # time of [start, end + grace) inside gaps [s]
     not_evaluable: bool = False  # not detected, and the window overlaps a gap: the miss is not a verdict
+    alarm_after_end: float = 0.0  # how long after `end` an alarm of this fault still held [s]
 
 
 @dataclass
@@ -142,10 +150,16 @@ class Score:
     steps: int = 0
     duration: float = 0.0
     gaps: list[Gap] = field(default_factory=list)
+    grace: float = 0.0  # [s] after a fault's end that its alarms may take to clear
 
     @property
     def false_alarm_time(self) -> float:
         return sum(fa.end - fa.start for fa in self.false_alarms)
+
+    @property
+    def held_beyond_grace(self) -> list[FaultScore]:
+        """The faults whose alarm held longer after their end than the grace (slow recovery)."""
+        return [f for f in self.faults if f.alarm_after_end > self.grace]
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -155,6 +169,8 @@ class Score:
             "false_alarms": [asdict(f) for f in self.false_alarms],
             "false_alarm_count": len(self.false_alarms),
             "false_alarm_time": self.false_alarm_time,
+            "grace": self.grace,
+            "held_beyond_grace": [f.fault for f in self.held_beyond_grace],
             "gaps": [g.to_json() for g in self.gaps],
             "gap_count": {s: sum(1 for g in self.gaps if g.stream == s) for s in ("diagnosis", "sensors")},
         }
@@ -178,7 +194,7 @@ def score_run(
     `gaps`: silences of the diagnosis or sensor stream seen by the monitor."""
     recs = sorted(records, key=lambda r: r.t)
     dt = _step_time(recs)
-    out = Score([], [], len(recs), (recs[-1].t - recs[0].t + dt) if recs else 0.0, list(gaps))
+    out = Score([], [], len(recs), (recs[-1].t - recs[0].t + dt) if recs else 0.0, list(gaps), grace)
     sensor_gaps = [g for g in gaps if g.stream == "sensors"]
 
     def in_sensor_gap(t: float) -> bool:
@@ -209,29 +225,46 @@ def score_run(
             fs.not_evaluable = fs.gap_overlap > 0.0
         out.faults.append(fs)
 
-    def covered(t: float) -> bool:
-        return any(w.start <= t < w.end + grace for w in windows)
+    def owner(t: float) -> int | None:
+        """The window whose [start, end + grace) holds t (the latest started, where they overlap)."""
+        held = [k for k, w in enumerate(windows) if w.start <= t < w.end + grace]
+        return max(held, key=lambda k: windows[k].start) if held else None
 
     diag_gaps = [g for g in gaps if g.stream == "diagnosis"]
     episode: FalseAlarm | None = None
     tests = 0
+    run_owner: int | None = None  # the window the current alarm run started or went on in
+    run_tests = 0  # the tests that alarmed in that window during the run
     prev_t = -math.inf
     for r in recs:
-        if episode is not None and any(prev_t <= g.start and g.end <= r.t for g in diag_gaps):
-            episode.tests = _test_list(tests, classes)  # the ECU was down in between: a new episode
-            out.false_alarms.append(episode)
-            episode = None
+        if any(prev_t <= g.start and g.end <= r.t for g in diag_gaps):
+            run_owner, run_tests = None, 0  # the ECU was down in between: nothing carries over
+            if episode is not None:  # and a false alarm episode ends there
+                episode.tests = _test_list(tests, classes)
+                out.false_alarms.append(episode)
+                episode = None
         prev_t = r.t
-        if r.alarm_mask != 0:
-            if episode is None and not covered(r.t):
-                episode, tests = FalseAlarm(r.t, r.t + dt, ""), 0
+        if r.alarm_mask == 0:
+            run_owner, run_tests = None, 0
             if episode is not None:
-                episode.end = r.t + dt
-                tests |= r.alarm_mask
-        elif episode is not None:
-            episode.tests = _test_list(tests, classes)
-            out.false_alarms.append(episode)
-            episode = None
+                episode.tests = _test_list(tests, classes)
+                out.false_alarms.append(episode)
+                episode = None
+            continue
+        k = owner(r.t)
+        if episode is None and k is not None:
+            run_owner, run_tests = k, run_tests | r.alarm_mask
+        elif episode is None and run_owner is not None and r.alarm_mask & ~run_tests == 0:
+            k = run_owner  # the run goes on past the window with the window's tests: still the fault's
+        else:
+            if episode is None:
+                episode, tests = FalseAlarm(r.t, r.t + dt, ""), 0
+            run_owner, run_tests, k = None, 0, None
+            episode.end = r.t + dt
+            tests |= r.alarm_mask
+        if k is not None:
+            fs = out.faults[k]
+            fs.alarm_after_end = max(fs.alarm_after_end, r.t + dt - windows[k].end)
     if episode is not None:
         episode.tests = _test_list(tests, classes)
         out.false_alarms.append(episode)

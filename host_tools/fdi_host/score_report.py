@@ -32,7 +32,7 @@ def _ms(x: float | None) -> str:
 def score_table(score: Score) -> str:
     """Plain-text table, one line per injected fault, then the false alarms."""
     head = (f"{'fault':6s} {'window [s]':>13s} {'detectable':>10s} {'det. delay':>10s} {'expected':>9s} "
-            f"{'iso. delay':>10s} {'iso %':>5s} {'verdict':>9s} isolation")
+            f"{'iso. delay':>10s} {'iso %':>5s} {'cleared':>9s} {'verdict':>9s} isolation")
     lines = [head, "-" * len(head)]
     for f in score.faults:
         iso = ("-" if f.isolation_correct is None else "ok" if f.isolation_correct else "WRONG" if f.wrong_isolation
@@ -45,7 +45,11 @@ def score_table(score: Score) -> str:
         det = _ms(f.detection_delay) if f.detected else "not eval." if f.not_evaluable else "missed"
         lines.append(f"{f.fault:6s} {win:>13s} {'yes' if f.detectable else 'no':>10s} "
                      f"{det:>10s} {f.expected_class:>9s} "
-                     f"{_ms(f.isolation_delay):>10s} {100 * f.isolated_fraction:5.0f} {f.verdict:>9s} {iso}")
+                     f"{_ms(f.isolation_delay):>10s} {100 * f.isolated_fraction:5.0f} "
+                     f"{_ms(f.alarm_after_end if f.detected else None):>9s} {f.verdict:>9s} {iso}")
+    lines.append("cleared: how long after the fault's end its alarm still held")
+    slow = ", ".join(f"{f.fault} {f.alarm_after_end:.2f} s" for f in score.held_beyond_grace)
+    lines.append(f"held beyond the {score.grace:g} s grace: {slow or 'none'}")
     lines.append(f"false alarms: {len(score.false_alarms)} episodes, {score.false_alarm_time:.2f} s "
                  f"(over {score.duration:.1f} s, {score.steps} diagnosis steps)")
     lines.append(gap_summary(score.gaps))

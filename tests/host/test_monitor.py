@@ -93,8 +93,38 @@ def test_false_alarms(scored: tuple[Monitor, dict[str, object]]) -> None:
     assert s.false_alarms[0].end - s.false_alarms[0].start == pytest.approx(0.2, abs=DT + 1e-6)
     assert s.false_alarms[0].tests == "r1" and s.false_alarms[1].tests == "r4"
     assert s.false_alarm_time == pytest.approx(0.3, abs=2 * DT)
-    # With no grace, the alarm tail of f4 (5.0..5.5) becomes a false alarm too.
-    assert len(mon.score(truth, grace=0.0).false_alarms) == 3
+    # The alarm of f4 holds 0.5 s past its end (5.0..5.5), within the grace.
+    by = {f.fault: f for f in s.faults}
+    assert by["f4"].alarm_after_end == pytest.approx(0.5 + 0.0007, abs=DT + 1e-6) and s.held_beyond_grace == []
+    # With no grace, that run is still f4's (no test joins it), now held beyond the grace, and no false alarm.
+    s0 = mon.score(truth, grace=0.0)
+    assert len(s0.false_alarms) == 2 and [f.fault for f in s0.held_beyond_grace] == ["f4"]
+    assert "held beyond the 0 s grace: f4 0.5" in score_table(s0)
+
+
+def test_an_alarm_held_past_the_window_is_the_faults_until_a_test_joins() -> None:
+    """A run that starts in f4's window and goes on past end + grace with the window's tests is f4's slow
+    recovery, not a false alarm; from the step another test joins, or after the run broke off, it is."""
+
+    def run(plan: list[tuple[float, float, int]]) -> list[DiagRecord]:
+        return [DiagRecord(k * DT, sum(m for a, b, m in plan if a <= k * DT < b), 0) for k in range(600)]
+
+    f4 = [FaultWindow("f4", 1.0, 2.0)]
+    held = score_run(run([(1.2, 3.5, 0b0011)]), f4, KIN, 1.0)
+    assert held.false_alarms == [] and held.faults[0].alarm_after_end == pytest.approx(1.5, abs=DT)
+    assert [f.fault for f in held.held_beyond_grace] == ["f4"]
+    assert json.loads(json.dumps(held.to_json()))["held_beyond_grace"] == ["f4"]
+    # r3 joins at 3.2 s: from there it is a false alarm (r1, r2 and r3 alarmed in it).
+    joined = score_run(run([(1.2, 3.5, 0b0011), (3.2, 3.6, 0b0100)]), f4, KIN, 1.0)
+    (fa,) = joined.false_alarms
+    assert fa.start == pytest.approx(3.2, abs=DT) and fa.end == pytest.approx(3.6, abs=DT) and fa.tests == "r1,r2,r3"
+    assert joined.faults[0].alarm_after_end == pytest.approx(1.2, abs=DT)
+    # The alarm clears at 2.5 s and comes back at 3.1 s, outside the window: false.
+    again = score_run(run([(1.2, 2.5, 0b0011), (3.1, 3.3, 0b0001)]), f4, KIN, 1.0)
+    assert len(again.false_alarms) == 1 and again.false_alarms[0].start == pytest.approx(3.1, abs=DT)
+    assert again.faults[0].alarm_after_end == pytest.approx(0.5, abs=DT) and again.held_beyond_grace == []
+    # Quiet before the end: nothing held after it.
+    assert score_run(run([(1.2, 1.5, 0b0011)]), f4, KIN, 1.0).faults[0].alarm_after_end == 0.0
 
 
 def test_lost_and_late_frames(scored: tuple[Monitor, dict[str, object]]) -> None:
