@@ -235,21 +235,22 @@ def score_run(
     tests = 0
     run_owner: int | None = None  # the window the current alarm run started or went on in
     run_tests = 0  # the tests that alarmed in that window during the run
+
+    def close() -> None:
+        """End the current alarm run (and its false alarm episode, if it is one)."""
+        nonlocal episode, run_owner, run_tests
+        if episode is not None:
+            episode.tests = _test_list(tests, classes)
+            out.false_alarms.append(episode)
+        episode, run_owner, run_tests = None, None, 0
+
     prev_t = -math.inf
     for r in recs:
         if any(prev_t <= g.start and g.end <= r.t for g in diag_gaps):
-            run_owner, run_tests = None, 0  # the ECU was down in between: nothing carries over
-            if episode is not None:  # and a false alarm episode ends there
-                episode.tests = _test_list(tests, classes)
-                out.false_alarms.append(episode)
-                episode = None
+            close()  # the ECU was down in between: nothing carries over
         prev_t = r.t
         if r.alarm_mask == 0:
-            run_owner, run_tests = None, 0
-            if episode is not None:
-                episode.tests = _test_list(tests, classes)
-                out.false_alarms.append(episode)
-                episode = None
+            close()
             continue
         k = owner(r.t)
         if episode is None and k is not None:
@@ -265,9 +266,7 @@ def score_run(
         if k is not None:
             fs = out.faults[k]
             fs.alarm_after_end = max(fs.alarm_after_end, r.t + dt - windows[k].end)
-    if episode is not None:
-        episode.tests = _test_list(tests, classes)
-        out.false_alarms.append(episode)
+    close()
     return out
 
 
