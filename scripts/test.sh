@@ -9,4 +9,6 @@ bash scripts/bootstrap.sh
 echo "== ruff"; .venv/bin/ruff check analysis host_tools tests
 echo "== mypy"; .venv/bin/mypy
 echo "== fw (C library)"; bash scripts/test_fw.sh
-echo "== pytest"; .venv/bin/python -m pytest -q
+echo "== pytest"; .venv/bin/python -m pytest -q --junitxml=build/pytest-junit.xml
+# every skip with its reason (README: the skips to expect without root or without QEMU)
+.venv/bin/python scripts/skip_summary.py build/fw/ctest-junit.xml build/fw-san/ctest-junit.xml build/pytest-junit.xml

@@ -18,10 +18,10 @@ jobs="${FDI_JOBS:-2}"
 run_ctest() { # print CTest's summary lines; fail if any test fails
   local dir="$1" log
   log="$(mktemp)"
-  if ! ctest --test-dir "$dir" -j "$jobs" --output-on-failure >"$log" 2>&1; then
+  if ! ctest --test-dir "$dir" -j "$jobs" --output-on-failure --output-junit ctest-junit.xml >"$log" 2>&1; then
     cat "$log"; rm -f "$log"; return 1
   fi
-  grep -E "tests passed|tests failed|Total Test time" "$log"
+  grep -E "tests passed|tests failed|Total Test time|Skipped|Not Run" "$log" || true
   rm -f "$log"
 }
 

@@ -20,6 +20,7 @@ from fdi_analysis.fault_matrix import Candidate
 from fdi_analysis.interpretation import interpret
 from fdi_analysis.model import Model
 from fdi_analysis.mso.results import bits
+from fdi_analysis.residuals.c_expr import c_float
 
 # Hand-written generators of fw/ (fdi_gen_kind_t), by the equation set of the MSO they implement.
 KNOWN_GENERATORS: dict[frozenset[str], str] = {
@@ -62,13 +63,6 @@ class Thresholds:
         )
 
 
-def _c_float(x: float) -> str:
-    s = repr(float(x))
-    if "e" not in s and "." not in s:
-        s += ".0"
-    return s + "f"
-
-
 def _c_string(s: str) -> str:
     return '"' + s.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
@@ -109,7 +103,7 @@ def render(model: Model, tests: Sequence[Candidate], thresholds: Thresholds, nam
         number = re.fullmatch(r"MSO(\d+)", t.label)
         rows.append(
             f"    {{{int(number.group(1)) if number else k + 1}U, {kind}, 0x{t.faults:08X}U, {mask},\n"
-            f"     {_c_float(thresholds.gate)}, {_c_float(variance)}, {_c_string(interpret(model, eqs))}}},"
+            f"     {c_float(thresholds.gate)}, {c_float(variance)}, {_c_string(interpret(model, eqs))}}},"
         )
         eq_lists.append(" ".join(eqs))
         var_lists.append(" ".join(unknowns))
@@ -122,7 +116,7 @@ def render(model: Model, tests: Sequence[Candidate], thresholds: Thresholds, nam
     size_rows, margin = test_size_rows(list(st.faults), labels, signatures, sizes)
     size_note = (f"reaction sizes from {sizes.source}, 0 = no reaction within the fault's limits" if sizes is not None
                  else "1 on the signature (no fault sizes given: classic exoneration)")
-    size_lines = [f"    {', '.join(_c_float(x) for x in row)}, /* {st.faults[j]} */" for j, row in enumerate(size_rows)]
+    size_lines = [f"    {', '.join(c_float(x) for x in row)}, /* {st.faults[j]} */" for j, row in enumerate(size_rows)]
     fault_names = [f"{f.name} {f.desc}".strip() for f in model.faults]
 
     header = f"""{banner}
@@ -181,7 +175,7 @@ const char *const {name}_unknowns[{len(tests)}] = {{
 
 const fdi_table_t {name} = {{
     FDI_TABLE_FORMAT_VERSION,
-    {{{_c_float(d[0])}, {_c_float(d[1])}, {_c_float(d[2])}, {_c_float(d[3])}}},
+    {{{c_float(d[0])}, {c_float(d[1])}, {c_float(d[2])}, {c_float(d[3])}}},
     {st.nf}U,
     {len(tests)}U,
     fault_names,
@@ -189,7 +183,7 @@ const fdi_table_t {name} = {{
     fault_signature,
     iso_class,
     test_size,
-    {_c_float(margin)},
+    {c_float(margin)},
 }};
 """
     return header, source

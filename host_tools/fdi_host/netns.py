@@ -1,10 +1,11 @@
 """Where a live bus can run on this machine: SocketCAN vcan if the kernel has AF_CAN, otherwise python-can's
 udp_multicast inside a private network namespace.
 
-A private network namespace (``unshare -n``, needs root or an unprivileged user namespace) has only a
-loopback device, down; `netns_command` wraps a command so that it first brings ``lo`` up with multicast and
-routes 239.0.0.0/8 over it. Multicast traffic then stays inside the namespace: parallel runs (other tests,
-other users) cannot see or disturb each other's frames.
+A private network namespace has only a loopback device, down. Root makes one with ``unshare -n``, any other
+user with ``unshare -rn`` (a new user namespace in which the user is root, where the kernel allows
+unprivileged user namespaces, as Debian's does by default). `netns_command` wraps a command so that it first
+brings ``lo`` up with multicast and routes 239.0.0.0/8 over it. Multicast traffic then stays inside the
+namespace: parallel runs (other tests, other users) cannot see or disturb each other's frames.
 """
 
 from __future__ import annotations
@@ -43,18 +44,24 @@ class NetnsCheck:
     reason: str
 
 
+def unshare_argv() -> list[str]:
+    """The unshare command that makes a private network namespace for this user (see the module doc)."""
+    return ["unshare", "-n"] if os.geteuid() == 0 else ["unshare", "-r", "-n"]
+
+
 def check_unshare() -> NetnsCheck:
     """Can this process make a private network namespace with a multicast-capable loopback?"""
     for tool in ("unshare", "ip"):
         if shutil.which(tool) is None:
             return NetnsCheck(False, f"`{tool}` not found (util-linux / iproute2)")
     try:
-        proc = subprocess.run(["unshare", "-n", "sh", "-c", _SETUP, "sh", "true"], capture_output=True, text=True,
+        proc = subprocess.run([*unshare_argv(), "sh", "-c", _SETUP, "sh", "true"], capture_output=True, text=True,
                               timeout=20, check=False)
     except (OSError, subprocess.TimeoutExpired) as exc:
         return NetnsCheck(False, f"unshare failed: {exc}")
     if proc.returncode != 0:
-        return NetnsCheck(False, f"`unshare -n` not permitted here: {proc.stderr.strip() or proc.returncode}")
+        return NetnsCheck(False, f"`{' '.join(unshare_argv())}` not permitted here (unprivileged user namespaces "
+                          f"off?): {proc.stderr.strip() or proc.returncode}")
     return NetnsCheck(True, "private network namespace with multicast on lo")
 
 
@@ -64,4 +71,4 @@ def inside_private_netns() -> bool:
 
 def netns_command(argv: list[str]) -> list[str]:
     """`argv` run in a new network namespace with lo up, multicast on and 239.0.0.0/8 routed to lo."""
-    return ["unshare", "-n", "env", f"{ENV_INSIDE}=1", "sh", "-c", _SETUP, "sh", *argv]
+    return [*unshare_argv(), "env", f"{ENV_INSIDE}=1", "sh", "-c", _SETUP, "sh", *argv]

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import numpy as np
 import sympy
 
 _FUNCS = {sympy.sin: "sinf", sympy.cos: "cosf", sympy.tanh: "tanhf", sympy.Abs: "fabsf", sympy.exp: "expf",
@@ -16,10 +17,17 @@ class CExprError(ValueError):
 
 
 def c_float(x: float) -> str:
-    s = repr(float(x))
-    if "e" not in s and "." not in s and "inf" not in s and "nan" not in s:
-        s += ".0"
-    return s + "f"
+    """The C `float` literal of x: the shortest decimal text that reads back as the same float32 value (what
+    the compiler makes of any longer text), so the generated C does not depend on the last bits of a double
+    computed on this machine. CExprError when x is not finite as a float32."""
+    f = np.float32(x)
+    if not np.isfinite(f):
+        raise CExprError(f"{x!r} is not a finite C float")
+    if f == 0.0 or 1e-4 <= abs(f) < 1e7:
+        text = np.format_float_positional(f, unique=True, trim="0")
+    else:
+        text = np.format_float_scientific(f, unique=True, trim="0")
+    return text + "f"
 
 
 def to_c(e: sympy.Basic, name: Callable[[sympy.Symbol], str]) -> str:

@@ -170,5 +170,7 @@ def design_observer(g: Generator, reference: Mapping[str, np.ndarray] | None = N
         if not c_ref > 0.0:
             raise NotRealizableError(f"{o.state} not observable from the residual equation {g.residual_equation} "
                                      f"on the reference drive (d r / d {o.state} = 0 there)")
-        eps = (OBSERVER_EPS * c_ref) ** 2
+        # c_ref to 3 significant digits: a design parameter, the same on every machine (the drive's last bits
+        # depend on the CPU's floating-point path)
+        eps = (OBSERVER_EPS * float(f"{c_ref:.3g}")) ** 2
     return replace(g, observer=replace(o, gain=gain_expr(o.a, o.c, lam, eps), pole=lam, eps=eps))
