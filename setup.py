@@ -1,7 +1,7 @@
 """Declares the C extension of the analysis package; everything else is in pyproject.toml.
 
-`pip install -e .` (or scripts/bootstrap.sh) compiles fdi_analysis.mso._core and fdi_host._fdi_ecu (the fw/
-C diagnoser and ECU core for the ctypes bindings in fdi_host.ecu_lib) with the system C compiler.
+`pip install -e .` (or scripts/bootstrap.sh) compiles fdi_analysis.mso._core and fdi_host.ecu._fdi_ecu (the fw/
+C diagnoser and ECU core for the ctypes bindings in fdi_host.ecu.bindings) with the system C compiler.
 """
 
 import platform
@@ -24,11 +24,11 @@ setup(
             depends=["analysis/fdi_analysis/mso/_core_impl.h"],
             extra_compile_args=_cflags,
         ),
-        # The C diagnoser + ECU core (fw/) as a shared library for host_tools/fdi_host/ecu_lib.py (ctypes).
+        # The C diagnoser + ECU core (fw/) as a shared library for host_tools/fdi_host/ecu/bindings.py (ctypes).
         Extension(
-            "fdi_host._fdi_ecu",
+            "fdi_host.ecu._fdi_ecu",
             sources=sorted(
-                ["host_tools/fdi_host/_fdi_ecu.c"]
+                ["host_tools/fdi_host/ecu/_fdi_ecu.c"]
                 + [str(p) for d in _ECU_DIRS for p in Path(d).glob("*.c")]
             ),
             include_dirs=["fw/include", "fw/src", "fw/generated", "fw/generated/can", "fw/ecu/include"],

@@ -7,8 +7,8 @@ top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$top"
 [ -x .venv/bin/fdi-analyze ] || bash scripts/bootstrap.sh
 # analysis/models/romo_thresholds.toml [generated]  <- fault-free simulated drives, their CAN frames as the ECU's
-#   steps see them (fdi_host.ecu_view), through the generators (~1.5 min; checked by test_calibration_current.py)
-.venv/bin/fdi-analyze calibrate analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml
+#   steps see them (fdi_host.can.ecu_view), through the generators (~1.5 min; checked by test_calibration_current.py)
+.venv/bin/fdi-tune calibrate analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml
 # host_tools/scenarios/fault_sizes.toml [per_test.*]  <- step-fault sweep through the generators in cornering, the
 # pairs it leaves without a size in the other scenarios [per_test_scenario.*] (~25 min; only with FDI_SWEEP_SIZES=1;
 # tests/analysis/test_residual_faults.py checks the committed sizes against the thresholds);
@@ -16,16 +16,16 @@ cd "$top"
 # selection detects within its limit (~1 min); when that changed the tests, calibrate and sweep again
 if [ "${FDI_SWEEP_SIZES:-0}" = 1 ]; then
   sweep_sizes() {
-    .venv/bin/fdi-analyze fault-sizes analysis/models/romo_grouped.toml \
+    .venv/bin/fdi-tune fault-sizes analysis/models/romo_grouped.toml \
       --thresholds analysis/models/romo_thresholds.toml --sizes host_tools/scenarios/fault_sizes.toml
   }
   augment_tests() { sed -n '/^\[augment\]/,/^\]/p' analysis/models/romo_thresholds.toml | grep -v '^ *#' || true; }
   sweep_sizes
   tests_before="$(augment_tests)"
-  .venv/bin/fdi-analyze augment analysis/models/romo_grouped.toml \
+  .venv/bin/fdi-tune augment analysis/models/romo_grouped.toml \
     --thresholds analysis/models/romo_thresholds.toml --sizes host_tools/scenarios/fault_sizes.toml
   if [ "$(augment_tests)" != "$tests_before" ]; then
-    .venv/bin/fdi-analyze calibrate analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml
+    .venv/bin/fdi-tune calibrate analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml
     sweep_sizes
   fi
 fi
@@ -37,6 +37,6 @@ fi
   --out fw/generated --report out/romo_grouped
 # fw/generated/fdi_kin_calibration.h  <- the hand-written kinematic table's variances and reaction sizes from
 #   simulated drives through the C ECU core (~4 min)
-.venv/bin/python -m fdi_host.kin_calibration --out fw/generated/fdi_kin_calibration.h
+.venv/bin/fdi-tune kin-calibration --out fw/generated/fdi_kin_calibration.h
 # fw/generated/can/romo_can.{h,c}, romo_can_e2e.h   <- dbc/romo.dbc (cantools generate_c_source + E2E data IDs)
 .venv/bin/python fw/ecu/tools/gen_romo_can.py --dbc dbc/romo.dbc --out fw/generated/can

@@ -6,22 +6,15 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from fdi_analysis import (
-    cli_augment,
-    cli_calibrate,
-    cli_convert,
-    cli_export,
-    cli_mso,
-    cli_report,
-    cli_residuals,
-    cli_select,
-)
-from fdi_analysis.exoneration import FaultSizesError
-from fdi_analysis.export_c import ExportError
+from fdi_analysis import cli_convert, cli_export, cli_mso, cli_report, cli_select
+from fdi_analysis.export.fault_sizes import FaultSizesError
+from fdi_analysis.export.table import ExportError
 from fdi_analysis.model import ModelError
+from fdi_analysis.residuals.reasons import NotRealizableError
+from fdi_analysis.residuals.selected import AugmentError
 from fdi_analysis.structure import StructureError
 
-SUBCOMMANDS = (cli_report, cli_mso, cli_select, cli_export, cli_convert, cli_calibrate, cli_augment, cli_residuals)
+SUBCOMMANDS = (cli_report, cli_mso, cli_select, cli_export, cli_convert)
 
 EPILOG = """examples:
   fdi-analyze report analysis/models/romo_quasistatic.toml -o out/romo
@@ -29,11 +22,8 @@ EPILOG = """examples:
   fdi-analyze select analysis/models/romo_grouped.toml -o out/grouped
   fdi-analyze export-c analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \
       --fault-sizes host_tools/scenarios/fault_sizes.toml --out fw/generated
-  fdi-analyze augment analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \
-      --sizes host_tools/scenarios/fault_sizes.toml
   fdi-analyze convert analysis/models/romo_grouped.toml --to-fdt out/romo_grouped_fdt.json
-  fdi-analyze residuals analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \
-      --log out/drive.blf --plot out/residuals.png --compare-ecu
+(the closed-loop steps on simulated drives, calibrate, fault-sizes, augment and residuals, are fdi-tune's)
 """
 
 
@@ -55,7 +45,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         code: int = args.func(args)
-    except (ModelError, StructureError, ExportError, FaultSizesError) as exc:
+    except (ModelError, StructureError, ExportError, FaultSizesError, AugmentError, NotRealizableError) as exc:
         print(f"fdi-analyze: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

@@ -7,10 +7,12 @@ import math
 from pathlib import Path
 from typing import Any
 
-from fdi_analysis.exoneration import FaultSizes
-from fdi_analysis.export_c import Thresholds, render
+from fdi_analysis.export import generators as emit_c
+from fdi_analysis.export import report
+from fdi_analysis.export.fault_sizes import FaultSizes
+from fdi_analysis.export.table import render
+from fdi_analysis.export.thresholds import Thresholds
 from fdi_analysis.model_loader import load_model
-from fdi_analysis.residuals import emit_c, report
 
 EXAMPLE = ("example: fdi-analyze export-c analysis/models/romo_grouped.toml "
            "--thresholds analysis/models/romo_thresholds.toml --fault-sizes host_tools/scenarios/fault_sizes.toml "
@@ -22,7 +24,7 @@ def register(sub: Any) -> None:
         "export-c",
         help="write the C diagnosis table (fdi_table_t) of the optimal method-B MSO selection",
         description="Select the optimal MSO set of MODEL (method B, fewest tests then fewest unknowns) among the "
-        "realizable candidates, append the tests of the thresholds file's [augment] table (fdi-analyze augment: "
+        "realizable candidates, append the tests of the thresholds file's [augment] table (fdi-tune augment: "
         "practical detectability), and write NAME.h / NAME.c for fw/ (tests with fault bitmasks, signals, "
         "generator kinds, gates and variances, fault names, the signature matrix and the isolability classes) "
         "and the residual generators of the tests.",
@@ -31,7 +33,7 @@ def register(sub: Any) -> None:
     p.add_argument("model", type=Path, help="model file (.toml) or FDT structure (.json)")
     p.add_argument("--thresholds", type=Path, required=True, help="gates, variances and generator design point")
     p.add_argument("--fault-sizes", type=Path, default=None,
-                   help="stated fault sizes per test (fdi-analyze fault-sizes); a test exonerates a fault only when "
+                   help="stated fault sizes per test (fdi-tune fault-sizes); a test exonerates a fault only when "
                    "it reacts at the fault's stated size (default: every test of the signature exonerates)")
     p.add_argument("--out", type=Path, required=True, help="output folder (fw/generated)")
     p.add_argument("--report", type=Path, default=None,
@@ -60,13 +62,14 @@ def generate_all(model_path: Path, thresholds_path: Path, out: Path, name: str, 
                  report_dir: Path | None = None) -> dict[str, str]:
     """The table and the generated residual generators of the optimal selection among realizable MSOs (and the
     generator report in `report_dir`)."""
-    from fdi_analysis.residuals.export import selected_generators
+    from fdi_analysis.residuals.selected import selected_generators
 
     model = load_model(model_path)
     command = command_line(model_path, thresholds_path, out, name, sizes_path)
     sizes = FaultSizes.load(sizes_path) if sizes_path is not None else None
     thresholds = Thresholds.load(thresholds_path)
-    tests, gens = selected_generators(model, workers=workers, progress=progress, augment=thresholds.augment)
+    tests, gens = selected_generators(model, thresholds.observer_reference(), workers=workers, progress=progress,
+                                      augment=thresholds.augment)
     header, source = render(model, tests, thresholds, name, command,
                             generated=[True] * len(tests), sizes=sizes)
     if report_dir is not None:

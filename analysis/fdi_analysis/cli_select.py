@@ -18,6 +18,7 @@ from fdi_analysis.model import Model
 from fdi_analysis.model_loader import load_model
 from fdi_analysis.mso import bits
 from fdi_analysis.plots import plot_fault_matrix, plot_selected_faults
+from fdi_analysis.residuals.reasons import Reason
 from fdi_analysis.selection import Selection, greedy, optimal
 
 EXAMPLE = (
@@ -67,26 +68,9 @@ def selection_rows(model: Model, sel: Selection) -> list[dict[str, Any]]:
     ]
 
 
-REJECTION_KINDS = (
-    ("integrating", "need open-loop integration"),
-    ("observer states", "need open-loop integration of two or more states (one observer state per generator)"),
-    ("computed from the observer state", "differentiate a value computed from an observer state"),
-    ("not observable", "have an observer state the residual equation does not see"),
-    ("inside the observer", "divide by a signal inside an observer"),
-    ("not an output equation", "leave only a differential constraint for the observer's residual"),
-    ("division by a signal", "divide by a signal inside a non-rational law"),
-    ("cannot be solved", "need a non-invertible equation solved"),
-    ("algebraic loop", "contain an algebraic loop"),
-)
-
-
-def rejection_summary(reasons: dict[str, int]) -> str:
-    """Rejection reasons grouped into a few kinds, largest first."""
-    counts: dict[str, int] = {}
-    for why, n in reasons.items():
-        kind = next((label for key, label in REJECTION_KINDS if key in why), why)
-        counts[kind] = counts.get(kind, 0) + n
-    return ", ".join(f"{n:,} {kind}" for kind, n in sorted(counts.items(), key=lambda kv: -kv[1]))
+def rejection_summary(reasons: dict[Reason, int]) -> str:
+    """Counts of the rejection reasons by kind, largest first."""
+    return ", ".join(f"{n:,} {kind.value}" for kind, n in sorted(reasons.items(), key=lambda kv: (-kv[1], kv[0].name)))
 
 
 def isolability_loss(kept: list[Any], everything: list[Any], faults: tuple[str, ...], method: Method) -> str:

@@ -2,7 +2,7 @@
  * fdi_kin_table.c - hand-made diagnosis table of the kinematic tests MSO1..MSO4 (see fdi_kin_table.h).
  * Data only. Variances and reaction sizes: fw/generated/fdi_kin_calibration.h, from drives of the vehicle
  * simulator through the C ECU core at the design point below (100 Hz, 1 Hz derivative filters) by
- * `python -m fdi_host.kin_calibration` (the rules of `fdi-analyze calibrate` and `fault-sizes`; a test fails
+ * `fdi-tune kin-calibration` (the rules of `fdi-tune calibrate` and `fault-sizes`; a test fails
  * when the header is stale).
  */
 #include "fdi_kin_table.h"

@@ -30,15 +30,15 @@ from pathlib import Path
 
 import numpy as np
 
-from fdi_host import canlog
-from fdi_host.dbc import RomoDatabase
-from fdi_host.live_bus import StopFlag, open_bus, try_realtime
-from fdi_host.live_ecu import DIAG_ID, load_steps
-from fdi_host.live_sender import send_paced
-from fdi_host.netns import check_unshare, inside_private_netns, netns_command
+from fdi_host.can import traffic
+from fdi_host.can.dbc import RomoDatabase
+from fdi_host.ecu.session import DIAG_ID, load_steps
+from fdi_host.live.bus import StopFlag, open_bus, try_realtime
+from fdi_host.live.netns import check_unshare, inside_private_netns, netns_command
+from fdi_host.live.sender import send_paced
 from fdi_host.replay import replay_offline, replay_offline_fast
-from fdi_host.scenario import load_scenario
-from fdi_host.vehicle_sim import simulate
+from fdi_host.sim.scenario import load_scenario
+from fdi_host.sim.vehicle_sim import simulate
 
 CHANNEL = "239.74.163.9"
 
@@ -92,14 +92,14 @@ def run(args: argparse.Namespace) -> int:
         (out / f).unlink(missing_ok=True)
     print(f"simulating {args.duration:.0f} s ({args.scenario}) ...", flush=True)
     res = simulate(load_scenario(args.scenario), [], duration=args.duration)
-    frames = canlog.build_frames(res, RomoDatabase())
+    frames = traffic.build_frames(res, RomoDatabase())
     rate = len(frames) / args.duration
     print(f"{len(frames)} frames, {rate:.0f} frames/s", flush=True)
 
     env = os.environ.copy()
     lis = subprocess.Popen([sys.executable, __file__, "--listener", str(out / "listener.npz"),
                             "--out-dir", str(out)], env=env)
-    ecu = subprocess.Popen([sys.executable, "-m", "fdi_host.ecu_cli", "--interface", "udp_multicast", "--channel",
+    ecu = subprocess.Popen([sys.executable, "-m", "fdi_host.live.ecu", "--interface", "udp_multicast", "--channel",
                             CHANNEL, "--table", args.table, "--log", str(out / "ecu.json"), "--ready-file",
                             str(out / "ecu.ready"), "--quiet", "--realtime"], env=env)
     try:

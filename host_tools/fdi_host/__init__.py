@@ -1,9 +1,16 @@
-"""Host tools for the ROMO FDI project: the CAN database, the dual-track simulator built from the model file,
-fault injection (Table I), CAN logs, and the paper's Fig. 6 (ARR3/ARR4).
+"""Host tools of the ROMO FDI project, in layers (a layer imports only the ones above it in this list, and the
+structural analysis `fdi_analysis` below them all):
 
-Modules: `plant` (model -> compiled plant), `vehicle_sim` (closed-loop drive), `controller` (geometric
-zero-slip controller and actuators), `scenario`, `faults`, `sensors`, `dbc`, `e2e`, `canlog`, `arr_paper`,
-`fig6`, `plots`, `sim_cli` (the ``fdi-sim`` command).
+  sim/      the vehicle simulator built from the model file, scenarios, Table I faults, sensors
+  can/      frame type, DBC, E2E, logs, a drive's CAN traffic and the ECU's view of it
+  ecu/      the C ECU core through ctypes: sessions and offline replay
+  tuning/   closed loop: calibration, fault-size sweep, augment, residuals on a log (``fdi-tune``)
+  paper/    the paper's ARR3/ARR4 and Fig. 6
+  live/     programs on a bus: sender, ``fdi-sim live``, ``fdi-ecu``, ``fdi-live``
+  monitor/  scoring a run against the ground truth (``fdi-monitor``)
+  quality/  the quality suite (``fdi-quality``)
+  replay    recorded logs back onto a bus or through the ECU (``fdi-replay``)
+  cli       ``fdi-sim``, whose subcommands span the simulator, the paper and the live bus
 """
 
 __all__: list[str] = []

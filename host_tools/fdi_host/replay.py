@@ -2,7 +2,7 @@
 
 On a bus the frames keep their relative timing, at ``--speed`` times real time (``max``: as fast as
 python-can sends). ``--offline`` skips the bus: every frame goes through the ECU bindings with its log
-timestamp on the time base of `fdi_host.live_ecu` (the one ``fdi-ecu`` uses live), as fast as possible, and
+timestamp on the time base of `fdi_host.ecu.session` (the one ``fdi-ecu`` uses live), as fast as possible, and
 the speed against real time is printed. By default in one C call (`ecu_lib.Ecu.process`: rx then poll per
 frame; the C core runs the steps due before a frame inside rx, so this equals EcuSession's poll-then-rx
 order, tested); with ``--ecu-log`` frame by frame through `EcuSession`, recording every step's residuals.
@@ -22,13 +22,14 @@ from typing import Any
 
 import can
 
-from fdi_host import canlog
-from fdi_host.dbc import RomoDatabase
-from fdi_host.live_bus import StopFlag, add_bus_arguments, open_bus
-from fdi_host.live_ecu import DIAG_ID, ORIGIN_LEAD, EcuSession, table_classes
-from fdi_host.live_sender import send_paced
-from fdi_host.score import DiagRecord, score_run, windows_from_truth
-from fdi_host.score_report import plot_diagnosis, plot_residuals, score_table, write_reports
+from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.frame import Frame
+from fdi_host.can.logs import LOG_SUFFIXES, read_log
+from fdi_host.ecu.session import DIAG_ID, ORIGIN_LEAD, EcuSession, table_classes
+from fdi_host.live.bus import StopFlag, add_bus_arguments, open_bus
+from fdi_host.live.sender import send_paced
+from fdi_host.monitor.report import plot_diagnosis, plot_residuals, score_table, write_reports
+from fdi_host.monitor.score import DiagRecord, score_run, windows_from_truth
 
 EPILOG = """\
 examples:
@@ -51,7 +52,7 @@ class OfflineResult:
         return self.log_duration / self.wall if self.wall > 0 else float("inf")
 
 
-def replay_offline(frames: Sequence[canlog.Frame], table: str, step: float = 0.01,
+def replay_offline(frames: Sequence[Frame], table: str, step: float = 0.01,
                    t0: float | None = None) -> OfflineResult:
     """All frames through a fresh ECU as fast as possible; then one more poll `step` after the last frame.
 
@@ -101,7 +102,7 @@ def _diag_decoder(db: RomoDatabase) -> Callable[[bytes], tuple[int, int, int, in
     return decode
 
 
-def replay_offline_fast(frames: Sequence[canlog.Frame], table: str) -> FastResult:
+def replay_offline_fast(frames: Sequence[Frame], table: str) -> FastResult:
     """The whole log through the ECU in one C call (`ecu_lib.Ecu.process`: rx then poll per frame), same time
     base as `EcuSession` (first frame at 0.5 ms after a step boundary). Only the diagnosis frames come back
     (no residuals): the fast path for scoring and for measuring speed."""
@@ -152,12 +153,12 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     ap = build_parser()
     args = ap.parse_args(argv)
-    if args.log.suffix not in canlog.LOG_SUFFIXES:
-        ap.error(f"{args.log}: unsupported extension; use {', '.join(canlog.LOG_SUFFIXES)}")
+    if args.log.suffix not in LOG_SUFFIXES:
+        ap.error(f"{args.log}: unsupported extension; use {', '.join(LOG_SUFFIXES)}")
     if not args.log.is_file():
         ap.error(f"{args.log}: no such file")
     try:
-        frames = canlog.read_log(args.log)
+        frames = read_log(args.log)
     except (OSError, ValueError, EOFError) as exc:
         print(f"fdi-replay: cannot read {args.log}: {exc}", file=sys.stderr)
         return 2
@@ -185,7 +186,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     return 130 if log.interrupted else 0
 
 
-def _offline(args: argparse.Namespace, frames: list[canlog.Frame]) -> int:
+def _offline(args: argparse.Namespace, frames: list[Frame]) -> int:
     """Through the bindings: per frame with the ECU log (residuals) if --ecu-log is given, else in one C call."""
     try:
         if args.ecu_log is not None:

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fdi_analysis.export.thresholds import Thresholds
 from fdi_analysis.model import Model
 from fdi_analysis.residuals.causality import synthesize
 from fdi_analysis.residuals.generator import Generator
@@ -87,4 +88,6 @@ def committed_generators(repo: Path, model: Model) -> list[Generator]:
     block = src.split("fdi_romo_table_equations")[1].split("};")[0]
     sets = re.findall(r'"([^"]*)"', block)
     labels = re.findall(r"^/\* (MSO\d+): ", (repo / "fw/generated/fdi_romo_generators.c").read_text(), flags=re.M)
-    return [synthesize(model, s.split(), labels[k] if k < len(labels) else f"T{k + 1}") for k, s in enumerate(sets)]
+    reference = Thresholds.load(repo / "analysis/models/romo_thresholds.toml").observer_reference()
+    return [synthesize(model, s.split(), labels[k] if k < len(labels) else f"T{k + 1}", reference=reference)
+            for k, s in enumerate(sets)]

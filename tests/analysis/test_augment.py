@@ -1,4 +1,4 @@
-"""Tests added to the structural selection for practical detectability (`fdi-analyze augment`): the search
+"""Tests added to the structural selection for practical detectability (`fdi-tune augment`): the search
 order and coverage with stubbed calibration and sweeps, the [augment] table of the thresholds file, the
 selection read back with it, and the committed files: every fault of the exported tests' signatures has a
 test that detects it within its limit."""
@@ -10,15 +10,15 @@ from pathlib import Path
 
 import pytest
 
-from fdi_analysis.export_c import Thresholds
+from fdi_analysis.export.thresholds import AUGMENT_MARKER, MARKER, Thresholds, with_augment, with_generated
 from fdi_analysis.fault_matrix import Candidate
 from fdi_analysis.model import Model
 from fdi_analysis.model_loader import load_model
-from fdi_analysis.residuals.augment import AugmentError, augment, undetected_faults
-from fdi_analysis.residuals.export import augmented_tests, realizable, selected_generators, structural_selection
 from fdi_analysis.residuals.generator import Generator
-from fdi_analysis.residuals.sweep import PairLimit
-from fdi_analysis.residuals.thresholds_file import AUGMENT_MARKER, MARKER, with_augment, with_generated
+from fdi_analysis.residuals.selected import augmented_tests, realizable, selected_generators, structural_selection
+from fdi_host.tuning.augment import AugmentError, augment, undetected_faults
+from fdi_host.tuning.drives import observer_reference
+from fdi_host.tuning.sweep import PairLimit
 
 MODEL = "analysis/models/romo_grouped.toml"
 THRESHOLDS = "analysis/models/romo_thresholds.toml"
@@ -53,7 +53,8 @@ def test_search_takes_the_first_candidate_that_detects_and_lets_it_cover_others(
             return _pair(fault, g, 70.0)
         return _pair(fault, g, None)  # f25: never
 
-    added, left = augment(model, keep, selection, ["f11", "f15", "f25"], lambda g: 1.0, sweep, tries=3)
+    added, left = augment(model, keep, selection, ["f11", "f15", "f25"], lambda g: 1.0, sweep,
+                          observer_reference(), tries=3)
     assert [a.generator.name for a in added] == [f11_holders[1]]
     assert set(added[0].covers) == {"f11", "f15"}  # f15 is in its signature and detected: not searched again
     assert added[0].covers["f11"].stated == 75.0 and "detects f11 from 50 (stated 75)" in added[0].comment()
@@ -70,7 +71,7 @@ def test_undetected_faults_need_every_pair_swept() -> None:
         "f1": {"T1": 3.0}, "f2": {"T1": "not detectable", "T2": "not detectable"}, "f3": {"T2": 2.0}}
     assert undetected_faults(per_test, [g, h]) == ["f2"]
     del per_test["f3"]["T2"]
-    with pytest.raises(AugmentError, match="no entry for f3 in T2: run `fdi-analyze fault-sizes` first"):
+    with pytest.raises(AugmentError, match="no entry for f3 in T2: run `fdi-tune fault-sizes` first"):
         undetected_faults(per_test, [g, h])
 
 
@@ -104,7 +105,7 @@ def test_committed_tests_detect_every_fault_in_practice(repo: Path) -> None:
     th = Thresholds.load(repo / THRESHOLDS)
     assert th.augment, "the committed thresholds file has no [augment] tests"
     model = load_model(repo / MODEL)
-    _, gens = selected_generators(model, workers=1, augment=th.augment)
+    _, gens = selected_generators(model, th.observer_reference(), workers=1, augment=th.augment)
     assert [" ".join(g.equations) for g in gens[-len(th.augment):]] == list(th.augment)
     doc = tomllib.loads((repo / SIZES).read_text(encoding="utf-8"))
     assert undetected_faults(doc["per_test"], gens) == []
@@ -126,7 +127,7 @@ def _structural_sizes_all_detected(repo: Path, path: Path) -> None:
 
 def test_cli_writes_an_empty_table_when_the_selection_detects_everything(
         repo: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    from fdi_analysis.cli import main
+    from fdi_host.tuning.cli import main
 
     sizes, thresholds = tmp_path / "sizes.toml", tmp_path / "thresholds.toml"
     _structural_sizes_all_detected(repo, sizes)
@@ -140,11 +141,11 @@ def test_cli_writes_an_empty_table_when_the_selection_detects_everything(
 
 def test_cli_names_a_test_missing_from_the_fault_size_file(
         repo: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    from fdi_analysis.cli import main
+    from fdi_host.tuning.cli import main
 
     sizes = tmp_path / "sizes.toml"
     text = (repo / SIZES).read_text(encoding="utf-8")
     sizes.write_text(text.replace("[per_test.f13]\nMSO2140 = 70", "[per_test.f13]"), encoding="utf-8")
     code = main(["augment", str(repo / MODEL), "--thresholds", str(repo / THRESHOLDS), "--sizes", str(sizes)])
     assert code == 2
-    assert "no entry for f13 in MSO2140: run `fdi-analyze fault-sizes` first" in capsys.readouterr().err
+    assert "no entry for f13 in MSO2140: run `fdi-tune fault-sizes` first" in capsys.readouterr().err

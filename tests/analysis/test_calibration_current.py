@@ -1,5 +1,5 @@
 """The calibrated sigmas of the generated residuals (analysis/models/romo_thresholds.toml [generated]) are
-reproducible and up to date: `fdi-analyze calibrate --check` recomputes them (in another process, on another
+reproducible and up to date: `fdi-tune calibrate --check` recomputes them (in another process, on another
 floating-point path) from the fault-free drives as the
 ECU sees them and finds the committed table equal (~1.5 min); a stale table is reported and left untouched."""
 
@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from fdi_analysis.cli import main
+from fdi_host.tuning.cli import main
 
 MODEL = "analysis/models/romo_grouped.toml"
 THRESHOLDS = "analysis/models/romo_thresholds.toml"
@@ -23,7 +23,7 @@ def test_committed_sigmas_are_up_to_date(
         other_fp_path: Callable[[list[str]], subprocess.CompletedProcess[str]]) -> None:
     # in another process on another floating-point path (OpenBLAS kernel and threads, no numpy SIMD): the
     # committed sigmas must come out the same on any machine; from the repository root, as scripts/generate.sh
-    res = other_fp_path([sys.executable, "-m", "fdi_analysis.cli", "calibrate", MODEL, "--thresholds", THRESHOLDS,
+    res = other_fp_path([sys.executable, "-m", "fdi_host.tuning.cli", "calibrate", MODEL, "--thresholds", THRESHOLDS,
                          "--check"])
     assert res.returncode == 0, res.stderr
 

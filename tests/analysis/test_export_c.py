@@ -11,7 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from fdi_analysis.export_c import Thresholds, render, write
+from fdi_analysis.export.table import render, write
+from fdi_analysis.export.thresholds import Thresholds
 from fdi_analysis.fault_matrix import Candidate
 from fdi_analysis.model_loader import load_model
 

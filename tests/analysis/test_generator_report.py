@@ -12,8 +12,8 @@ from pathlib import Path
 import pytest
 import sympy
 
-from fdi_analysis.exoneration import FaultSizes, FaultSizesError
-from fdi_analysis.residuals import report
+from fdi_analysis.export import report
+from fdi_analysis.export.fault_sizes import FaultSizes, FaultSizesError
 from fdi_analysis.residuals.generator import Generator
 
 SIZES = """

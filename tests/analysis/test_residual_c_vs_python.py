@@ -12,7 +12,7 @@ from residual_harness import build_harness, committed_generators, run_harness
 
 from fdi_analysis.model_loader import load_model
 from fdi_analysis.residuals.evaluate import residual
-from fdi_analysis.residuals.simulate import drive
+from fdi_host.tuning.drives import drive
 
 FDI_GEN_GENERATED_1 = 7
 

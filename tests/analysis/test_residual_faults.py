@@ -1,11 +1,11 @@
-"""On simulated drives as the ECU sees them (their CAN frames held at its steps, fdi_host.ecu_view), as the
+"""On simulated drives as the ECU sees them (their CAN frames held at its steps, fdi_host.can.ecu_view), as the
 diagnoser evaluates the generated residuals (inside each test's operating domain,
 restarted with a 3 s warm-up on every entry, raw alarm = |r| > gate sigma or the two-sided CUSUM k = 1.5,
 h = 150 of fw/include/fdi_eval.h, sigma from the thresholds file):
   - the fault-free drives of all five scenarios of host_tools/scenarios raise no alarm (a noise realisation
     other than the calibration's), and near standstill (low_speed) the tyre-law tests are not evaluated;
   - EVERY (fault, test) pair of the signatures raises the alarm at its stated size of
-    host_tools/scenarios/fault_sizes.toml [per_test.<fault>] (written by `fdi-analyze fault-sizes` with
+    host_tools/scenarios/fault_sizes.toml [per_test.<fault>] (written by `fdi-tune fault-sizes` with
     another noise seed), each as a 3 s step in the cornering scenario; the pairs stated "not detectable by
     this test in practice" are listed there with the reason, and the file covers every pair;
   - the pairs stated in another manoeuvre ([per_test_scenario.<fault>], e.g. a wheel's torque fault in the
@@ -24,14 +24,14 @@ import numpy as np
 import pytest
 from residual_harness import committed_generators
 
-from fdi_analysis.export_c import Thresholds
+from fdi_analysis.export.thresholds import Thresholds
 from fdi_analysis.model_loader import load_model
-from fdi_analysis.residuals import sweep_manoeuvres
-from fdi_analysis.residuals.calibrate import first_alarm
 from fdi_analysis.residuals.evaluate import evaluable_segments
 from fdi_analysis.residuals.generator import Generator
-from fdi_analysis.residuals.simulate import drive
-from fdi_analysis.residuals.sweep import (
+from fdi_host.tuning import sweep_manoeuvres
+from fdi_host.tuning.calibrate import first_alarm
+from fdi_host.tuning.drives import drive
+from fdi_host.tuning.sweep import (
     ELSEWHERE,
     NOT_DETECTABLE,
     OFF,
@@ -211,7 +211,7 @@ def test_other_scenarios_sweep(monkeypatch: pytest.MonkeyPatch) -> None:
 def test_confirmation_raises_sizes_that_not_every_seed_detects(monkeypatch: pytest.MonkeyPatch) -> None:
     """A stated size is raised along the grid until the test alarms at it with the sweep's seeds and the extra
     confirmation seeds; a size that would pass the limit is not stated (sweep._confirmed, stubbed drives)."""
-    from fdi_analysis.residuals import sweep
+    from fdi_host.tuning import sweep
 
     calls: list[tuple[list[float], list[int]]] = []
     reliable_from = {"T1": 0.2, "T2": 0.07, "T3": 1.0}  # every seed alarms from this size on

@@ -19,12 +19,13 @@ import pytest
 import sympy
 from residual_harness import SIGNALS, build_harness, run_harness
 
+from fdi_analysis.export.generators import render
 from fdi_analysis.model import Model
 from fdi_analysis.model_loader import load_model
-from fdi_analysis.residuals.causality import NotRealizableError, closure, plan, synthesize
-from fdi_analysis.residuals.emit_c import render
+from fdi_analysis.residuals.causality import closure, plan, synthesize
 from fdi_analysis.residuals.evaluate import residual
 from fdi_analysis.residuals.realizability import why_not_realizable
+from fdi_analysis.residuals.reasons import NotRealizableError, Reason, Rejection
 from fdi_analysis.residuals.signals import raw
 from fdi_analysis.residuals.solvability import BlockSolution, Solver, _determinant
 
@@ -160,7 +161,7 @@ def test_determinant_with_a_signal_is_cleared_from_the_residual(tmp_path: Path) 
     # with E1 or E2 as the residual equation the loop holds a*b: not linear in a and b jointly
     for r in ("E1", "E2"):
         why = closure(m, Solver(m), ["E1", "E2", "E3"], r)
-        assert isinstance(why, str) and "not linear" in why
+        assert isinstance(why, Rejection) and why.kind is Reason.ALGEBRAIC_LOOP and "not linear" in why.text
     g = synthesize(m, ["E1", "E2", "E3"], "P")
     u, y, s, w = (raw(k) for k in ("u", "y", "s", "w"))
     assert sympy.expand(g.expr ** 2 - (w * (1 + s) ** 2 - (u + y) * (s * u - y)) ** 2) == 0
@@ -176,7 +177,8 @@ def test_singular_loop_is_rejected_with_the_reason(tmp_path: Path) -> None:
     m = _model(tmp_path, "s.toml", PRODUCT.replace("SECOND", "s*(a + b)"))
     solver = Solver(m)
     why = solver.solve_block([m.equation("E1"), m.equation("E2")], ["a", "b"])
-    assert isinstance(why, str) and "singular" in why and "E1, E2" in why
+    assert isinstance(why, Rejection) and why.kind is Reason.ALGEBRAIC_LOOP
+    assert "singular" in why.text and "E1, E2" in why.text
     with pytest.raises(NotRealizableError, match="algebraic loop"):
         synthesize(m, ["E1", "E2", "E3"], "S")
 
@@ -186,7 +188,8 @@ def test_marked_pair_is_never_solved_inside_a_loop(tmp_path: Path) -> None:
                                                        'expr = "u = a + b + fu"\nnot_solvable_for = ["a"]')
     m = _model(tmp_path, "n.toml", text)
     why = Solver(m).solve_block([m.equation("E1"), m.equation("E2")], ["a", "b"])
-    assert isinstance(why, str) and "E1 is marked not_solvable_for a" in why
+    assert isinstance(why, Rejection) and why.kind is Reason.ALGEBRAIC_LOOP
+    assert (why.equation, why.variable) == ("E1", "a") and "E1 is marked not_solvable_for a" in why.text
     with pytest.raises(NotRealizableError):
         synthesize(m, ["E1", "E2", "E3"], "N")
 
@@ -197,9 +200,9 @@ def test_tyre_law_loops_of_romo_are_rejected_with_the_equation_and_variable(repo
     m = load_model(repo / "analysis/models/romo_grouped.toml")
     eqs = ["W1.FL", "W2.FL", "W1.dyn", "W2.dyn", "W1.D", "W2.D", "S1", "S2", "S4", "S5", "S.omega1", "S.omega2"]
     why = why_not_realizable(m, Solver(m), eqs)
-    assert why is not None and "algebraic loop" in why
-    assert "W1.FL" in why or "W2.FL" in why
-    assert "not_solvable_for" in why or "not linear" in why
+    assert why is not None and why.kind is Reason.ALGEBRAIC_LOOP
+    assert why.equation in ("W1.FL", "W2.FL") and why.equation in why.text and why.variable in why.text
+    assert "not_solvable_for" in why.text or "not linear" in why.text
 
 
 def test_determinant_probe_is_relative_to_the_coefficients() -> None:

@@ -22,14 +22,15 @@ import sympy
 
 from fdi_analysis.model import Model
 from fdi_analysis.model_loader import load_model
-from fdi_analysis.residuals.causality import NotRealizableError, synthesize
+from fdi_analysis.residuals.causality import synthesize
 from fdi_analysis.residuals.evaluate import residual
 from fdi_analysis.residuals.generator import OBSERVER_EPS, XHAT
-from fdi_analysis.residuals.observer import pole
+from fdi_analysis.residuals.observer import ObserverReference, pole
 from fdi_analysis.residuals.realizability import why_not_realizable
+from fdi_analysis.residuals.reasons import NotRealizableError, Reason
 from fdi_analysis.residuals.signals import raw
-from fdi_analysis.residuals.simulate import drive
 from fdi_analysis.residuals.solvability import Solver
+from fdi_host.tuning.drives import drive, observer_reference
 
 K = 0.5
 TANK = f"""
@@ -107,13 +108,14 @@ def tank(tmp_path_factory: pytest.TempPathFactory) -> Model:
 
 def test_plain_sequence_is_blocked_by_open_loop_integration(tank: Model) -> None:
     why = why_not_realizable(tank, Solver(tank), MSO, observer=False)
-    assert why is not None and "h is reachable only by integrating D" in why
+    assert why is not None and why.kind is Reason.OPEN_LOOP and (why.equation, why.variable) == ("D", "h")
+    assert "h is reachable only by integrating D" in why.text
     assert why_not_realizable(tank, Solver(tank), MSO) is None  # with the observer path
 
 
 def test_observer_generator_matches_the_hand_derivation(tank: Model) -> None:
     ref = tank_signals(400, 0.5)
-    g = synthesize(tank, MSO, "T", reference=ref)
+    g = synthesize(tank, MSO, "T", reference=ObserverReference(signals=ref))
     o = g.observer
     assert o is not None and o.state == "h" and o.equation == "D" and g.residual_equation == "E2"
     assert g.level == 0 and not g.filters  # no derivative: the observer reads the raw samples
@@ -138,7 +140,7 @@ def test_observer_residual_on_the_tank(tank: Model) -> None:
     """Fault-free: an initial error of the reset value (level sensor 0.3 off) decays with the error pole;
     inflow-sensor fault: the residual settles at the hand-derived fu (c^2 + eps) / (lambda c)."""
     ref = tank_signals(400, 0.5)
-    g = synthesize(tank, MSO, "T", reference=ref)
+    g = synthesize(tank, MSO, "T", reference=ObserverReference(signals=ref))
     o = g.observer
     assert o is not None
     lam = o.pole
@@ -165,9 +167,10 @@ def test_state_not_observable_from_the_residual_equation(tmp_path: Path) -> None
     (tmp_path / "t.toml").write_text(text.split('[[equation]]\nid = "E4"')[0] + TANK.split('expr = "z = h + fz"')[1])
     m = load_model(tmp_path / "t.toml")
     why = why_not_realizable(m, Solver(m), ["E1", "E2", "E3", "D"])
-    assert why is not None and "h not observable from the residual equation" in why
+    assert why is not None and why.kind is Reason.NOT_OBSERVABLE and why.variable == "h"
+    assert "h not observable from the residual equation" in why.text
     with pytest.raises(NotRealizableError, match="not realizable"):
-        synthesize(m, ["E1", "E2", "E3", "D"], "T", reference=tank_signals(100, 0.5))
+        synthesize(m, ["E1", "E2", "E3", "D"], "T", reference=ObserverReference(signals=tank_signals(100, 0.5)))
 
 
 def test_two_open_loop_states_need_two_observers(tmp_path: Path) -> None:
@@ -211,7 +214,8 @@ differential = ["dh2", "h2"]
     m = load_model(tmp_path / "t2.toml")
     ids = [e.id for e in m.equations]
     why = why_not_realizable(m, Solver(m), ids)
-    assert why is not None and why.startswith("needs 2 observer states")
+    assert why is not None and why.kind is Reason.OBSERVER_STATES and why.text.startswith("needs 2 observer states")
+    assert len(why.states) == 2
     with pytest.raises(NotRealizableError, match="observer states"):
         synthesize(m, ids, "T")
 
@@ -235,9 +239,9 @@ def test_romo_observer_generator_replaces_the_wheel_speed_sensor(romo: Model) ->
     while a motor-torque fault of that wheel (f10, in the signature through the observer's state equation)
     moves it far beyond the fault-free level; the wheel's own slip dynamics, faster than the error pole,
     are left alone (gain Max(lambda + a, 0) * ...)."""
-    from fdi_analysis.residuals.emit_c import inputs
+    from fdi_analysis.export.generators import inputs
 
-    g = synthesize(romo, MSO2644, "MSO2644")
+    g = synthesize(romo, MSO2644, "MSO2644", reference=observer_reference())
     o = g.observer
     assert o is not None and o.state == "omega1" and o.equation == "W1.D" and g.residual_equation == "B1"
     assert "f22" not in g.faults and {"f10", "f14"} <= set(g.faults)

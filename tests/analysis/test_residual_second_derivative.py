@@ -20,7 +20,9 @@ from fdi_analysis.model import Model
 from fdi_analysis.model_loader import load_model
 from fdi_analysis.residuals.causality import plan, synthesize, twice_differentiated
 from fdi_analysis.residuals.evaluate import residual
+from fdi_analysis.residuals.reasons import NotRealizableError, Reason
 from fdi_analysis.residuals.solvability import Solver
+from fdi_host.tuning.drives import observer_reference
 
 DOUBLE_INTEGRATOR = """
 [model]
@@ -106,6 +108,9 @@ def test_romo_arr3_arr4_keep_the_second_derivative_and_say_why(repo: Path) -> No
         assert g.observer is None and g.level == 2
         assert g.note.startswith(f"an observer for {state} (residual {out_eq}) instead of the second derivative")
         assert "psidot_m" in g.note
-        i = synthesize(m, eqs, "T", causality="integral")
+        with pytest.raises(NotRealizableError) as exc:  # its gain is designed on a reference drive
+            synthesize(m, eqs, "T", causality="integral")
+        assert exc.value.kind is Reason.NO_REFERENCE
+        i = synthesize(m, eqs, "T", reference=observer_reference(), causality="integral")
         assert i.observer is not None and i.observer.state == state and i.residual_equation == out_eq
         assert i.level == 1 and "psidot_m" in str(i.observer.c)

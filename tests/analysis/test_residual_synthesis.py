@@ -14,12 +14,13 @@ from fdi_analysis.candidates import mso_candidates
 from fdi_analysis.fault_matrix import Candidate, fault_matrix
 from fdi_analysis.model import Model
 from fdi_analysis.model_loader import load_model
-from fdi_analysis.residuals.causality import NotRealizableError, synthesize
+from fdi_analysis.residuals.causality import synthesize
 from fdi_analysis.residuals.evaluate import evaluable_segments, in_domain, residual
 from fdi_analysis.residuals.generator import DOMAIN_FACTOR
 from fdi_analysis.residuals.realizability import realizable_candidates, why_not_realizable
-from fdi_analysis.residuals.simulate import drive
+from fdi_analysis.residuals.reasons import NotRealizableError, Reason
 from fdi_analysis.residuals.solvability import Solution, Solver
+from fdi_host.tuning.drives import drive
 
 ARR3 = ["K1", "K2", "D1", "D2", "S1", "S2", "S3", "S4"]
 ARR4 = ["K1", "K2", "D1", "D2", "S1", "S2", "S3", "S5"]
@@ -62,7 +63,7 @@ def test_open_loop_integration_is_rejected_with_a_reason(model: Model) -> None:
         "S5",
     ]
     why = why_not_realizable(model, Solver(model), eqs, observer=False)
-    assert why is not None and "integrating" in why
+    assert why is not None and why.kind is Reason.OPEN_LOOP and "integrating" in why.text
     # vx and the four wheel speeds: one observer state per generator only
     with pytest.raises(NotRealizableError, match=r"^not realizable: needs 5 observer states \(vx, omega1, "):
         synthesize(model, eqs, "T4")
@@ -93,7 +94,10 @@ def test_realizable_candidates_still_detect_every_fault(model: Model) -> None:
     # faults of their wheel; with it only the steering / tyre-force pairs of each wheel (f6/f18, ...) stay
     plain, plain_reasons = realizable_candidates(model, cands, observer=False)
     assert {c.label for c in plain} < {c.label for c in keep}
-    assert not any("observer" in k for k in plain_reasons)
+    observer_kinds = {Reason.OBSERVER_STATES, Reason.OBSERVER_DERIVATIVE, Reason.OBSERVER_DIVISION,
+                      Reason.OBSERVER_OUTPUT, Reason.NOT_OBSERVABLE, Reason.NO_OBSERVER_EQUATION}
+    assert not observer_kinds & set(plain_reasons) and Reason.OPEN_LOOP in plain_reasons
+    assert observer_kinds & set(reasons)
     full = fault_matrix([c.faults for c in cands], st.nf, "B")
     names = ("none", *st.faults)
 

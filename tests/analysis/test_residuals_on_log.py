@@ -1,4 +1,4 @@
-"""`fdi-analyze residuals`: the generated residuals computed offline on a CAN log equal the C ECU's, step by
+"""`fdi-tune residuals`: the generated residuals computed offline on a CAN log equal the C ECU's, step by
 step; the ECU view of a log holds each message's last frame at the ECU's step times; bad logs are refused with
 the reason."""
 
@@ -11,13 +11,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fdi_analysis.cli import main
-from fdi_host.canlog import Frame, build_frames, read_log, write_log
-from fdi_host.dbc import RomoDatabase
-from fdi_host.ecu_view import ecu_view, step_times
-from fdi_host.faults import FaultSpec
-from fdi_host.scenario import load_scenario
-from fdi_host.vehicle_sim import simulate
+from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.ecu_view import ecu_view, step_times
+from fdi_host.can.frame import Frame
+from fdi_host.can.logs import read_log, write_log
+from fdi_host.can.traffic import build_frames
+from fdi_host.sim.faults import FaultSpec
+from fdi_host.sim.scenario import load_scenario
+from fdi_host.sim.vehicle_sim import simulate
+from fdi_host.tuning.cli import main
 
 MODEL = "analysis/models/romo_grouped.toml"
 THRESHOLDS = "analysis/models/romo_thresholds.toml"

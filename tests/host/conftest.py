@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from fdi_host.dbc import RomoDatabase
-from fdi_host.plant import Plant
-from fdi_host.vehicle_sim import default_plant
+from fdi_host.can.dbc import RomoDatabase
+from fdi_host.sim.plant import Plant
+from fdi_host.sim.vehicle_sim import default_plant
 
 
 @pytest.fixture(scope="session")

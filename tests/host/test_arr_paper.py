@@ -7,9 +7,9 @@ import pytest
 import sympy
 
 from fdi_analysis.model_loader import load_model
-from fdi_host.arr_paper import SVFDerivative
-from fdi_host.fig6 import QUIET_BANDS, REACT_BANDS, SETTLE_S, Fig6Result, run_fig6
-from fdi_host.plant import DEFAULT_MODEL
+from fdi_host.paper.arr import SVFDerivative
+from fdi_host.paper.fig6 import QUIET_BANDS, REACT_BANDS, SETTLE_S, Fig6Result, run_fig6
+from fdi_host.sim.plant import DEFAULT_MODEL
 
 
 def test_arrs_follow_from_model_equations() -> None:

@@ -1,4 +1,4 @@
-"""Bad CAN input through the ECU core (fdi_host.ecu_lib) on simulated fault-free traffic: unknown IDs, wrong
+"""Bad CAN input through the ECU core (fdi_host.ecu.bindings) on simulated fault-free traffic: unknown IDs, wrong
 DLC, bad CRC, repeated and jumping alive counters, raw values out of range (alive counter 15), sender status,
 bursts at 10x the nominal rate, gaps (a sender going silent) and reordered frames.
 
@@ -15,12 +15,13 @@ from collections.abc import Callable
 
 import pytest
 
-from fdi_host import e2e
-from fdi_host.canlog import Frame, build_frames
-from fdi_host.dbc import RomoDatabase
-from fdi_host.ecu_lib import DIAG_ID, REASONS, Ecu, EcuResult
-from fdi_host.scenario import load_scenario
-from fdi_host.vehicle_sim import simulate
+from fdi_host.can import e2e
+from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.frame import Frame
+from fdi_host.can.traffic import build_frames
+from fdi_host.ecu.bindings import DIAG_ID, REASONS, Ecu, EcuResult
+from fdi_host.sim.scenario import load_scenario
+from fdi_host.sim.vehicle_sim import simulate
 
 DURATION = 10.5
 W0, W1 = 4.0, 5.5  # corruption window [s]; warm-up after it: 3.2 s

@@ -9,11 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fdi_host import e2e
-from fdi_host.canlog import Frame, build_frames, bus_load, decode_frames, read_log, write_log
-from fdi_host.dbc import SIMULATED_MESSAGES, RomoDatabase
-from fdi_host.scenario import load_scenario
-from fdi_host.vehicle_sim import SimResult, simulate
+from fdi_host.can import e2e
+from fdi_host.can.dbc import SIMULATED_MESSAGES, RomoDatabase
+from fdi_host.can.frame import Frame
+from fdi_host.can.logs import read_log, write_log
+from fdi_host.can.traffic import build_frames, bus_load, decode_frames
+from fdi_host.sim.scenario import load_scenario
+from fdi_host.sim.vehicle_sim import SimResult, simulate
 
 
 @pytest.fixture(scope="module")

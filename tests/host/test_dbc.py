@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fdi_host import e2e
-from fdi_host.dbc import DEFAULT_DBC, SIGNAL_MAP, SIMULATED_MESSAGES, E2EError, RomoDatabase
-from fdi_host.sensors import DEMAND_RANGES, SENSOR_BY_KNOWN, SENSORS
+from fdi_host.can import e2e
+from fdi_host.can.dbc import DEFAULT_DBC, SIGNAL_MAP, SIMULATED_MESSAGES, E2EError, RomoDatabase
+from fdi_host.sim.sensors import DEMAND_RANGES, SENSOR_BY_KNOWN, SENSORS
 
 
 def test_cantools_dump_works() -> None:
@@ -49,7 +49,7 @@ def test_every_sim_signal_has_a_sensor_spec_and_vice_versa() -> None:
 
 @pytest.mark.parametrize("sm", SIGNAL_MAP, ids=lambda s: s.sim)
 def test_range_and_resolution(db: RomoDatabase, sm: object) -> None:
-    from fdi_host.dbc import SignalMap
+    from fdi_host.can.dbc import SignalMap
 
     assert isinstance(sm, SignalMap)
     sig = db.message(sm.message).get_signal_by_name(sm.signal)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from fdi_host import e2e
+from fdi_host.can import e2e
 
 # AUTOSAR SWS CRC Library, Crc_CalculateCRC8 check values (SAE-J1850, start 0xFF, xor 0xFF).
 AUTOSAR_CHECK = [

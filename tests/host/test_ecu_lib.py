@@ -1,4 +1,4 @@
-"""The C ECU core through its Python bindings (fdi_host.ecu_lib), fed with the simulator's CAN frames.
+"""The C ECU core through its Python bindings (fdi_host.ecu.bindings), fed with the simulator's CAN frames.
 
 A drifting vx sensor (f4, ramp) on the kinematic table must be detected and isolated as f4 (and nothing else),
 the fault-free drive must give no detection at all; the diagnosis frames must decode with the DBC (cantools)
@@ -13,13 +13,14 @@ import itertools
 
 import pytest
 
-from fdi_host import e2e
-from fdi_host.canlog import Frame, build_frames
-from fdi_host.dbc import RomoDatabase
-from fdi_host.ecu_lib import DIAG_ID, REASONS, Ecu, EcuError, table_info
-from fdi_host.faults import FaultSpec
-from fdi_host.scenario import load_scenario
-from fdi_host.vehicle_sim import simulate
+from fdi_host.can import e2e
+from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.frame import Frame
+from fdi_host.can.traffic import build_frames
+from fdi_host.ecu.bindings import DIAG_ID, REASONS, Ecu, EcuError, table_info
+from fdi_host.sim.faults import FaultSpec
+from fdi_host.sim.scenario import load_scenario
+from fdi_host.sim.vehicle_sim import simulate
 
 DURATION = 13.0
 ONSET = 6.0

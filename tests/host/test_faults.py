@@ -7,10 +7,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from fdi_host.canlog import build_frames, decode_frames
-from fdi_host.faults import FAULT_IDS, FaultSpec, FaultSpecError, fault_matrix, parse_fault
-from fdi_host.scenario import Scenario, load_scenario
-from fdi_host.vehicle_sim import SimResult, simulate
+from fdi_host.can.traffic import build_frames, decode_frames
+from fdi_host.sim.faults import FAULT_IDS, FaultSpec, FaultSpecError, fault_matrix, parse_fault
+from fdi_host.sim.scenario import Scenario, load_scenario
+from fdi_host.sim.vehicle_sim import SimResult, simulate
 
 ONSET = 1.5
 SENSOR_FAULTS = {"f1": "ax_m", "f2": "ay_m", "f3": "psidot_m", "f4": "vx_m", "f5": "vy_m",

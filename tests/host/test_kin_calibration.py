@@ -1,5 +1,5 @@
 """The kinematic table's calibration header (fw/generated/fdi_kin_calibration.h) is reproducible and up to date:
-the committed copy equals what `python -m fdi_host.kin_calibration` computes now (variances from fault-free
+the committed copy equals what `fdi-tune kin-calibration` computes now (variances from fault-free
 simulated drives, reaction sizes from step faults, both through the C ECU core). ~4 min."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from fdi_host.kin_calibration import main
+from fdi_host.tuning.cli import main
 
 HEADER = Path(__file__).resolve().parents[2] / "fw" / "generated" / "fdi_kin_calibration.h"
 
@@ -21,7 +21,7 @@ def test_committed_header_is_up_to_date(
         other_fp_path: Callable[[list[str]], subprocess.CompletedProcess[str]]) -> None:
     # in another process on another floating-point path (OpenBLAS kernel and threads, no numpy SIMD): the
     # committed header must come out the same on any machine
-    res = other_fp_path([sys.executable, "-m", "fdi_host.kin_calibration", "--check", str(HEADER)])
+    res = other_fp_path([sys.executable, "-m", "fdi_host.tuning.cli", "kin-calibration", "--check", str(HEADER)])
     assert res.returncode == 0, res.stderr
     text = HEADER.read_text(encoding="utf-8")
     variances = [float(v) for v in re.findall(r"#define FDI_KIN_VARIANCE_\d (\S+)f", text)]
@@ -33,7 +33,7 @@ def test_committed_header_is_up_to_date(
 
 def test_stale_header_is_reported(tmp_path: Path, capsys: pytest.CaptureFixture[str],
                                   monkeypatch: pytest.MonkeyPatch) -> None:
-    import fdi_host.kin_calibration as kc
+    import fdi_host.tuning.kin_calibration as kc
 
     monkeypatch.setattr(kc, "calibrations", lambda progress=None: [])
     monkeypatch.setattr(kc, "variances", lambda cals: [])
@@ -41,6 +41,6 @@ def test_stale_header_is_reported(tmp_path: Path, capsys: pytest.CaptureFixture[
     monkeypatch.setattr(kc, "render", lambda cals, sizes: "new text\n")
     old = tmp_path / "h.h"
     old.write_text("old text\n", encoding="utf-8")
-    assert main(["--check", str(old)]) == 1
-    assert "is stale: run python -m fdi_host.kin_calibration" in capsys.readouterr().err
-    assert main(["--out", str(old)]) == 0 and old.read_text(encoding="utf-8") == "new text\n"
+    assert main(["kin-calibration", "--check", str(old)]) == 1
+    assert "is stale: run fdi-tune kin-calibration" in capsys.readouterr().err
+    assert main(["kin-calibration", "--out", str(old)]) == 0 and old.read_text(encoding="utf-8") == "new text\n"

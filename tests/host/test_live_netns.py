@@ -12,9 +12,9 @@ from pathlib import Path
 
 import pytest
 
-from fdi_host.live_ecu import load_steps
-from fdi_host.live_sender import SendLog
-from fdi_host.netns import check_unshare
+from fdi_host.ecu.session import load_steps
+from fdi_host.live.netns import check_unshare
+from fdi_host.live.sender import SendLog
 
 pytest.importorskip("msgpack", reason="python-can's udp_multicast interface needs msgpack")
 
@@ -31,7 +31,7 @@ def live_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
         pytest.skip(f"no private network namespace for udp_multicast: {chk.reason}")
     out = tmp_path_factory.mktemp("live")
     f, a, b = FAULT
-    cmd = [sys.executable, "-m", "fdi_host.live_runner", "--transport", "netns", "--scenario", "cornering",
+    cmd = [sys.executable, "-m", "fdi_host.live.runner", "--transport", "netns", "--scenario", "cornering",
            "--no-scenario-faults", "--fault", f"{f}@{a}s:0.5:end={b}s", "--duration", str(DURATION),
            "--table", "kin", "--out-dir", str(out), "--channel", "239.74.163.7"]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=240, check=False)

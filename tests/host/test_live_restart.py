@@ -19,12 +19,14 @@ from typing import Any
 
 import pytest
 
-from fdi_host import e2e
-from fdi_host.dbc import RomoDatabase
-from fdi_host.live_ecu import ORIGIN_LEAD, EcuSession, load_steps
-from fdi_host.live_restart import RestartEvent, restart_schedule
-from fdi_host.live_sender import BusFrame, read_log_frames, resume_frames
-from fdi_host.netns import check_unshare
+from fdi_host.can import e2e
+from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.frame import Frame
+from fdi_host.can.logs import LogError, read_log, write_log
+from fdi_host.ecu.session import ORIGIN_LEAD, EcuSession, load_steps
+from fdi_host.live.netns import check_unshare
+from fdi_host.live.restart import RestartEvent, restart_schedule
+from fdi_host.live.sender import resume_frames
 
 # Timeline (drive seconds): the restarted ECU is back ~1 s after its start and warms up for ~3.2 s (the kin
 # table's settling time) before the simulator is killed; the simulator is back ~1-1.5 s after its start, the
@@ -46,7 +48,7 @@ def restart_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
         pytest.skip(f"no private network namespace for udp_multicast: {chk.reason}")
     out = tmp_path_factory.mktemp("restart")
     f, a = FAULT
-    cmd = [sys.executable, "-m", "fdi_host.live_runner", "--transport", "netns", "--scenario", "cornering",
+    cmd = [sys.executable, "-m", "fdi_host.live.runner", "--transport", "netns", "--scenario", "cornering",
            "--no-scenario-faults", "--fault", f"{f}@{a}s:0.5", "--duration", str(DURATION),
            "--table", "kin", "--out-dir", str(out), "--channel", "239.74.163.8",
            "--restart-ecu-at", str(ECU_KILL), "--ecu-down", str(ECU_DOWN),
@@ -159,9 +161,9 @@ def test_resumed_frames_restart_counters_with_valid_crc(tmp_path: Path) -> None:
     db = RomoDatabase()
     frames = []
     for k in range(40):  # IMU every 5 ms, velocity every 10 ms, counters running from 0
-        frames.append(BusFrame(k * 0.005, 128, db.encode("IMU_Motion", {"IMU_AccelX": 0.01 * k}, k % 15)))
+        frames.append(Frame(k * 0.005, 128, db.encode("IMU_Motion", {"IMU_AccelX": 0.01 * k}, k % 15)))
         if k % 2 == 0:
-            frames.append(BusFrame(k * 0.005, 136, db.encode("VelocitySensor", {}, (k // 2) % 15)))
+            frames.append(Frame(k * 0.005, 136, db.encode("VelocitySensor", {}, (k // 2) % 15)))
     out = resume_frames(frames, 0.1, 13, db)
     assert [f.timestamp for f in out] == [f.timestamp for f in frames if f.timestamp >= 0.1]
     for fid, name in ((128, "IMU_Motion"), (136, "VelocitySensor")):
@@ -176,16 +178,19 @@ def test_resumed_frames_restart_counters_with_valid_crc(tmp_path: Path) -> None:
     assert resume_frames(frames, 99.0, 0, db) == []
     with pytest.raises(ValueError, match="counter start"):
         resume_frames(frames, 0.0, 15, db)
-    from fdi_host import canlog
 
     log = tmp_path / "d.blf"
-    canlog.write_log([canlog.Frame(f.timestamp, f.frame_id, f.data) for f in frames], log)
-    back = read_log_frames(log)
+    write_log([Frame(f.timestamp, f.frame_id, f.data) for f in frames], log)
+    back = read_log(log)
     assert [(f.frame_id, f.data) for f in back] == [(f.frame_id, f.data) for f in frames]
-    with pytest.raises(ValueError, match="unsupported"):
-        read_log_frames(tmp_path / "d.txt")
-    with pytest.raises(OSError):
-        read_log_frames(tmp_path / "missing.blf")
+    with pytest.raises(LogError, match="unsupported"):
+        read_log(tmp_path / "d.txt")
+    with pytest.raises(LogError, match="no such file"):
+        read_log(tmp_path / "missing.blf")
+    good = log.read_bytes()  # a real .blf with its object headers garbled
+    (tmp_path / "corrupt.blf").write_bytes(good[:144] + b"\xff" * 100 + good[244:])
+    with pytest.raises(LogError, match=r"corrupt\.blf: not a readable \.blf log"):
+        read_log(tmp_path / "corrupt.blf")
 
 
 def test_ecu_joining_a_drive_under_way_starts_on_the_step_grid() -> None:

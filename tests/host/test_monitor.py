@@ -7,12 +7,12 @@ from pathlib import Path
 
 import pytest
 
-from fdi_host import e2e
-from fdi_host.dbc import RomoDatabase
-from fdi_host.live_ecu import StepRecord
-from fdi_host.monitor import Monitor
-from fdi_host.score import DiagRecord, FaultWindow, TableClasses, fault_names, score_run, windows_from_truth
-from fdi_host.score_report import plot_diagnosis, plot_residuals, score_table, write_reports
+from fdi_host.can import e2e
+from fdi_host.can.dbc import RomoDatabase
+from fdi_host.ecu.session import StepRecord
+from fdi_host.monitor.cli import Monitor
+from fdi_host.monitor.report import plot_diagnosis, plot_residuals, score_table, write_reports
+from fdi_host.monitor.score import DiagRecord, FaultWindow, TableClasses, fault_names, score_run, windows_from_truth
 
 # Signatures of the kinematic table (fw/src/fdi_kin_table.c): tests 0..3 over f1..f5, all unique.
 KIN = TableClasses.from_signatures([0x0D, 0x0E, 0x0F, 0x07, 0x0B], ["r1", "r2", "r3", "r4"])
@@ -323,7 +323,7 @@ def test_gaps_in_scoring_and_reports(db: RomoDatabase, tmp_path: Path) -> None:
 def test_a_gap_is_not_a_detection() -> None:
     """Alarms of diagnosis frames inside a sensor gap are not a detection (the ECU's inputs are stale);
     a false-alarm episode does not run on across an ECU gap."""
-    from fdi_host.monitor_gaps import Gap
+    from fdi_host.monitor.gaps import Gap
 
     recs = [DiagRecord(k * DT, 0b0111 if 200 <= k < 260 else 0, F["f4"] if 200 <= k < 260 else 0)
             for k in range(500)]

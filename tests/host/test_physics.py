@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fdi_host.plant import Plant
-from fdi_host.scenario import load_scenario
-from fdi_host.vehicle_sim import SimConfig, SimResult, simulate
+from fdi_host.sim.plant import Plant
+from fdi_host.sim.scenario import load_scenario
+from fdi_host.sim.vehicle_sim import SimConfig, SimResult, simulate
 
 
 @pytest.fixture(scope="module")

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import sympy
 
-from fdi_host.plant import RECORDED, STATES, Plant
-from fdi_host.scenario import load_scenario
-from fdi_host.vehicle_sim import SimConfig, simulate
+from fdi_host.sim.plant import RECORDED, STATES, Plant
+from fdi_host.sim.scenario import load_scenario
+from fdi_host.sim.vehicle_sim import SimConfig, simulate
 
 
 def _args(plant: Plant, rng: np.random.Generator) -> list[float]:

@@ -1,4 +1,4 @@
-"""The diagnosis quality suite (fdi_host.quality): quick mode end to end through the ECU core, the case
+"""The diagnosis quality suite (fdi_host.quality.suite): quick mode end to end through the ECU core, the case
 evaluation on hand-made result sequences, the sensor-fault shortcut against a full simulation, the fault-size
 file's errors."""
 
@@ -11,22 +11,21 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fdi_host.ecu_lib import EcuResult
-from fdi_host.faults import FaultSpec
-from fdi_host.quality import (
+from fdi_host.ecu.bindings import EcuResult
+from fdi_host.quality.cli import main, quick_config
+from fdi_host.quality.report import markdown, to_dict
+from fdi_host.quality.suite import (
     DEFAULT_SIZES,
     QualityError,
     SuiteConfig,
     evaluate_case,
-    faulty_drive,
     load_fault_sizes,
     run_suite,
     summary_rows,
 )
-from fdi_host.quality_cli import main, quick_config
-from fdi_host.quality_report import markdown, to_dict
-from fdi_host.scenario import load_scenario
-from fdi_host.vehicle_sim import simulate
+from fdi_host.sim.faults import FaultSpec
+from fdi_host.sim.scenario import load_scenario
+from fdi_host.sim.vehicle_sim import faulty_drive, simulate
 
 
 def result(t: float, candidates: int = 0, alarm: int = 0) -> EcuResult:

@@ -18,9 +18,9 @@ from pathlib import Path
 
 import pytest
 
-from fdi_host import canlog
-from fdi_host.live_ecu import StepRecord, load_steps
-from fdi_host.netns import check_unshare
+from fdi_host.can.logs import read_log
+from fdi_host.ecu.session import StepRecord, load_steps
+from fdi_host.live.netns import check_unshare
 from fdi_host.replay import replay_offline
 
 pytest.importorskip("msgpack", reason="python-can's udp_multicast interface needs msgpack")
@@ -32,7 +32,7 @@ def live_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     if not chk.ok:
         pytest.skip(f"no private network namespace for udp_multicast: {chk.reason}")
     out = tmp_path_factory.mktemp("equiv")
-    cmd = [sys.executable, "-m", "fdi_host.live_runner", "--transport", "netns", "--scenario", "cornering",
+    cmd = [sys.executable, "-m", "fdi_host.live.runner", "--transport", "netns", "--scenario", "cornering",
            "--no-scenario-faults", "--fault", "f5@4s:0.4:end=6s", "--duration", "8", "--table", "kin",
            "--out-dir", str(out), "--channel", "239.74.163.8"]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=240, check=False)
@@ -46,7 +46,7 @@ def _by_step(steps: list[StepRecord]) -> dict[int, StepRecord]:
 
 def test_offline_replay_of_received_frames_is_identical(live_run: Path) -> None:
     live = _by_step(load_steps(live_run / "ecu.json"))
-    frames = canlog.read_log(live_run / "ecu_rx.log")
+    frames = read_log(live_run / "ecu_rx.log")
     t0 = float((live_run / "origin.txt").read_text())  # the live ECU aligned its steps to the sender's t = 0
     off = _by_step(replay_offline(frames, "kin", t0=t0).session.steps)
     common = sorted(set(live) & set(off))
@@ -61,7 +61,7 @@ def test_offline_replay_of_received_frames_is_identical(live_run: Path) -> None:
 
 def test_offline_replay_of_sent_drive_agrees(live_run: Path) -> None:
     live = _by_step(load_steps(live_run / "ecu.json"))
-    off = _by_step(replay_offline(canlog.read_log(live_run / "drive.blf"), "kin").session.steps)
+    off = _by_step(replay_offline(read_log(live_run / "drive.blf"), "kin").session.steps)
     common = sorted(set(live) & set(off))
     assert len(common) >= 790
     same = sum((live[k].alarm_mask, live[k].candidates) == (off[k].alarm_mask, off[k].candidates) for k in common)
@@ -74,7 +74,7 @@ def test_offline_replay_of_sent_drive_agrees(live_run: Path) -> None:
 # ----------------------------------------------------------------------------------- without a network namespace
 @pytest.fixture(scope="module")
 def short_drive(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    from fdi_host.sim_cli import main as sim_main
+    from fdi_host.cli import main as sim_main
 
     out = tmp_path_factory.mktemp("drive")
     rc = sim_main(["--scenario", "fig6", "--no-scenario-faults", "--fault", "f4@3.5s:0.5", "--duration", "5",
@@ -84,7 +84,7 @@ def short_drive(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def test_log_formats_give_the_same_offline_diagnosis(short_drive: Path) -> None:
-    runs = {ext: replay_offline(canlog.read_log(short_drive / f"d.{ext}"), "kin") for ext in ("blf", "log", "asc")}
+    runs = {ext: replay_offline(read_log(short_drive / f"d.{ext}"), "kin") for ext in ("blf", "log", "asc")}
     ref = runs["blf"].session.steps
     assert len(ref) >= 500 and any(s.alarm_mask for s in ref)
     for ext in ("log", "asc"):
@@ -109,7 +109,7 @@ def test_replay_onto_a_bus_delivers_every_frame(short_drive: Path) -> None:
             got.append((m.arbitration_id, bytes(m.data)))
     finally:
         rx.shutdown()
-    sent = [(f.frame_id, f.data) for f in canlog.read_log(short_drive / "d.log")]
+    sent = [(f.frame_id, f.data) for f in read_log(short_drive / "d.log")]
     assert got == sent
 
 
@@ -135,9 +135,9 @@ def test_real_time_pacing(short_drive: Path) -> None:
     import can
     import numpy as np
 
-    from fdi_host.live_sender import send_paced
+    from fdi_host.live.sender import send_paced
 
-    frames = [f for f in canlog.read_log(short_drive / "d.log") if f.timestamp < 0.6]
+    frames = [f for f in read_log(short_drive / "d.log") if f.timestamp < 0.6]
     bus = can.Bus(interface="virtual", channel="pacing-test")
     try:
         for speed in (1.0, 5.0):
@@ -154,7 +154,7 @@ def test_one_call_replay_equals_frame_by_frame(short_drive: Path) -> None:
     """fdi-replay --offline's fast path (one C call) gives the diagnosis of the per-frame EcuSession path."""
     from fdi_host.replay import replay_offline_fast
 
-    frames = canlog.read_log(short_drive / "d.blf")
+    frames = read_log(short_drive / "d.blf")
     slow = replay_offline(frames, "kin").session.records()
     fast = replay_offline_fast(frames, "kin").records
     slow_by_t = {round(r.t, 6): r for r in slow}

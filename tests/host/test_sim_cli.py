@@ -8,8 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fdi_host.canlog import decode_frames, read_log
-from fdi_host.sim_cli import main
+from fdi_host.can.logs import read_log
+from fdi_host.can.traffic import decode_frames
+from fdi_host.cli import main
 
 
 def test_help_has_examples(capsys: pytest.CaptureFixture[str]) -> None:

@@ -5,7 +5,7 @@ with a busybox initramfs (tests/vm/prepare.sh, cached in .cache/vm). In the gues
 simulated drive (fig6 profile, vx sensor drifting from 5 s, f4) onto vcan0 in real time, fdi-ecu-socketcan
 (kin table) answers with diagnosis frames and fdi-can-record records them. The test checks the frames (E2E CRC,
 counter sequence), the ECU's counters (every frame received and accepted) and that the guest's diagnosis is the
-one the offline bindings (fdi_host.ecu_lib, the same C core) give on the same log: no detection before the
+one the offline bindings (fdi_host.ecu.bindings, the same C core) give on the same log: no detection before the
 fault, the fault isolated as f4 and as nothing else, with the same timing within a few steps. Skipped, with the
 reason, where qemu-system-x86_64, busybox-static or the kernel package are not available.
 """
@@ -20,13 +20,14 @@ from pathlib import Path
 
 import pytest
 
-from fdi_host import e2e
-from fdi_host.canlog import build_frames, read_log, write_log
-from fdi_host.dbc import RomoDatabase
-from fdi_host.ecu_lib import DIAG_ID, Ecu
-from fdi_host.faults import FaultSpec
-from fdi_host.scenario import load_scenario
-from fdi_host.vehicle_sim import simulate
+from fdi_host.can import e2e
+from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.logs import read_log, write_log
+from fdi_host.can.traffic import build_frames
+from fdi_host.ecu.bindings import DIAG_ID, Ecu
+from fdi_host.sim.faults import FaultSpec
+from fdi_host.sim.scenario import load_scenario
+from fdi_host.sim.vehicle_sim import simulate
 
 REPO = Path(__file__).resolve().parents[2]
 BUILD = REPO / "build" / "vm"

@@ -46,21 +46,20 @@ from numpy.typing import NDArray
 from fdi_analysis.dm import dulmage_mendelsohn
 from fdi_analysis.model import Equation, Model
 from fdi_analysis.residuals.generator import DOMAIN_FACTOR, LOOP_JOIN, XHAT, Generator, Observer, Step
-from fdi_analysis.residuals.observer import align_with_state, d_dstate, design_observer, initial_estimate
+from fdi_analysis.residuals.observer import (
+    ObserverReference,
+    align_with_state,
+    d_dstate,
+    design_observer,
+    initial_estimate,
+)
+from fdi_analysis.residuals.reasons import NotRealizableError, Reason, Rejection
 from fdi_analysis.residuals.signals import align, derivative, filter_bank, nodes_in, raw
 from fdi_analysis.residuals.solvability import BlockSolution, Solution, Solver
 
 FloatArray = NDArray[np.float64]
 Causality = Literal["auto", "derivative", "integral"]
 MAX_LEVEL = 2  # at most two filter stages (second derivatives), as the hand-written ARR3/ARR4
-
-
-class NotRealizableError(ValueError):
-    """The MSO set has no residual generator of this kind; str() is 'not realizable: <reason>'."""
-
-    def __init__(self, reason: str) -> None:
-        super().__init__(f"not realizable: {reason}")
-        self.reason = reason
 
 
 @dataclass(frozen=True)
@@ -74,7 +73,7 @@ class Plan:
 
 
 def closure(model: Model, solver: Solver, eq_ids: Iterable[str], residual: str | None,
-            observed: str | None = None) -> Plan | str:
+            observed: str | None = None) -> Plan | Rejection:
     """The sequence computing every unknown of the MSO without `residual`, or the reason it fails.
 
     With residual None every equation may be used and the one left over becomes the residual equation
@@ -87,7 +86,8 @@ def closure(model: Model, solver: Solver, eq_ids: Iterable[str], residual: str |
     if observed is not None:
         obs_eq = next((e for e in ids if (d := model.equation(e).differential) is not None and d[1] == observed), "")
         if not obs_eq or obs_eq == residual:
-            return f"{observed} has no differential constraint to drive an observer"
+            return Rejection(Reason.NO_OBSERVER_EQUATION, f"{observed} has no differential constraint to drive an "
+                             "observer", residual or "", observed)
     eqs = [model.equation(e) for e in ids if e != residual and e != obs_eq]
     unknowns = sorted({u for e in eqs for u in e.unknowns}
                       | (set(model.equation(residual).unknowns) if residual is not None else set())
@@ -95,8 +95,8 @@ def closure(model: Model, solver: Solver, eq_ids: Iterable[str], residual: str |
     level: dict[str, int] = {}
     tainted: set[str] = set()  # values that hold a division by a signal
     from_obs: set[str] = set()  # values computed from the observer state
-    singular = ""
-    loop_why = ""  # why an algebraic loop of the set is not solved
+    singular: Rejection | None = None  # the first step refused for a division by a signal
+    loop_why: Rejection | None = None  # why an algebraic loop of the set is not solved
     steps: list[Step] = []
     used: set[str] = set()
     if observed is not None:
@@ -112,13 +112,15 @@ def closure(model: Model, solver: Solver, eq_ids: Iterable[str], residual: str |
         inputs = {v for e in block for v in e.unknowns if v not in sols}
         bad = [(e.id, v) for e in block for v in e.unknowns if v in tainted and not solver.rational_in(e, v)]
         if bad:
-            singular = singular or (f"{bad[0][1]} holds a division by a signal and {bad[0][0]} is not rational "
-                                    f"in it (singular when the divisor vanishes)")
+            singular = singular or Rejection(
+                Reason.DIVISION, f"{bad[0][1]} holds a division by a signal and {bad[0][0]} is not rational in it "
+                "(singular when the divisor vanishes)", bad[0][0], bad[0][1])
             return False
         div = any(bool(sol.coefficient.free_symbols) for sol in sols.values())
         if observed is not None and (div or inputs & tainted):
-            singular = singular or (f"{names} solved for {', '.join(sols)} divides by a signal inside the "
-                                    "observer (singular when the divisor vanishes)")
+            singular = singular or Rejection(
+                Reason.OBSERVER_DIVISION, f"{names} solved for {', '.join(sols)} divides by a signal inside the "
+                "observer (singular when the divisor vanishes)", names, next(iter(sols)))
             return False
         lv = max((level[v] for v in inputs), default=0)
         for u in sols:
@@ -141,8 +143,9 @@ def closure(model: Model, solver: Solver, eq_ids: Iterable[str], residual: str |
                 dx, x = e.differential
                 if x in level and dx not in level:
                     if x in from_obs:
-                        singular = singular or (f"{e.id} would differentiate {x}, computed from the observer "
-                                                f"state {observed}")
+                        singular = singular or Rejection(
+                            Reason.OBSERVER_DERIVATIVE, f"{e.id} would differentiate {x}, computed from the observer "
+                            f"state {observed}", e.id, x)
                         continue
                     level[dx] = level[x] + 1
                     if x in tainted:
@@ -160,7 +163,7 @@ def closure(model: Model, solver: Solver, eq_ids: Iterable[str], residual: str |
         if not progress and len(level) < len(unknowns):
             for block, vars_ in _loops(solver, eqs, used, level):
                 blk = solver.solve_block(block, vars_)
-                if isinstance(blk, str):
+                if isinstance(blk, Rejection):
                     loop_why = loop_why or blk
                     continue
                 if accept(block, dict(zip(blk.unknowns, blk.solutions, strict=True)), "loop"):
@@ -169,14 +172,14 @@ def closure(model: Model, solver: Solver, eq_ids: Iterable[str], residual: str |
     missing = [u for u in unknowns if u not in level]
     if missing:
         why = singular or _blocked(model, solver, eqs, missing, used, loop_why)
-        if residual is None and open_loop_states(model, why) is None:
+        if residual is None and why.kind is not Reason.OPEN_LOOP:
             # an algebraic loop inside the overdetermined part splits into blocks only once the residual
             # equation is chosen: try each equation of that part that could close a solvable loop
             for r in _loop_residuals(solver, eqs, used, missing):
                 q = closure(model, solver, ids, r, observed)
                 if isinstance(q, Plan):
                     return q
-                if "algebraic loop" in q and "algebraic loop" not in why:
+                if q.kind is Reason.ALGEBRAIC_LOOP and why.kind is not Reason.ALGEBRAIC_LOOP:
                     why = q
         return why
     if residual is None:
@@ -184,50 +187,54 @@ def closure(model: Model, solver: Solver, eq_ids: Iterable[str], residual: str |
         if observed is not None:
             left = [e for e in left if set(model.equation(e).unknowns) & from_obs] or left
         if not left:
-            return "no equation left for a residual"
+            return Rejection(Reason.NO_RESIDUAL, "no equation left for a residual")
         residual = left[0]
     res_eq = model.equation(residual)
     bad = [v for v in res_eq.unknowns if v in tainted and not solver.rational_in(res_eq, v)]
     if bad:
-        return (f"residual {residual} is not rational in {bad[0]}, which holds a division by a signal "
-                "(singular when the divisor vanishes)")
+        return Rejection(Reason.RESIDUAL_DIVISION, f"residual {residual} is not rational in {bad[0]}, which holds a "
+                         "division by a signal (singular when the divisor vanishes)", residual, bad[0])
     if observed is not None:
         if res_eq.differential is not None:
-            return f"residual {residual} is a differential constraint, not an output equation of {observed}"
+            return Rejection(Reason.OBSERVER_OUTPUT, f"residual {residual} is a differential constraint, not an "
+                             f"output equation of {observed}", residual, observed)
         if not set(res_eq.unknowns) & from_obs:
-            return (f"residual {residual}: {observed} not observable from the residual equation (it does not "
-                    "depend on it)")
+            return Rejection(Reason.NOT_OBSERVABLE, f"residual {residual}: {observed} not observable from the "
+                             "residual equation (it does not depend on it)", residual, observed)
     if res_eq.differential is not None:
         dx, x = res_eq.differential
         lv = max(level[x] + 1, level[dx])
     else:
         lv = max((level[u] for u in res_eq.unknowns), default=0)
     if lv > MAX_LEVEL:
-        return f"needs {lv} filter levels (derivatives of derivatives beyond {MAX_LEVEL})"
+        return Rejection(Reason.FILTER_LEVELS, f"needs {lv} filter levels (derivatives of derivatives beyond "
+                         f"{MAX_LEVEL})", residual)
     n_der = sum(s.kind == "derivative" for s in steps) + (res_eq.differential is not None)
     return Plan(residual, tuple(steps), lv, n_der, sum(s.division for s in steps), observed or "")
 
 
-def open_loop_states(model: Model, reason: str) -> str | None:
-    """The state named by an open-loop-integration reason of `closure`, else None."""
-    if " is reachable only by integrating " not in reason:
-        return None
-    return reason.split(" is reachable only by integrating ", 1)[0]
+# Reasons found on the equation left over as the residual: with another residual equation the set may work.
+RESIDUAL_CHECKS = frozenset({Reason.RESIDUAL_DIVISION, Reason.OBSERVER_OUTPUT, Reason.NOT_OBSERVABLE})
+
+
+def open_loop_state(reason: Rejection) -> str | None:
+    """The state an open-loop-integration reason of `closure` names, else None."""
+    return reason.variable if reason.kind is Reason.OPEN_LOOP else None
 
 
 def observer_closure(model: Model, solver: Solver, eq_ids: Iterable[str], residual: str | None,
-                     reason: str) -> Plan | str:
+                     reason: Rejection) -> Plan | Rejection:
     """When the plain closure fails with `reason` = open-loop integration of a state: the closure with that
     state estimated by an observer; more than one such state is rejected ("needs k observer states")."""
     ids = list(eq_ids)
     states: list[str] = []
     why = reason
-    while (x := open_loop_states(model, why)) is not None and x not in states:
+    while (x := open_loop_state(why)) is not None and x not in states:
         states.append(x)
         if len(states) > 1:
             break
         p = closure(model, solver, ids, residual, x)
-        if isinstance(p, str) and residual is None and p.startswith("residual "):
+        if isinstance(p, Rejection) and residual is None and p.kind in RESIDUAL_CHECKS:
             # the equation left over does not see x: another choice of the residual equation may
             for r in ids:
                 q = closure(model, solver, ids, r, x)
@@ -238,8 +245,9 @@ def observer_closure(model: Model, solver: Solver, eq_ids: Iterable[str], residu
         why = p
     if len(states) > 1:
         more = _open_loop_count(model, solver, ids, residual, states)
-        return f"needs {more} observer states ({', '.join(states)}{', ...' if more > len(states) else ''})"
-    return why if why != reason else reason
+        return Rejection(Reason.OBSERVER_STATES, f"needs {more} observer states "
+                         f"({', '.join(states)}{', ...' if more > len(states) else ''})", states=tuple(states))
+    return why
 
 
 def _open_loop_count(model: Model, solver: Solver, ids: list[str], residual: str | None,
@@ -251,14 +259,14 @@ def _open_loop_count(model: Model, solver: Solver, ids: list[str], residual: str
         extra = [e for e in ids if (d := model.equation(e).differential) is None or d[1] not in found]
         # a pretend measurement of each found state: drop its differential constraint and seed it known
         p = _closure_seeded(model, solver, extra, residual, found)
-        x = open_loop_states(model, p) if isinstance(p, str) else None
+        x = open_loop_state(p) if p is not None else None
         if x is None or x in found or x not in diffs:
             return len(found)
         found.append(x)
 
 
 def _closure_seeded(model: Model, solver: Solver, ids: list[str], residual: str | None,
-                    seeds: list[str]) -> str:
+                    seeds: list[str]) -> Rejection | None:
     eqs = [model.equation(e) for e in ids if e != residual]
     known = set(seeds)
     used: set[str] = set()
@@ -283,7 +291,7 @@ def _closure_seeded(model: Model, solver: Solver, ids: list[str], residual: str 
     missing = sorted(unknowns - known)
     if missing:
         return _blocked(model, solver, eqs, missing, used)
-    return "ok"
+    return None
 
 
 def _loops(solver: Solver, eqs: list[Equation], used: set[str],
@@ -364,23 +372,25 @@ def _overdetermined(lack: tuple[tuple[str, frozenset[str]], ...]) -> tuple[str, 
 
 
 def _blocked(model: Model, solver: Solver, eqs: list[Equation], missing: list[str], used: set[str],
-             loop_why: str = "") -> str:
+             loop_why: Rejection | None = None) -> Rejection:
     for e in eqs:
         if e.id not in used and e.differential is not None and e.differential[1] in missing:
-            return (f"{e.differential[1]} is reachable only by integrating {e.id} with no measurement of it in "
-                    "the set (open-loop simulation, drifts)")
-    reasons = []
+            return Rejection(Reason.OPEN_LOOP, f"{e.differential[1]} is reachable only by integrating {e.id} with no "
+                             "measurement of it in the set (open-loop simulation, drifts)", e.id, e.differential[1])
+    reasons: list[tuple[str, str]] = []
     for e in eqs:
         if e.id in used or e.differential is not None:
             continue
         todo = [u for u in e.unknowns if u in missing]
         if len(todo) == 1:
-            reasons.append(f"{e.id} cannot be solved for {todo[0]}")
-    if loop_why:
+            reasons.append((e.id, todo[0]))
+    if loop_why is not None:
         return loop_why
     if reasons:
-        return "; ".join(reasons[:3])
+        return Rejection(Reason.NOT_SOLVABLE, "; ".join(f"{e} cannot be solved for {v}" for e, v in reasons[:3]),
+                         reasons[0][0], reasons[0][1])
     why = ""
+    where = ("", "")
     for e in eqs:  # the first equation of the loop that Cramer's rule cannot take, and why
         if e.id in used or e.differential is not None:
             continue
@@ -388,8 +398,10 @@ def _blocked(model: Model, solver: Solver, eqs: list[Equation], missing: list[st
         if bad:
             how = "is marked not_solvable_for" if bad[0] in e.not_solvable_for else "is not linear in"
             why = f": {e.id} {how} {bad[0]}"
+            where = (e.id, bad[0])
             break
-    return f"algebraic loop in {', '.join(missing[:6])} (no equation with a single unknown left{why})"
+    return Rejection(Reason.ALGEBRAIC_LOOP, f"algebraic loop in {', '.join(missing[:6])} (no equation with a single "
+                     f"unknown left{why})", *where)
 
 
 def plan(model: Model, solver: Solver, eq_ids: Iterable[str]) -> Plan:
@@ -397,19 +409,20 @@ def plan(model: Model, solver: Solver, eq_ids: Iterable[str]) -> Plan:
     Plans without an observer state win over plans with one."""
     ids = list(eq_ids)
     best: Plan | None = None
-    first_reason = ""
+    first_reason: Rejection | None = None
     for r in ids:
         p = closure(model, solver, ids, r)
-        if isinstance(p, str) and open_loop_states(model, p) is not None:
+        if isinstance(p, Rejection) and open_loop_state(p) is not None:
             p = observer_closure(model, solver, ids, r, p)
-        if isinstance(p, str):
-            first_reason = first_reason or f"{p} (residual {r})"
+        if isinstance(p, Rejection):
+            first_reason = first_reason or Rejection(p.kind, f"{p.text} (residual {r})", p.equation, p.variable,
+                                                     p.states)
             continue
         key = (bool(p.observer), p.level, p.derivatives, p.divisions)
         if best is None or key < (bool(best.observer), best.level, best.derivatives, best.divisions):
             best = p
     if best is None:
-        raise NotRealizableError(first_reason)
+        raise NotRealizableError(first_reason or Rejection(Reason.NO_RESIDUAL, "no equation to try as residual"))
     return best
 
 
@@ -446,10 +459,11 @@ def integral_alternative(model: Model, solver: Solver, eq_ids: Iterable[str], p:
 
 
 def synthesize(model: Model, eq_ids: Iterable[str], name: str, solver: Solver | None = None,
-               reference: Mapping[str, FloatArray] | None = None, causality: Causality = "auto") -> Generator:
-    """The residual generator of the MSO set `eq_ids` (raises NotRealizableError). `reference`: fault-free
-    measured signals for the gain design of an observer generator (default: the simulator's reference
-    drive, `observer.reference_sensitivity`).
+               reference: ObserverReference | None = None, causality: Causality = "auto") -> Generator:
+    """The residual generator of the MSO set `eq_ids` (raises NotRealizableError). `reference`: what the gain
+    design of an observer generator whose output sensitivity varies takes its regularisation from (fault-free
+    reference signals or the sensitivity already measured on them, `observer.ObserverReference`); without
+    it such a generator is rejected (Reason.NO_REFERENCE).
 
     Causality: filtered derivatives for measured signals; an observer for a state only the integration of
     its differential constraint reaches; for a state whose derivative would be taken twice (`causality`):
@@ -529,7 +543,8 @@ def _assemble(model: Model, solver: Solver, ids: list[str], p: Plan, name: str, 
         try:
             poly = sympy.Poly(sympy.expand(expr), *invs)
         except sympy.PolynomialError as exc:
-            raise NotRealizableError(f"residual {p.residual} is not polynomial in a quotient by a signal") from exc
+            raise NotRealizableError(Rejection(Reason.NOT_POLYNOMIAL, f"residual {p.residual} is not polynomial in a "
+                                               "quotient by a signal", p.residual)) from exc
         degs = [max(m[i] for m in poly.monoms()) for i in range(len(invs))]
         scale = sympy.Mul(*[inverses[v] ** d for v, d in zip(invs, degs, strict=True)])
         # the residual times the divisors to their highest powers; a divisor that is a sum (the determinant of
@@ -548,14 +563,16 @@ def _assemble(model: Model, solver: Solver, ids: list[str], p: Plan, name: str, 
         observer = Observer(p.observer, obs_eq, update, sympy.Integer(0), d_dstate(update),
                             d_dstate(expr), 0.0, 0.0, initial_estimate(model, solver, p.observer))
         if observer.c == 0:
-            raise NotRealizableError(f"{p.observer} not observable from the residual equation {p.residual} "
-                                     f"(d r / d {p.observer} is identically 0)")
+            raise NotRealizableError(Rejection(Reason.NOT_OBSERVABLE, f"{p.observer} not observable from the residual "
+                                               f"equation {p.residual} (d r / d {p.observer} is identically 0)",
+                                               p.residual, p.observer))
     else:
         expr, level = align(expr)
     if scaled_by:
         scaled_by = scaled_by.replace("__L0d0", f" (filtered x{level})")
     if not expr.free_symbols:
-        raise NotRealizableError(f"residual of {p.residual} is identically {expr}")
+        raise NotRealizableError(Rejection(Reason.CONSTANT_RESIDUAL, f"residual of {p.residual} is identically {expr}",
+                                           p.residual))
     nodes = nodes_in(expr) | (nodes_in(observer.update) if observer is not None else set())
     order = [k.name for k in model.knowns]
     used_eqs = {e for s in p.steps for e in s.equations} | {p.residual}

@@ -16,6 +16,7 @@ from fdi_analysis.residuals.generator import DOMAIN_SIGNAL, XHAT, Generator
 from fdi_analysis.residuals.signals import Node
 
 FloatArray = NDArray[np.float64]
+SMALL_JDT = 1e-6  # below |J dt| the observer step's phi = expm1(J dt) / J is taken as dt
 
 
 @dataclass(frozen=True)
@@ -81,11 +82,34 @@ def residual(g: Generator, signals: Mapping[str, FloatArray], design: FilterDesi
     return r
 
 
+def _heaviside(v: float, h0: float = 0.0) -> float:
+    return 1.0 if v > 0.0 else 0.0
+
+
+def _sign(v: float) -> float:
+    return 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
+
+
+# Scalar functions for lambdify: the derivatives hold sign() and Heaviside() (as the C: 0 at 0)
+SCALAR_MODULES: list[object] = [{"Heaviside": _heaviside, "sign": _sign}, "math"]
+VECTOR_MODULES: list[object] = [{"Heaviside": lambda v, h0=0.0: np.where(np.asarray(v) > 0.0, 1.0, 0.0)}, "numpy"]
+
+
+def initial_values(g: Generator, signals: Mapping[str, np.ndarray]) -> np.ndarray:
+    assert g.observer is not None
+    n = len(next(iter(signals.values())))
+    init = g.observer.initial
+    if not init.free_symbols:
+        return np.full(n, float(init))
+    syms = sorted(init.free_symbols, key=str)
+    fn = sympy.lambdify(syms, init, modules="numpy")
+    return np.asarray(fn(*[np.asarray(signals[str(s).split("__L")[0]], dtype=float) for s in syms]),
+                      dtype=float) * np.ones(n)
+
+
 def observer_residual(g: Generator, signals: Mapping[str, FloatArray], values: Mapping[Node, FloatArray],
                       design: FilterDesign) -> FloatArray:
     """The observer generator sample by sample (fdi_analysis.residuals.observer; same steps as the C)."""
-    from fdi_analysis.residuals.observer import SCALAR_MODULES, SMALL_JDT, initial_values
-
     o = g.observer
     assert o is not None
     syms = [XHAT, *[n.symbol for n in g.nodes]]

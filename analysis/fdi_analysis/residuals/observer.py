@@ -33,23 +33,21 @@ check it): a non-finite value gives 0.
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Mapping
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import sympy
 
 from fdi_analysis.model import Model
+from fdi_analysis.residuals.evaluate import VECTOR_MODULES, FilterDesign, in_domain, initial_values, node_signals
 from fdi_analysis.residuals.generator import OBSERVER_EPS, OBSERVER_POLE_FACTOR, XHAT, Generator
+from fdi_analysis.residuals.reasons import NotRealizableError, Reason, Rejection
 from fdi_analysis.residuals.signals import nodes_in, raw
 from fdi_analysis.residuals.solvability import Solution, Solver
 
-REFERENCE_SCENARIO = "cornering"  # fault-free reference drive for c_ref (a steady drive would leave c = 0)
-REFERENCE_DURATION = 12.0
 DESIGN_CUTOFF_HZ = 1.0  # the table's filter design (FilterDesign, fdi_table_design_t)
-SMALL_JDT = 1e-6
 
 
 def pole(cutoff_hz: float = DESIGN_CUTOFF_HZ) -> float:
@@ -85,19 +83,6 @@ def initial_estimate(model: Model, solver: Solver, state: str) -> sympy.Expr:
     return value.get(sympy.Symbol(state), sympy.Integer(0))
 
 
-def _heaviside(v: float, h0: float = 0.0) -> float:
-    return 1.0 if v > 0.0 else 0.0
-
-
-def _sign(v: float) -> float:
-    return 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
-
-
-# Scalar functions for lambdify: the derivatives hold sign() and Heaviside() (as the C: 0 at 0)
-SCALAR_MODULES: list[object] = [{"Heaviside": _heaviside, "sign": _sign}, "math"]
-VECTOR_MODULES: list[object] = [{"Heaviside": lambda v, h0=0.0: np.where(np.asarray(v) > 0.0, 1.0, 0.0)}, "numpy"]
-
-
 def d_dstate(expr: sympy.Expr) -> sympy.Expr:
     """d expr / d XHAT with every symbol taken real (Abs -> sign, Max -> Heaviside; no re/im terms)."""
     syms = sorted(expr.free_symbols, key=str)
@@ -115,62 +100,66 @@ def gain_expr(a: sympy.Expr, c: sympy.Expr, lam: float, eps: float) -> sympy.Exp
     return -k * c / (c**2 + sympy.Float(eps))
 
 
-@functools.lru_cache(maxsize=2)
-def _reference_drive() -> dict[str, np.ndarray]:
-    from fdi_analysis.residuals.simulate import drive
+@dataclass(frozen=True)
+class ObserverReference:
+    """Where the run-time gain of an observer generator takes its regularisation eps = (OBSERVER_EPS c_ref)^2
+    from, c_ref being the RMS of the output sensitivity c = de/dx on a fault-free reference drive: the drive's
+    measured signals (`signals`, c_ref is computed on them), or the c_ref values already computed, by the
+    generator's equation set (space separated; the thresholds file's [observer] table)."""
 
-    _, sig = drive(REFERENCE_SCENARIO, duration=REFERENCE_DURATION)
-    return sig
+    signals: Mapping[str, np.ndarray] | None = None
+    c_ref: Mapping[str, float] = field(default_factory=dict)
+
+    def sensitivity(self, g: Generator) -> float | None:
+        """c_ref of generator `g`, or None when this reference has neither its value nor signals."""
+        key = " ".join(g.equations)
+        if key in self.c_ref:
+            return float(self.c_ref[key])
+        return reference_sensitivity(g, self.signals) if self.signals is not None else None
 
 
-def reference_sensitivity(g: Generator, reference: Mapping[str, np.ndarray] | None = None) -> float:
-    """RMS of c = de/dx on fault-free reference signals (default: the simulator's reference drive), inside
-    the operating domain and after the first quarter (at most 3 s), with x taken from its initial estimate
-    (the measurement, fault-free here)."""
-    from fdi_analysis.residuals.evaluate import FilterDesign, in_domain, node_signals
+def round_sensitivity(c_ref: float) -> float:
+    """c_ref to 3 significant digits: a design number that is the same on every machine (a drive's last bits
+    depend on the CPU's floating-point path) and that the thresholds file holds exactly."""
+    return float(f"{c_ref:.3g}")
 
+
+def reference_sensitivity(g: Generator, signals: Mapping[str, np.ndarray]) -> float:
+    """RMS of c = de/dx on fault-free reference signals, inside the operating domain and after the first
+    quarter (at most 3 s), with x taken from its initial estimate (the measurement, fault-free here), rounded
+    (`round_sensitivity`)."""
     assert g.observer is not None
-    sig = dict(reference) if reference is not None else _reference_drive()
-    values = node_signals(g, sig, FilterDesign())
+    values = node_signals(g, signals, FilterDesign())
     syms = [n.symbol for n in g.nodes]
-    xs = initial_values(g, sig)
+    xs = initial_values(g, signals)
     fn = sympy.lambdify([XHAT, *syms], g.observer.c, modules=VECTOR_MODULES)
     cv = np.asarray(fn(xs, *[values[n] for n in g.nodes]), dtype=float) * np.ones(len(xs))
-    ok = in_domain(g, sig)
+    ok = in_domain(g, signals)
     ok[:min(300, len(ok) // 4)] = False
     if not ok.any():
         return 0.0
-    return float(np.sqrt(np.mean(cv[ok] ** 2)))
+    return round_sensitivity(float(np.sqrt(np.mean(cv[ok] ** 2))))
 
 
-def initial_values(g: Generator, signals: Mapping[str, np.ndarray]) -> np.ndarray:
-    assert g.observer is not None
-    n = len(next(iter(signals.values())))
-    init = g.observer.initial
-    if not init.free_symbols:
-        return np.full(n, float(init))
-    syms = sorted(init.free_symbols, key=str)
-    fn = sympy.lambdify(syms, init, modules="numpy")
-    return np.asarray(fn(*[np.asarray(signals[str(s).split("__L")[0]], dtype=float) for s in syms]),
-                      dtype=float) * np.ones(n)
-
-
-def design_observer(g: Generator, reference: Mapping[str, np.ndarray] | None = None,
+def design_observer(g: Generator, reference: ObserverReference | None,
                     cutoff_hz: float = DESIGN_CUTOFF_HZ) -> Generator:
-    """Fill in the pole, eps and the gain of a synthesised observer generator (`reference`: fault-free
-    signals for c_ref, default the simulator's reference drive)."""
-    from fdi_analysis.residuals.causality import NotRealizableError
-
+    """Fill in the pole, eps and the gain of a synthesised observer generator. A constant output sensitivity
+    c needs no reference; otherwise `reference` gives c_ref (NotRealizableError NO_REFERENCE without it,
+    NOT_OBSERVABLE when c vanishes on the reference drive)."""
     assert g.observer is not None
     o = g.observer
     lam = pole(cutoff_hz)
     eps = 0.0
     if o.c.free_symbols:
-        c_ref = reference_sensitivity(g, reference)
+        c_ref = reference.sensitivity(g) if reference is not None else None
+        if c_ref is None:
+            raise NotRealizableError(Rejection(
+                Reason.NO_REFERENCE, f"the observer gain of {g.name} ({o.state}) needs a reference drive: its "
+                "output sensitivity varies (fdi-tune calibrate writes it to the thresholds file's [observer] table)",
+                g.residual_equation, o.state))
         if not c_ref > 0.0:
-            raise NotRealizableError(f"{o.state} not observable from the residual equation {g.residual_equation} "
-                                     f"on the reference drive (d r / d {o.state} = 0 there)")
-        # c_ref to 3 significant digits: a design parameter, the same on every machine (the drive's last bits
-        # depend on the CPU's floating-point path)
-        eps = (OBSERVER_EPS * float(f"{c_ref:.3g}")) ** 2
+            raise NotRealizableError(Rejection(
+                Reason.NOT_OBSERVABLE, f"{o.state} not observable from the residual equation {g.residual_equation} "
+                f"on the reference drive (d r / d {o.state} = 0 there)", g.residual_equation, o.state))
+        eps = (OBSERVER_EPS * c_ref) ** 2
     return replace(g, observer=replace(o, gain=gain_expr(o.a, o.c, lam, eps), pole=lam, eps=eps))

@@ -27,6 +27,7 @@ import numpy as np
 import sympy
 
 from fdi_analysis.model import Equation, Model
+from fdi_analysis.residuals.reasons import Reason, Rejection
 
 
 @dataclass(frozen=True)
@@ -56,8 +57,9 @@ class Solver:
         self.params = {sympy.Symbol(k): sympy.Float(v) for k, v in model.parameter_values().items()}
         self.fault_zero = {sympy.Symbol(f.name): sympy.Integer(0) for f in model.faults}
         self._residuals: dict[str, sympy.Expr] = {}
-        self._cache: dict[tuple[str, str], Solution | str] = {}
-        self._blocks: dict[tuple[str, str], BlockSolution | str] = {}
+        self._cache: dict[tuple[str, str], Solution | Rejection] = {}
+        self._rational: dict[tuple[str, str], bool] = {}
+        self._blocks: dict[tuple[str, str], BlockSolution | Rejection] = {}
         self._loop_unknowns: dict[str, frozenset[str]] = {}
 
     def residual(self, eq: Equation) -> sympy.Expr:
@@ -67,7 +69,7 @@ class Solver:
             self._residuals[eq.id] = sympy.expand_mul(res) if res.is_polynomial() else res
         return self._residuals[eq.id]
 
-    def solve(self, eq: Equation, var: str) -> Solution | str:
+    def solve(self, eq: Equation, var: str) -> Solution | Rejection:
         """The solution, or the reason why `eq` is not solved for `var`."""
         key = (eq.id, var)
         if key not in self._cache:
@@ -79,12 +81,11 @@ class Solver:
 
     def rational_in(self, eq: Equation, var: str) -> bool:
         """True when the equation is a rational function of `var` (a quotient in var can be cleared)."""
-        key = (eq.id, "rational:" + var)
-        if key not in self._cache:
-            ok = eq.differential is not None or (
-                eq.lhs is not None and self.residual(eq).is_rational_function(sympy.Symbol(var)))
-            self._cache[key] = Solution(sympy.Integer(0), sympy.Integer(1)) if ok else "not rational"
-        return isinstance(self._cache[key], Solution)
+        key = (eq.id, var)
+        if key not in self._rational:
+            self._rational[key] = eq.differential is not None or (
+                eq.lhs is not None and bool(self.residual(eq).is_rational_function(sympy.Symbol(var))))
+        return self._rational[key]
 
     def linear_in(self, eq: Equation, var: str) -> bool:
         """True when `eq` may take part in an algebraic loop over `var`: usable, not marked
@@ -95,7 +96,7 @@ class Solver:
         """The unknowns `eq` may be solved for inside an algebraic loop (`linear_in`), cached per equation."""
         if eq.id not in self._loop_unknowns:
             ok: set[str] = set()
-            if not self._unusable(eq):
+            if self._unusable(eq) is None:
                 res = self.residual(eq)
                 for u in eq.unknowns:
                     x = sympy.Symbol(u)
@@ -104,7 +105,7 @@ class Solver:
             self._loop_unknowns[eq.id] = frozenset(ok)
         return self._loop_unknowns[eq.id]
 
-    def solve_block(self, eqs: Sequence[Equation], unknowns: Sequence[str]) -> BlockSolution | str:
+    def solve_block(self, eqs: Sequence[Equation], unknowns: Sequence[str]) -> BlockSolution | Rejection:
         """The joint solution of the algebraic loop `eqs` (k equations) for `unknowns` (k unknowns), or the
         reason why it is not solved (cached per loop)."""
         key = ("+".join(sorted(e.id for e in eqs)), "+".join(sorted(unknowns)))
@@ -112,23 +113,27 @@ class Solver:
             self._blocks[key] = self._solve_block(sorted(eqs, key=lambda e: e.id), sorted(unknowns))
         return self._blocks[key]
 
-    def _solve_block(self, eqs: list[Equation], unknowns: list[str]) -> BlockSolution | str:
+    def _solve_block(self, eqs: list[Equation], unknowns: list[str]) -> BlockSolution | Rejection:
         names = ", ".join(e.id for e in eqs)
+
+        def loop(text: str, equation: str = "", variable: str = "") -> Rejection:
+            return Rejection(Reason.ALGEBRAIC_LOOP, f"algebraic loop {names}{text}", equation or eqs[0].id, variable)
+
         if len(eqs) != len(unknowns):
-            return f"algebraic loop {names} is not square ({len(eqs)} equations, {len(unknowns)} unknowns)"
+            return loop(f" is not square ({len(eqs)} equations, {len(unknowns)} unknowns)")
         for e in eqs:
             why = self._unusable(e)
-            if why:
+            if why is not None:
                 return why
             marked = [u for u in unknowns if u in e.not_solvable_for and u in e.unknowns]
             if marked:
-                return f"algebraic loop {names}: {e.id} is marked not_solvable_for {marked[0]}"
+                return loop(f": {e.id} is marked not_solvable_for {marked[0]}", e.id, marked[0])
             nonlinear = [u for u in unknowns if u in e.unknowns and not self.linear_in(e, u)]
             if nonlinear:
-                return (f"algebraic loop {names}: {e.id} is not linear in {nonlinear[0]} (non-invertible or "
-                        "multi-branch term)")
+                return loop(f": {e.id} is not linear in {nonlinear[0]} (non-invertible or multi-branch term)", e.id,
+                            nonlinear[0])
         if len(eqs) > MAX_LOOP:
-            return f"algebraic loop {names} has {len(eqs)} equations (more than {MAX_LOOP} are not solved)"
+            return loop(f" has {len(eqs)} equations (more than {MAX_LOOP} are not solved)")
         xs = [sympy.Symbol(u) for u in unknowns]
         res = [self.residual(e) for e in eqs]
         jac = sympy.Matrix([[sympy.diff(r, x) for x in xs] for r in res])
@@ -136,50 +141,55 @@ class Solver:
             for j, x in enumerate(xs):
                 held = sorted(str(v) for v in jac[i, j].free_symbols & set(xs))
                 if held:
-                    return (f"algebraic loop {names}: {e.id} is not linear in {', '.join(unknowns)} jointly "
-                            f"(its coefficient of {x} holds {', '.join(held)})")
+                    return loop(f": {e.id} is not linear in {', '.join(unknowns)} jointly (its coefficient of {x} "
+                                f"holds {', '.join(held)})", e.id, str(x))
         det = _determinant(jac)
         if det is None:
-            return (f"algebraic loop {names} divides by its determinant, which varies with "
-                    f"{', '.join(sorted(map(str, jac.free_symbols))[:4])} through non-polynomial terms (its zeros "
-                    "cannot be cleared)")
+            return loop(f" divides by its determinant, which varies with "
+                        f"{', '.join(sorted(map(str, jac.free_symbols))[:4])} through non-polynomial terms (its zeros "
+                        "cannot be cleared)")
         if det == 0:
-            return f"algebraic loop {names} is singular in {', '.join(unknowns)} (determinant identically 0)"
+            return loop(f" is singular in {', '.join(unknowns)} (determinant identically 0)")
         if det.free_symbols and not det.is_polynomial(*det.free_symbols):
-            return (f"algebraic loop {names} divides by its determinant, not a polynomial in "
-                    f"{', '.join(sorted(map(str, det.free_symbols))[:4])} (its zeros cannot be cleared)")
+            return loop(f" divides by its determinant, not a polynomial in "
+                        f"{', '.join(sorted(map(str, det.free_symbols))[:4])} (its zeros cannot be cleared)")
         rest = sympy.Matrix([r.xreplace({x: 0 for x in xs}) for r in res])
         num = jac.adjugate() * (-rest)
         sols = tuple(Solution(expr=sympy.expand(num[k]) / det, coefficient=det) for k in range(len(xs)))
         return BlockSolution(tuple(e.id for e in eqs), tuple(unknowns), sols)
 
     @staticmethod
-    def _unusable(eq: Equation) -> str:
-        """Why an equation cannot be solved for anything ("" when it can be tried)."""
+    def _unusable(eq: Equation) -> Rejection | None:
+        """Why an equation cannot be solved for anything (None when it can be tried)."""
+        why = ""
         if eq.differential is not None:
-            return f"{eq.id} is a differential constraint"
-        if eq.derivatives:
-            return f"{eq.id} holds inline derivatives der(...), which the generator does not handle"
-        if eq.lhs is None:
-            return f"{eq.id} has no expression"
-        return ""
+            why = f"{eq.id} is a differential constraint"
+        elif eq.derivatives:
+            why = f"{eq.id} holds inline derivatives der(...), which the generator does not handle"
+        elif eq.lhs is None:
+            why = f"{eq.id} has no expression"
+        return Rejection(Reason.UNUSABLE_EQUATION, why, eq.id) if why else None
 
-    def _solve(self, eq: Equation, var: str) -> Solution | str:
+    def _solve(self, eq: Equation, var: str) -> Solution | Rejection:
         why = self._unusable(eq)
-        if why:
+        if why is not None:
             return why
+
+        def no(text: str) -> Rejection:
+            return Rejection(Reason.NOT_SOLVABLE, text, eq.id, var)
+
         if var in eq.not_solvable_for:
-            return f"{eq.id} is marked not_solvable_for {var}"
+            return no(f"{eq.id} is marked not_solvable_for {var}")
         x = sympy.Symbol(var)
         res = self.residual(eq)
         coef = sympy.diff(res, x)
         if coef.has(x):
-            return f"{eq.id} is not linear in {var} (non-invertible or multi-branch term)"
+            return no(f"{eq.id} is not linear in {var} (non-invertible or multi-branch term)")
         if coef == 0:
-            return f"{var} does not appear in {eq.id}"
+            return no(f"{var} does not appear in {eq.id}")
         if coef.free_symbols and not coef.is_polynomial(*coef.free_symbols):
-            return (f"{eq.id} solved for {var} divides by {sympy.sstr(coef)[:60]}, not a polynomial in signals "
-                    "(its zeros cannot be cleared)")
+            return no(f"{eq.id} solved for {var} divides by {sympy.sstr(coef)[:60]}, not a polynomial in signals "
+                      "(its zeros cannot be cleared)")
         rest = res.subs(x, 0)
         return Solution(expr=-rest / coef, coefficient=coef)
 
@@ -209,7 +219,8 @@ def _determinant(jac: sympy.Matrix, probes: int = 8, seed: int = 7) -> sympy.Exp
         v0 = values[0]
         if all(abs(v - v0) <= 1e-9 * abs(v0) for v in values):
             near = round(v0)
-            return sympy.Integer(near) if abs(v0 - near) <= 1e-9 * abs(v0) else sympy.Float(v0)
+            # 12 significant digits: the same number whatever the machine's LAPACK path
+            return sympy.Integer(near) if abs(v0 - near) <= 1e-9 * abs(v0) else sympy.Float(float(f"{v0:.12g}"))
     if not all(v.is_polynomial(*syms) for v in jac):
         return None
     return sympy.expand(jac.det(method="berkowitz"))

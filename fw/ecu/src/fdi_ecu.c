@@ -14,7 +14,7 @@
 #define BAR_TO_PA 1.0e5f
 #define WARMUP_MARGIN_STEPS 20U
 /* Isolation episodes (fdi_diag.h): a quiet test exonerates only after 3 s, the response window in which the
-   analysis states the per-test fault sizes (fdi-analyze fault-sizes: alarm within a 3 s step); an episode
+   analysis states the per-test fault sizes (fdi-tune fault-sizes: alarm within a 3 s step); an episode
    ends after 3 s without any alarm. */
 #define ISO_SETTLE_STEPS 300U
 #define EPISODE_CLEAR_STEPS 300U

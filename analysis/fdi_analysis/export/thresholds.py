@@ -1,0 +1,81 @@
+"""The thresholds TOML file (`Thresholds`): gate, design point, the hand-written kinds' variances, and its
+generated parts, the hand-maintained part above them kept byte for byte: the [augment] table (tests added to
+the structural selection for practical detectability, written by `fdi-tune augment`) and, last, the
+[generated] table (variance per generated residual) and the [observer] table (the reference sensitivity of
+each observer generator's gain design), written by `fdi-tune calibrate`."""
+
+from __future__ import annotations
+
+import tomllib
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from fdi_analysis.residuals.observer import ObserverReference
+
+
+@dataclass(frozen=True)
+class Thresholds:
+    """Residual normalisation per generator kind: gate (in standard deviations) and fault-free variance."""
+
+    design: tuple[float, float, float, float]  # dt, cutoff_hz, zeta, obs_gain
+    gate: float
+    variance: dict[str, float]
+    source: str
+    generated: dict[str, float] = field(default_factory=dict)  # by MSO equation set (space separated)
+    augment: tuple[str, ...] = ()  # equation sets of the tests added for practical detectability ([augment])
+    observer: dict[str, float] = field(default_factory=dict)  # c_ref of the observer generators ([observer])
+
+    @staticmethod
+    def load(path: Path) -> Thresholds:
+        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+        d = doc["design"]
+        return Thresholds(
+            design=(float(d["dt"]), float(d["cutoff_hz"]), float(d["zeta"]), float(d["obs_gain"])),
+            gate=float(doc["gate"]),
+            variance={str(k): float(v) for k, v in doc["variance"].items()},
+            source=str(path),
+            generated={str(k): float(v) for k, v in doc.get("generated", {}).items()},
+            augment=tuple(str(t) for t in doc.get("augment", {}).get("tests", [])),
+            observer={str(k): float(v) for k, v in doc.get("observer", {}).items()},
+        )
+
+    def observer_reference(self) -> ObserverReference:
+        """The reference of the observer generators' gain design: the [observer] table's c_ref values."""
+        return ObserverReference(c_ref=self.observer)
+
+
+MARKER = "# ---- generated residuals: written by `fdi-tune calibrate`, do not edit below ----"
+AUGMENT_MARKER = "# ---- tests added for practical detectability: written by `fdi-tune augment` ----"
+
+
+def with_generated(text: str, rows: Sequence[tuple[str, float, str]], provenance: str,
+                   observer: Sequence[tuple[str, float, str]] = ()) -> str:
+    """The file's text with its [generated] table (rows: equation set, variance, comment) and its [observer]
+    table (equation set, c_ref, comment) replaced."""
+    head = text.split(MARKER)[0].rstrip("\n") + "\n\n"
+    lines = [MARKER, f"# {provenance}", "[generated]"]
+    for eqs, var, comment in rows:
+        lines.append(f"# {comment}")
+        lines.append(f'"{eqs}" = {var:.4g}')
+    if observer:
+        lines += ["", "# reference sensitivity c_ref = RMS of d r / d x on the reference drive (3 significant digits) "
+                  "of each observer generator: its gain's regularisation eps = (0.1 c_ref)^2", "[observer]"]
+        for eqs, c_ref, comment in observer:
+            lines.append(f"# {comment}")
+            lines.append(f'"{eqs}" = {c_ref:.3g}')
+    return head + "\n".join(lines) + "\n"
+
+
+def with_augment(text: str, tests: Sequence[tuple[str, str]], provenance: str) -> str:
+    """The file's text with its [augment] table replaced (placed just above the [generated] table, which is
+    kept); tests: (equation set, comment)."""
+    hand, _, generated = text.partition(MARKER)
+    head = hand.split(AUGMENT_MARKER)[0].rstrip("\n") + "\n\n"
+    lines = [AUGMENT_MARKER, *(f"# {p}" for p in provenance.splitlines()), "[augment]", "tests = ["]
+    for eqs, comment in tests:
+        lines.append(f"    # {comment}")
+        lines.append(f'    "{eqs}",')
+    lines.append("]")
+    tail = ("\n" + MARKER + generated) if generated or MARKER in text else ""
+    return head + "\n".join(lines) + "\n" + tail

@@ -1,0 +1,75 @@
+"""`fdi-quality`: the diagnosis quality suite (all faults x scenarios x sizes x step/ramp + fault-free drives)
+through the C ECU core, offline; writes quality.json and quality.md."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from tqdm import tqdm
+
+from fdi_host.ecu.bindings import TABLES
+from fdi_host.quality.report import markdown, write_json, write_markdown
+from fdi_host.quality.suite import DEFAULT_SIZES, QualityError, SuiteConfig, run_suite
+from fdi_host.sim.scenario import SCENARIOS
+
+EXAMPLES = """examples:
+  fdi-quality --table kin --out out/quality            # full run: 5 scenarios, x1 and x2, step and ramp, 30 min
+  fdi-quality --quick --out out/quality-quick          # CI size: 1 scenario, x1, step, 1 min fault-free
+  fdi-quality --table romo --faults f6 f10 --scenarios cornering slalom
+"""
+
+
+def quick_config(table: str) -> SuiteConfig:
+    return SuiteConfig(table=table, scenarios=("cornering",), multipliers=(1.0,), shapes=("step",),
+                       fault_free_minutes=0.3)
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="fdi-quality", description=__doc__, epilog=EXAMPLES,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--table", choices=TABLES, default="kin", help="diagnosis table of the ECU (default kin)")
+    p.add_argument("--quick", action="store_true", help="small run for CI (one scenario, x1, step)")
+    p.add_argument("--scenarios", nargs="+", default=None, help=f"scenarios (default: {' '.join(SCENARIOS)})")
+    p.add_argument("--faults", nargs="+", default=None, help="faults to run (default: every fault of the table)")
+    p.add_argument("--multipliers", nargs="+", type=float, default=None, help="sizes as multiples (default 1 2)")
+    p.add_argument("--shapes", nargs="+", default=None, choices=("step", "ramp"))
+    p.add_argument("--fault-free-minutes", type=float, default=None, help="fault-free driving (default 30)")
+    p.add_argument("--sizes", type=Path, default=DEFAULT_SIZES, help="minimal fault sizes (TOML [sizes])")
+    p.add_argument("-o", "--out", type=Path, default=None, help="folder for quality.json and quality.md")
+    args = p.parse_args(argv)
+    base = quick_config(args.table) if args.quick else SuiteConfig(table=args.table)
+    try:
+        cfg = SuiteConfig(
+            table=args.table,
+            scenarios=tuple(args.scenarios) if args.scenarios else base.scenarios,
+            multipliers=tuple(args.multipliers) if args.multipliers else base.multipliers,
+            shapes=tuple(args.shapes) if args.shapes else base.shapes,
+            faults=tuple(args.faults) if args.faults else (),
+            fault_free_minutes=base.fault_free_minutes if args.fault_free_minutes is None else args.fault_free_minutes,
+            sizes_file=args.sizes,
+        )
+        with tqdm(desc="quality", unit="run", file=sys.stderr) as bar:
+            def progress(text: str) -> None:
+                bar.set_postfix_str(text[:60])
+                bar.update(1)
+
+            result = run_suite(cfg, progress)
+    except QualityError as exc:
+        print(f"fdi-quality: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("fdi-quality: interrupted", file=sys.stderr)
+        return 130
+    print(markdown(result))
+    if args.out is not None:
+        args.out.mkdir(parents=True, exist_ok=True)
+        write_json(result, args.out / "quality.json")
+        write_markdown(result, args.out / "quality.md")
+        print(f"wrote {args.out / 'quality.json'} and {args.out / 'quality.md'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,62 @@
+"""A simulated drive as a command line asks for it (the drive options of `fdi_host.sim.options`), and its
+ground-truth file: shared by ``fdi-sim`` and ``fdi-sim live``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+from tqdm import tqdm
+
+from fdi_host.sim.faults import FaultSpecError, ground_truth, parse_fault
+from fdi_host.sim.plant import Plant
+from fdi_host.sim.scenario import ScenarioError, load_scenario
+from fdi_host.sim.vehicle_sim import SimConfig, SimResult, default_plant, simulate
+
+
+def write_truth(result: SimResult, plant: Plant, duration: float, start_time: float, noise: bool,
+                path: Path) -> Path:
+    """Ground truth of a drive (fault specs, per fault: equations, unit, active intervals) as JSON."""
+    info = {
+        v.name: {
+            "unit": v.unit,
+            "desc": v.desc,
+            "equations": [e.id for e in plant.model.equations if v.name in e.faults],
+        }
+        for v in plant.model.faults
+    }
+    gt = ground_truth(result.faults, result.t, info)
+    gt |= {"scenario": result.scenario.name, "seed": result.seed, "duration": duration, "start_time": start_time,
+           "noise": noise}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(gt, indent=2) + "\n", encoding="utf-8")
+    return path
+
+
+@dataclass(frozen=True)
+class Drive:
+    """A simulated drive as the command line asked for it."""
+
+    result: SimResult
+    plant: Plant
+    duration: float
+
+
+def simulate_from_args(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Drive:
+    """Scenario, scenario faults (unless --no-scenario-faults) and --fault specs, duration, seed and noise from
+    the common options of `fdi-sim` and `fdi-sim live`; simulates with a progress bar (a bad option: ap.error)."""
+    try:
+        sc = load_scenario(args.scenario)
+        extra = [parse_fault(f) for f in args.fault]
+    except (ScenarioError, FaultSpecError) as exc:
+        ap.error(str(exc))
+    faults = ([] if args.no_scenario_faults else list(sc.faults)) + extra
+    duration = args.duration if args.duration is not None else sc.duration
+    cfg = SimConfig(noise_scale=0.0 if args.no_noise else 1.0)
+    plant = default_plant()
+    with tqdm(total=round(duration / cfg.dt) + 1, unit="ms", desc=f"simulate {sc.name}", disable=args.quiet) as bar:
+        result = simulate(sc, faults, seed=args.seed, plant=plant, config=cfg, duration=duration,
+                          progress=bar.update)
+    return Drive(result=result, plant=plant, duration=duration)

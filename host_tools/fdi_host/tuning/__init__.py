@@ -1,0 +1,3 @@
+"""Closed-loop work that needs both the structural synthesis (`fdi_analysis`) and the simulator: threshold
+calibration on fault-free drives, the fault-size sweep, tests added for practical detectability, the generated
+residuals computed on a CAN log, and the kinematic table's calibration. CLI: ``fdi-tune``."""

@@ -1,0 +1,196 @@
+"""`fdi-tune calibrate MODEL`: residual noise levels from fault-free simulated drives -> thresholds file."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+EXAMPLE = ("example: fdi-tune calibrate analysis/models/romo_grouped.toml "
+           "--thresholds analysis/models/romo_thresholds.toml --scenarios cornering slalom straight")
+
+# All five scenarios of host_tools/scenarios; near standstill (low_speed) the tyre-law residuals are outside
+# their operating domain (Generator.min_speed) and not evaluated, as on the vehicle.
+DEFAULT_SCENARIOS = ("cornering", "fig6", "low_speed", "slalom", "straight")
+CALIBRATION_SEEDS = (1001, 1002)  # noise seeds of further drives per scenario besides the scenario's own
+# Each drive as long as its scenario (as the quality suite's fault-free drives): a shorter drive would miss the
+# end of a profile, e.g. fig6's hardest transient at 34 s (sawtooth yaw-rate reset with a side-slip step).
+CALIBRATION_DURATION: float | None = None
+CALIBRATION_WARMUP = 3.0  # s ignored at the start
+SWEEP_SCENARIO = "cornering"  # fault-sizes: the fault-free drive the step faults are injected in
+SWEEP_SEEDS = (777, 778)  # fault-sizes: an alarm counts when the drives of every seed alarm
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser(
+        "calibrate",
+        help="calibrate the variances of the generated residual generators on fault-free simulated drives",
+        description="Synthesise the residual generators of the selection (as export-c does), run them on "
+        "fault-free simulated drives of several scenarios and noise seeds, as the ECU sees them (the drives' "
+        "CAN frames at their cycle times, held at the diagnosis steps, DBC quantisation; fdi_host.can.ecu_view), "
+        "and write each residual's sigma (no raw alarm of the gate or the CUSUM in any drive inside each test's "
+        "operating domain after the warm-up, times a 25 %% margin) into the [generated] table of the "
+        "thresholds file (the rest of the file is kept).",
+        epilog=EXAMPLE,
+    )
+    p.add_argument("model", type=Path, help="model file (.toml)")
+    p.add_argument("--thresholds", type=Path, required=True, help="thresholds file to update")
+    p.add_argument("--scenarios", nargs="+", default=list(DEFAULT_SCENARIOS), help="fault-free drives")
+    p.add_argument("--duration", type=float, default=CALIBRATION_DURATION,
+                   help="seconds per drive (default: each scenario's own duration)")
+    p.add_argument("--seeds", type=int, nargs="*", default=list(CALIBRATION_SEEDS),
+                   help="noise seeds of further drives per scenario besides the scenario's own (default 1001 1002)")
+    p.add_argument("--warmup", type=float, default=CALIBRATION_WARMUP, help="seconds ignored at the start (default 3)")
+    p.add_argument("--workers", type=int, default=2, help="worker processes of the MSO search (default 2)")
+    p.add_argument("--check", action="store_true",
+                   help="do not write: exit 1 when the file's [generated] table differs from the calibration now")
+    p.set_defaults(func=run)
+
+    q = sub.add_parser(
+        "fault-sizes",
+        help="sweep step faults on a simulated drive: the stated fault size of every (fault, test) pair",
+        description="For every fault and every test of its signature, the smallest size on a 1-1.5-2-3-5-7 "
+        "grid at which the test raises a raw alarm (gate or CUSUM, inside its operating domain) within 3 s of "
+        "the step (the drive as the ECU sees it, as for calibrate); the stated size is the next grid value. "
+        "Written below a marker line of the fault-size file as [per_test.<fault>] tables (the hand-written "
+        "[sizes] and [limits] above are kept). Pairs that "
+        "the sweep leaves without a stated size are then swept in the other scenarios, each driven whole with the "
+        "fault from 4 s on, one drive per size (up to the fault's [limits] value, the limit included), and "
+        "written as [per_test_scenario.<fault>] tables (scenario, size); pairs no scenario detects within the "
+        "limit are written as 'not detectable by this test in practice'.",
+        epilog="example: fdi-tune fault-sizes analysis/models/romo_grouped.toml --thresholds "
+        "analysis/models/romo_thresholds.toml --sizes host_tools/scenarios/fault_sizes.toml",
+    )
+    q.add_argument("model", type=Path, help="model file (.toml)")
+    q.add_argument("--thresholds", type=Path, required=True, help="thresholds file (gate, sigmas)")
+    q.add_argument("--sizes", type=Path, required=True, help="fault-size file with [sizes] and [limits]")
+    q.add_argument("--scenario", default=SWEEP_SCENARIO, help="fault-free scenario the faults are injected in")
+    q.add_argument("--seeds", type=int, nargs="+", default=list(SWEEP_SEEDS),
+                   help="noise seeds of the sweep drives; an alarm counts when every seed alarms (default 777 778)")
+    q.add_argument("--other-scenarios", nargs="*", default=None,
+                   help="scenarios driven whole for the pairs the --scenario sweep leaves without a stated size "
+                   "(default: the other four of host_tools/scenarios, in that order for ties; none given: no such "
+                   "sweep)")
+    q.add_argument("--faults", nargs="*", help="only these faults (default: all of the selection)")
+    q.add_argument("--workers", type=int, default=2, help="worker processes of the MSO search (default 2)")
+    q.set_defaults(func=run_sizes)
+
+
+def run(args: argparse.Namespace) -> int:
+    from fdi_analysis.export.thresholds import Thresholds, with_generated
+    from fdi_analysis.model_loader import load_model
+    from fdi_analysis.residuals.evaluate import FilterDesign
+    from fdi_analysis.residuals.selected import selected_generators
+    from fdi_host.tuning.calibrate import MARGIN, calibrate
+    from fdi_host.tuning.drives import fault_free_drives, observer_reference, residual_segments
+
+    th = Thresholds.load(args.thresholds)
+    design = FilterDesign(th.design[0], th.design[1], th.design[2])
+    model = load_model(args.model)
+    print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
+    reference = observer_reference()  # c_ref measured now on the reference drive (written to [observer])
+    _, gens = selected_generators(model, reference, workers=args.workers, augment=th.augment)
+    signals = fault_free_drives(args.scenarios, [None, *args.seeds], args.duration, design.dt,
+                                log=lambda s: print(s, file=sys.stderr))
+    skip = round(args.warmup / design.dt)
+    drives = [residual_segments(g, signals, skip, design) for g in gens]
+    rows = []
+    for g, d in zip(gens, drives, strict=True):
+        c = calibrate(d, th.gate)
+        rows.append((" ".join(g.equations), c.variance, f"{g.name}: sigma {c.sigma:.3g} (fault-free RMS {c.rms:.3g}, "
+                                                         f"peak {c.peak:.3g})"))
+        print(f"{g.name}: sigma {c.sigma:.3g}  fault-free RMS {c.rms:.3g}  peak {c.peak:.3g}")
+    provenance = (f"fdi-tune calibrate {args.model.as_posix()} --scenarios {' '.join(args.scenarios)} "
+                  f"--seeds {' '.join(map(str, args.seeds))} (and each scenario's own seed) "
+                  + ("(each scenario's own duration)" if args.duration is None else f"--duration {args.duration:g}")
+                  + f" --warmup {args.warmup:g}, the drives' CAN frames as the ECU's steps see "
+                  f"them: in each test's operating domain, no raw alarm (|r| > gate sigma or CUSUM k = 1.5, "
+                  f"h = 150) in any fault-free drive, sigma times {MARGIN}")
+    observer_rows = []
+    for g in gens:
+        if g.observer is not None and g.observer.c.free_symbols:
+            c_ref = reference.sensitivity(g)
+            assert c_ref is not None
+            observer_rows.append((" ".join(g.equations), c_ref, f"{g.name}: observer for {g.observer.state}, "
+                                  f"residual {g.residual_equation}"))
+    old = args.thresholds.read_text(encoding="utf-8")
+    new = with_generated(old, rows, provenance, observer_rows)
+    if args.check:
+        if new != old:
+            print(f"{args.thresholds} is stale: run scripts/generate.sh (fdi-tune calibrate)", file=sys.stderr)
+            return 1
+        print(f"{args.thresholds} is up to date")
+        return 0
+    args.thresholds.write_text(new, encoding="utf-8")
+    print(f"wrote {args.thresholds}")
+    return 0
+
+
+def run_sizes(args: argparse.Namespace) -> int:
+
+    import numpy as np
+
+    from fdi_analysis.export.thresholds import Thresholds
+    from fdi_analysis.model_loader import load_model
+    from fdi_analysis.residuals.selected import selected_generators
+    from fdi_host.tuning import sweep, sweep_manoeuvres
+    from fdi_host.tuning.drives import observer_reference
+
+    def say(text: str) -> None:
+        print(text, file=sys.stderr)
+
+    th = Thresholds.load(args.thresholds)
+    size_file = sweep.SizeFile.load(args.sizes)
+    model = load_model(args.model)
+    print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
+    _, gens = selected_generators(model, observer_reference(th), workers=args.workers, augment=th.augment)
+    sigmas = [float(np.sqrt(th.generated[" ".join(g.equations)])) for g in gens]
+    faults = sorted({f for g in gens for f in g.faults}, key=lambda f: int(f[1:]))
+    if args.faults:
+        faults = [f for f in faults if f in set(args.faults)]
+    missing = size_file.lacking(faults)
+    if missing:
+        print(f"error: {args.sizes} lacks [sizes] or [limits] for {', '.join(missing)}", file=sys.stderr)
+        return 2
+    run_drive = sweep.scenario_drive(args.scenario)
+    others = [s for s in (DEFAULT_SCENARIOS if args.other_scenarios is None else args.other_scenarios)
+              if s != args.scenario]
+    whole_drive = sweep_manoeuvres.scenario_drive()
+    pairs: list[sweep.PairLimit] = []
+    elsewhere: list[sweep.ScenarioLimit] = []
+    for f in faults:
+        mine = size_file.detection_limits(gens, sigmas, th.gate, f, run_drive, args.seeds, log=say)
+        pairs.extend(mine)
+        pending = [(g, s) for g, s in zip(gens, sigmas, strict=True)
+                   if any(p.test == g.name and p.stated is None for p in mine)]
+        if pending and others:
+            found = sweep_manoeuvres.sweep_scenarios(pending, th.gate, f, size_file.sizes[f] / 10.0,
+                                                     size_file.limits[f], whole_drive, args.seeds, others, log=say)
+            elsewhere.extend(found.values())
+    provenance = (f"fdi-tune fault-sizes {args.model.as_posix()} --scenario {args.scenario} "
+                  f"--seeds {' '.join(map(str, args.seeds))} (CAN frames as the ECU's steps see them)\n"
+                  f"steps of {sweep.ON:g} s (then {sweep.OFF:g} s off) "
+                  f"from {sweep.START:g} s, "
+                  "sizes from [sizes] / 10 up to [limits] on the grid 1, 1.5, 2, 3, 5, 7 x 10^k;\n"
+                  "raw alarm of the diagnoser with every seed (|r| > gate sigma or CUSUM k = 1.5, h = 150 from the "
+                  "onset, sigma of "
+                  f"{args.thresholds.as_posix()}) inside the test's operating domain;\n"
+                  "stated size = the grid value above the first alarm, confirmed (raised along the grid until it "
+                  "alarms in a drive of its own with every seed and every seed + "
+                  f"{', '.join(map(str, sweep.CONFIRM_SEED_OFFSETS))});\n"
+                  "pairs without a stated size there: swept in "
+                  f"{', '.join(others) if others else '(no other scenario)'}, each driven whole with the fault from "
+                  f"{sweep_manoeuvres.ONSET:g} s on (an alarm after the onset with every seed, none in the seed's "
+                  "fault-free drive), sizes up to the limit included, the scenario of the first alarm refined and "
+                  "confirmed alike -> [per_test_scenario.<fault>];\n"
+                  "tests/analysis/test_residual_faults.py checks every pair at it with another noise seed.")
+    section = sweep.render_section(pairs, provenance, [g.name for g in gens], args.scenario, elsewhere, others)
+    if args.faults:
+        print(section)
+        return 0
+    args.sizes.write_text(sweep.write_section(args.sizes.read_text(encoding="utf-8"), section), encoding="utf-8")
+    n_primary = sum(p.stated is not None for p in pairs)
+    print(f"wrote {args.sizes}: {n_primary} pairs with a stated size in {args.scenario}, {len(elsewhere)} in another "
+          f"scenario, {len(pairs) - n_primary - len(elsewhere)} not detectable in practice")
+    return 0
