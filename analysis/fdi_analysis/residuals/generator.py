@@ -86,6 +86,9 @@ class Generator:
     domain_reason: str = ""  # where min_speed comes from in the model
     observer: Observer | None = None  # integral causality for one state (expr then depends on XHAT)
     note: str = ""  # a causality the synthesis considered and did not take, and why ("" for none)
+    # d r / d f_j of each fault of the signature with a nonzero steady-state sensitivity, over the same Node
+    # symbols (and XHAT) as `expr`: what the generator also computes on line (`residuals.sensitivity`)
+    sensitivities: tuple[tuple[str, sympy.Expr], ...] = ()
 
     def domain(self) -> str:
         if self.min_speed <= 0.0:
