@@ -22,10 +22,11 @@ EXAMPLE = ("example: fdi-analyze export-c analysis/models/romo_grouped.toml "
 def register(sub: Any) -> None:
     p = sub.add_parser(
         "export-c",
-        help="write the C diagnosis table (fdi_table_t) of the optimal method-B MSO selection",
-        description="Select the optimal MSO set of MODEL (method B, fewest tests then fewest unknowns) among the "
-        "realizable candidates, append the tests of the thresholds file's [augment] table (fdi-tune augment: "
-        "practical detectability), and write NAME.h / NAME.c for fw/ (tests with fault bitmasks, signals, "
+        help="write the C diagnosis table (fdi_table_t) and residual generators of the tests on board",
+        description="Take the tests of the thresholds file's [selection] table (fdi-analyze practical: selection "
+        "by practical isolability) or, without one, the optimal MSO selection of MODEL (method B, fewest tests "
+        "then fewest unknowns) among the realizable candidates, and write NAME.h / NAME.c for fw/ (tests with "
+        "fault bitmasks, signals, "
         "generator kinds, gates and variances, fault names, the signature matrix and the isolability classes) "
         "and the residual generators of the tests.",
         epilog=EXAMPLE,
@@ -69,7 +70,7 @@ def generate_all(model_path: Path, thresholds_path: Path, out: Path, name: str, 
     sizes = FaultSizes.load(sizes_path) if sizes_path is not None else None
     thresholds = Thresholds.load(thresholds_path)
     tests, gens = selected_generators(model, thresholds.observer_reference(), workers=workers, progress=progress,
-                                      augment=thresholds.augment)
+                                      selection=thresholds.selection, sensitivities=True)
     header, source = render(model, tests, thresholds, name, command,
                             generated=[True] * len(tests), sizes=sizes)
     if report_dir is not None:

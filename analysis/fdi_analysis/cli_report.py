@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from fdi_analysis.model_loader import load_model
-from fdi_analysis.plots import plot_dm, plot_isolability
+from fdi_analysis.plots import plot_dm, plot_isolability, save
 from fdi_analysis.report import write_json, write_markdown
 from fdi_analysis.summary import Summary, summarize
 
@@ -55,8 +55,8 @@ def run(args: argparse.Namespace) -> int:
         out.mkdir(parents=True, exist_ok=True)
         plots: dict[str, str] = {}
         if not args.no_plots:
-            plot_dm(s, out / "dm.png")
-            plot_isolability(s, out / "isolability.png")
+            save(plot_dm(s), out / "dm.png")
+            save(plot_isolability(s), out / "isolability.png")
             plots = {"DM decomposition": "dm.png", "Single-fault isolability": "isolability.png"}
         write_json(s, out / "report.json")
         write_markdown(s, out / "report.md", plots)

@@ -17,7 +17,7 @@ from fdi_analysis.interpretation import interpret
 from fdi_analysis.model import Model
 from fdi_analysis.model_loader import load_model
 from fdi_analysis.mso import bits
-from fdi_analysis.plots import plot_fault_matrix, plot_selected_faults
+from fdi_analysis.plots import plot_fault_matrix, plot_selected_faults, save
 from fdi_analysis.residuals.reasons import Reason
 from fdi_analysis.selection import Selection, greedy, optimal
 
@@ -153,13 +153,13 @@ def write_outputs(out: Path, model: Model, n_sets: int, kind: str, cands: list[A
     st = model.structure()
     out.mkdir(parents=True, exist_ok=True)
     all_sets = [t.faults for t in cands]
-    plot_fault_matrix(fault_matrix(all_sets, st.nf, "A"), fault_matrix(all_sets, st.nf, "B"), st.faults,
-                      f"{model.name}: fault matrix of all {n_sets:,} {kind}", out / "fault_matrix.png")
+    save(plot_fault_matrix(fault_matrix(all_sets, st.nf, "A"), fault_matrix(all_sets, st.nf, "B"), st.faults,
+                           f"{model.name}: fault matrix of all {n_sets:,} {kind}"), out / "fault_matrix.png")
     best = selections["optimal B"]
-    plot_selected_faults(signature_matrix(best.tests, st.nf), st.faults,
-                         [f"{k + 1}: {t.label}" for k, t in enumerate(best.tests)],
-                         f"{model.name}: faults affecting each selected MSO set (optimal, method B)",
-                         out / "selected_faults.png")
+    save(plot_selected_faults(signature_matrix(best.tests, st.nf), st.faults,
+                              [f"{k + 1}: {t.label}" for k, t in enumerate(best.tests)],
+                              f"{model.name}: faults affecting each selected MSO set (optimal, method B)"),
+         out / "selected_faults.png")
     data = {
         "model": model.name,
         "candidate_source": kind,

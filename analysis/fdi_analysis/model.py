@@ -42,6 +42,7 @@ class Variable:
     role: Role
     unit: str = ""
     desc: str = ""
+    input: bool = False  # a known that drives the system (actuator command) rather than a measurement
 
 
 @dataclass(frozen=True)

@@ -184,7 +184,8 @@ class _ModelBuilder:
                     raise ModelError(f"[[{role}]] entry needs a valid 'name', got {name!r}", file=self.file)
                 if name in variables or name in params:
                     raise ModelError(f"variable {name!r} declared twice", file=self.file, symbol=name)
-                variables[name] = Variable(name, role, str(raw.get("unit", "")), str(raw.get("desc", "")))
+                variables[name] = Variable(name, role, str(raw.get("unit", "")), str(raw.get("desc", "")),
+                                           bool(raw.get("input", False)) and role == "known")
         equations: list[Equation] = list(base.equations) if base else []
         removed = self.meta.get("remove_equations", [])
         for eid in removed:

@@ -1,20 +1,33 @@
-"""Pictures of the structure: the DM-ordered incidence matrix and the single-fault isolability matrix."""
+"""Pictures of the structure: the DM-ordered incidence matrix, the single-fault isolability matrix, the paper's
+fault matrix (Fig. 4) and selected-faults chart (Fig. 5), and the structural next to the practical isolability
+of a selection. Each function draws into a given Axes (`ax=`, for notebooks) or a new figure, and returns the
+figure; `save` writes it to a file. No backend is chosen here."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 
 from fdi_analysis.summary import Summary
 
 
-def plot_dm(summary: Summary, path: Path) -> None:
-    """Incidence matrix with rows/columns in DM order (M-, M0 blocks, M+), faults on the right."""
+def _figure(ax: Axes | None, size: tuple[float, float]) -> tuple[Figure, Axes]:
+    if ax is None:
+        fig, new = plt.subplots(figsize=size)
+        return fig, new
+    owner = ax.get_figure()
+    assert isinstance(owner, Figure)
+    return owner, ax
+
+
+def plot_dm(summary: Summary) -> Figure:
+    """Incidence matrix with rows/columns in DM order (M-, M0 blocks, M+), faults on the right (two axes, so
+    always a figure of its own)."""
     st = summary.structure
     dm = summary.dm
     rows = [*dm.minus_eqs, *dm.zero_eqs, *dm.plus_eqs]
@@ -43,17 +56,16 @@ def plot_dm(summary: Summary, path: Path) -> None:
     axf.set_xticks(range(st.nf), list(st.faults), fontsize=5, rotation=90)
     axf.set_title("faults", fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
+    return fig
 
 
-def plot_isolability(summary: Summary, path: Path) -> None:
+def plot_isolability(summary: Summary, ax: Axes | None = None) -> Figure:
     """Single-fault isolability: a filled cell (row i, column j) means fault i cannot be isolated from j."""
     st = summary.structure
     iso = summary.isolability
     n = st.nf
     M = ~iso.isolable
-    fig, ax = plt.subplots(figsize=(max(4.0, 0.28 * n), max(4.0, 0.28 * n)))
+    fig, ax = _figure(ax, (max(4.0, 0.28 * n), max(4.0, 0.28 * n)))
     ax.imshow(M, cmap="Blues", vmin=0, vmax=1.6)
     ax.set_xticks(range(n), list(st.faults), fontsize=6, rotation=90)
     ax.set_yticks(range(n), list(st.faults), fontsize=6)
@@ -61,15 +73,15 @@ def plot_isolability(summary: Summary, path: Path) -> None:
     ax.set_ylabel("fault i (not isolable from j)")
     ax.set_title(f"{summary.model.name}: single-fault isolability", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
+    return fig
 
 
-def plot_fault_matrix(fm_a: np.ndarray, fm_b: np.ndarray, faults: tuple[str, ...], title: str, path: Path) -> None:
+def plot_fault_matrix(fm_a: np.ndarray, fm_b: np.ndarray, faults: Sequence[str], title: str,
+                      ax: Axes | None = None) -> Figure:
     """The paper's Fig. 4: method A as 'x', method B as red squares (row = occurred fault, 0 = no fault)."""
     n = fm_a.shape[0]
     labels = ["0", *(f.lstrip("f") for f in faults)]
-    fig, ax = plt.subplots(figsize=(max(4.0, 0.3 * n), max(4.0, 0.3 * n)))
+    fig, ax = _figure(ax, (max(4.0, 0.3 * n), max(4.0, 0.3 * n)))
     by, bx = np.nonzero(fm_b)
     ax.scatter(bx, by, marker="s", s=70, facecolors="none", edgecolors="tab:red", linewidths=1.2,
                label="method B (signatures identical)")
@@ -85,15 +97,14 @@ def plot_fault_matrix(fm_a: np.ndarray, fm_b: np.ndarray, faults: tuple[str, ...
     ax.set_title(title, fontsize=9)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=7, ncol=2)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
+    return fig
 
 
-def plot_selected_faults(fsm: np.ndarray, faults: tuple[str, ...], row_labels: list[str], title: str,
-                         path: Path) -> None:
+def plot_selected_faults(fsm: np.ndarray, faults: Sequence[str], row_labels: list[str], title: str,
+                         ax: Axes | None = None) -> Figure:
     """The paper's Fig. 5: which faults affect each selected MSO set (rows = selection index)."""
     nt, nf = fsm.shape
-    fig, ax = plt.subplots(figsize=(max(5.0, 0.3 * nf), max(2.5, 0.35 * nt + 1.2)))
+    fig, ax = _figure(ax, (max(5.0, 0.3 * nf), max(2.5, 0.35 * nt + 1.2)))
     yy, xx = np.nonzero(fsm)
     ax.scatter(xx, yy, marker="s", s=60, c="tab:blue")
     ax.set_xticks(range(nf), [f.lstrip("f") for f in faults], fontsize=7)
@@ -105,5 +116,40 @@ def plot_selected_faults(fsm: np.ndarray, faults: tuple[str, ...], row_labels: l
     ax.grid(True, lw=0.3, alpha=0.5)
     ax.set_title(title, fontsize=9)
     fig.tight_layout()
+    return fig
+
+
+def save(fig: Figure, path: Path) -> Path:
+    """Write a figure made by one of these functions to `path` (PNG) and close it."""
     fig.savefig(path, dpi=130)
     plt.close(fig)
+    return path
+
+
+def plot_practical_isolability(faults: Sequence[str], structural: Mapping[tuple[str, str], bool],
+                               practical: Mapping[tuple[str, str], int], n_scenarios: int, title: str,
+                               ax: Axes | None = None) -> Figure:
+    """Structural next to practical isolability of a selection: cell (i, j) white when the tests practically
+    separate faults i and j in every manoeuvre, shaded by the number of manoeuvres where they do not,
+    crossed when the tests cannot separate them even structurally (method B)."""
+    n = len(faults)
+    fig, ax = _figure(ax, (max(5.0, 0.3 * n + 1.5), max(4.5, 0.3 * n + 1.0)))
+    missing = np.zeros((n, n))
+    for i, a in enumerate(faults):
+        for j, b in enumerate(faults):
+            if i != j:
+                missing[i, j] = n_scenarios - practical.get((a, b), 0)
+    im = ax.imshow(missing, cmap="Oranges", vmin=0, vmax=max(1, n_scenarios))
+    sy, sx = np.nonzero([[i != j and not structural.get((a, b), False) for j, b in enumerate(faults)]
+                         for i, a in enumerate(faults)])
+    ax.scatter(sx, sy, marker="x", s=25, c="black", linewidths=0.8, label="not isolable structurally")
+    ax.set_xticks(range(n), [f.lstrip("f") for f in faults], fontsize=6)
+    ax.set_yticks(range(n), [f.lstrip("f") for f in faults], fontsize=6)
+    ax.set_xlabel("fault")
+    ax.set_ylabel("fault")
+    ax.set_title(title, fontsize=9)
+    cb = fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04)
+    cb.set_label(f"manoeuvres (of {n_scenarios}) without practical separation", fontsize=7)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.08), fontsize=7)
+    fig.tight_layout()
+    return fig

@@ -4,7 +4,7 @@ structural analysis `fdi_analysis` below them all):
   sim/      the vehicle simulator built from the model file, scenarios, Table I faults, sensors
   can/      frame type, DBC, E2E, logs, a drive's CAN traffic and the ECU's view of it
   ecu/      the C ECU core through ctypes: sessions and offline replay
-  tuning/   closed loop: calibration, fault-size sweep, augment, residuals on a log (``fdi-tune``)
+  tuning/   closed loop: screening, calibration, fault-size sweep, residuals on a log (``fdi-tune``)
   paper/    the paper's ARR3/ARR4 and Fig. 6
   live/     programs on a bus: sender, ``fdi-sim live``, ``fdi-ecu``, ``fdi-live``
   monitor/  scoring a run against the ground truth (``fdi-monitor``)

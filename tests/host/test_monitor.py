@@ -9,10 +9,11 @@ import pytest
 
 from fdi_host.can import e2e
 from fdi_host.can.dbc import RomoDatabase
+from fdi_host.ecu.records import DiagRecord, TableClasses
 from fdi_host.ecu.session import StepRecord
 from fdi_host.monitor.cli import Monitor
 from fdi_host.monitor.report import plot_diagnosis, plot_residuals, score_table, write_reports
-from fdi_host.monitor.score import DiagRecord, FaultWindow, TableClasses, fault_names, score_run, windows_from_truth
+from fdi_host.monitor.score import FaultWindow, fault_names, score_run, windows_from_truth
 
 # Signatures of the kinematic table (fw/src/fdi_kin_table.c): tests 0..3 over f1..f5, all unique.
 KIN = TableClasses.from_signatures([0x0D, 0x0E, 0x0F, 0x07, 0x0B], ["r1", "r2", "r3", "r4"])

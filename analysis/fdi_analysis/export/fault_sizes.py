@@ -1,4 +1,9 @@
-"""Which quiet tests may exonerate which fault: the reaction sizes of the residual analysis.
+"""The fault-size file (`FaultSizes`, one reader for every tool): the required size of each fault
+([requirement], the engineering requirement the quality suite, the screening and the practical selection
+work with), the physical limits ([limits]) and the sizes at which each test reacts ([per_test.<fault>], the
+fault-size sweep's smallest detectable sizes, extra information).
+
+Which quiet tests may exonerate which fault: the reaction sizes of the residual analysis.
 
 A test that is structurally sensitive to a fault but reacts to it only at sizes far above the size of the fault at
 hand stays quiet while that fault is present; if its quietness exonerated the fault, the isolation would clear the
@@ -13,6 +18,7 @@ reaction size.
 
 from __future__ import annotations
 
+import math
 import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -25,7 +31,7 @@ class FaultSizesError(ValueError):
 
 @dataclass(frozen=True)
 class FaultSizes:
-    sizes: Mapping[str, float]  # fault -> stated minimal detectable size
+    requirement: Mapping[str, float]  # fault -> required size (the size to detect and isolate)
     per_test: Mapping[str, Mapping[str, float | str]]  # fault -> test label -> size, or why there is none
     source: str
     # fault -> test label -> (scenario, size): pairs stated in another manoeuvre ([per_test_scenario.<fault>]);
@@ -39,12 +45,14 @@ class FaultSizes:
             doc = tomllib.loads(path.read_text(encoding="utf-8"))
         except (OSError, tomllib.TOMLDecodeError) as exc:
             raise FaultSizesError(f"{path}: {exc}") from exc
-        sizes = doc.get("sizes")
+        sizes = doc.get("requirement")
         if not isinstance(sizes, dict):
-            raise FaultSizesError(f"{path}: no [sizes] table")
-        bad = [f for f, v in sizes.items() if not isinstance(v, int | float) or not v > 0]
+            raise FaultSizesError(f"{path}: expected a [requirement] table (fault id = required size)")
+        bad = [f for f, v in sizes.items()
+               if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) or not v > 0]
         if bad:
-            raise FaultSizesError(f"{path}: [sizes] {bad[0]} must be a positive number")
+            raise FaultSizesError(f"{path}: [requirement] size of {bad[0]} must be a positive number, got "
+                                  f"{sizes[bad[0]]!r}")
         per_test = doc.get("per_test", {})
         for f, row in per_test.items():
             for test, v in row.items():
@@ -61,6 +69,16 @@ class FaultSizes:
                 elsewhere.setdefault(f, {})[test] = (v["scenario"], float(v["size"]))
         limits = {f: float(v) for f, v in doc.get("limits", {}).items() if isinstance(v, int | float)}
         return FaultSizes({f: float(v) for f, v in sizes.items()}, per_test, str(path), elsewhere, limits)
+
+    def check_faults(self, faults: Sequence[str]) -> None:
+        """FaultSizesError when the file names a fault that is not in `faults` or lacks a required one."""
+        unknown = [f for f in self.requirement if f not in faults]
+        if unknown:
+            raise FaultSizesError(f"{self.source}: unknown fault {unknown[0]!r} in [requirement] (faults are "
+                                  f"{faults[0]}..{faults[-1]})")
+        missing = [f for f in faults if f not in self.requirement]
+        if missing:
+            raise FaultSizesError(f"{self.source}: [requirement] lacks {', '.join(missing)}")
 
     def reaction_size(self, fault: str, test: str) -> float:
         """The size of `fault` at which `test` reacts; 0 when it does not (or was not measured)."""

@@ -1,8 +1,8 @@
 """The thresholds TOML file (`Thresholds`): gate, design point, the hand-written kinds' variances, and its
-generated parts, the hand-maintained part above them kept byte for byte: the [augment] table (tests added to
-the structural selection for practical detectability, written by `fdi-tune augment`) and, last, the
-[generated] table (variance per generated residual) and the [observer] table (the reference sensitivity of
-each observer generator's gain design), written by `fdi-tune calibrate`."""
+generated parts, the hand-maintained part above them kept byte for byte: the [selection] table (the tests on
+board, by practical isolability, written by `fdi-analyze practical`) and, last, the [generated] table
+(variance per generated residual) and the [observer] table (the reference sensitivity of each observer
+generator's gain design), written by `fdi-tune calibrate`."""
 
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ class Thresholds:
     variance: dict[str, float]
     source: str
     generated: dict[str, float] = field(default_factory=dict)  # by MSO equation set (space separated)
-    augment: tuple[str, ...] = ()  # equation sets of the tests added for practical detectability ([augment])
+    selection: tuple[str, ...] = ()  # equation sets of the practical selection ([selection]); () = structural
     observer: dict[str, float] = field(default_factory=dict)  # c_ref of the observer generators ([observer])
 
     @staticmethod
@@ -36,7 +36,7 @@ class Thresholds:
             variance={str(k): float(v) for k, v in doc["variance"].items()},
             source=str(path),
             generated={str(k): float(v) for k, v in doc.get("generated", {}).items()},
-            augment=tuple(str(t) for t in doc.get("augment", {}).get("tests", [])),
+            selection=tuple(str(t) for t in doc.get("selection", {}).get("tests", [])),
             observer={str(k): float(v) for k, v in doc.get("observer", {}).items()},
         )
 
@@ -46,7 +46,7 @@ class Thresholds:
 
 
 MARKER = "# ---- generated residuals: written by `fdi-tune calibrate`, do not edit below ----"
-AUGMENT_MARKER = "# ---- tests added for practical detectability: written by `fdi-tune augment` ----"
+SELECTION_MARKER = "# ---- the tests on board, by practical isolability: written by `fdi-analyze practical` ----"
 
 
 def with_generated(text: str, rows: Sequence[tuple[str, float, str]], provenance: str,
@@ -67,12 +67,12 @@ def with_generated(text: str, rows: Sequence[tuple[str, float, str]], provenance
     return head + "\n".join(lines) + "\n"
 
 
-def with_augment(text: str, tests: Sequence[tuple[str, str]], provenance: str) -> str:
-    """The file's text with its [augment] table replaced (placed just above the [generated] table, which is
-    kept); tests: (equation set, comment)."""
+def with_selection(text: str, tests: Sequence[tuple[str, str]], provenance: str) -> str:
+    """The file's text with its [selection] table replaced (just above the generated tables, which are kept);
+    tests: (equation set, comment)."""
     hand, _, generated = text.partition(MARKER)
-    head = hand.split(AUGMENT_MARKER)[0].rstrip("\n") + "\n\n"
-    lines = [AUGMENT_MARKER, *(f"# {p}" for p in provenance.splitlines()), "[augment]", "tests = ["]
+    head = hand.split(SELECTION_MARKER)[0].rstrip("\n") + "\n\n"
+    lines = [SELECTION_MARKER, *(f"# {p}" for p in provenance.splitlines()), "[selection]", "tests = ["]
     for eqs, comment in tests:
         lines.append(f"    # {comment}")
         lines.append(f'    "{eqs}",')

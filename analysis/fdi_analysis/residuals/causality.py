@@ -496,12 +496,22 @@ def _readable(expr: sympy.Expr) -> str:
     return str(sympy.sstr(expr.xreplace(names)))
 
 
-def _assemble(model: Model, solver: Solver, ids: list[str], p: Plan, name: str, note: str = "") -> Generator:
-    """The generator of plan `p` (an observer generator without its gain: `design_observer` adds it)."""
+@dataclass(frozen=True)
+class SequenceValues:
+    """The values of a plan's computation sequence: each computed variable as an expression over the raw
+    node symbols, XHAT and the placeholders of divisions by signals (`inverses`: placeholder -> divisor)."""
+
+    value: dict[sympy.Symbol, sympy.Expr]
+    inverses: dict[sympy.Symbol, sympy.Expr]
+
+
+def sequence_values(model: Model, solver: Solver, p: Plan) -> SequenceValues:
+    """Run the steps of plan `p` symbolically (with a fault-keeping solver the values hold the fault symbols)."""
     known_sub = {sympy.Symbol(k.name): raw(k.name) for k in model.knowns}
     value: dict[sympy.Symbol, sympy.Expr] = {}
     inverses: dict[sympy.Symbol, sympy.Expr] = {}  # placeholder 1/c for a division by the signal c
     loop_inverse: dict[str, sympy.Symbol] = {}  # one placeholder per algebraic loop (its determinant)
+    faults = solver.fault_symbols
     if p.observer:
         value[sympy.Symbol(p.observer)] = XHAT
     for s in p.steps:
@@ -510,7 +520,7 @@ def _assemble(model: Model, solver: Solver, ids: list[str], p: Plan, name: str, 
         if s.kind == "derivative":
             pair = model.equation(s.equation).differential
             assert pair is not None
-            value[sympy.Symbol(s.var)] = derivative(value[sympy.Symbol(pair[1])], inverses)
+            value[sympy.Symbol(s.var)] = derivative(value[sympy.Symbol(pair[1])], inverses, faults)
             continue
         if s.kind == "loop":
             block = [model.equation(e) for e in s.equations]
@@ -531,28 +541,52 @@ def _assemble(model: Model, solver: Solver, ids: list[str], p: Plan, name: str, 
             value[sympy.Symbol(s.var)] = (sol.expr * sol.coefficient).xreplace(known_sub).xreplace(value) * inv
         else:
             value[sympy.Symbol(s.var)] = sol.expr.xreplace(known_sub).xreplace(value)
+    return SequenceValues(value, inverses)
+
+
+def residual_value(model: Model, solver: Solver, p: Plan, seq: SequenceValues) -> sympy.Expr:
+    """The residual equation of `p` evaluated on the sequence (divisions still as placeholders)."""
+    known_sub = {sympy.Symbol(k.name): raw(k.name) for k in model.knowns}
     req = model.equation(p.residual)
     if req.differential is not None:
         dx, x = req.differential
-        expr = value[sympy.Symbol(dx)] - derivative(value[sympy.Symbol(x)], inverses)
-    else:
-        expr = solver.residual(req).xreplace(known_sub).xreplace(value)
+        return seq.value[sympy.Symbol(dx)] - derivative(seq.value[sympy.Symbol(x)], seq.inverses, solver.fault_symbols)
+    return solver.residual(req).xreplace(known_sub).xreplace(seq.value)
+
+
+def division_degrees(p: Plan, expr: sympy.Expr, inverses: dict[sympy.Symbol, sympy.Expr]) -> list[int]:
+    """The highest power of each placeholder (sorted by name) in `expr`: the divisors' powers to clear."""
+    invs = sorted(inverses, key=str)
+    try:
+        poly = sympy.Poly(sympy.expand(expr), *invs)
+    except sympy.PolynomialError as exc:
+        raise NotRealizableError(Rejection(Reason.NOT_POLYNOMIAL, f"residual {p.residual} is not polynomial in a "
+                                           "quotient by a signal", p.residual)) from exc
+    return [max(m[i] for m in poly.monoms()) for i in range(len(invs))]
+
+
+def cleared(expr: sympy.Expr, inverses: dict[sympy.Symbol, sympy.Expr], degs: list[int]) -> sympy.Expr:
+    """`expr` times the divisors to the powers `degs` (placeholders sorted by name), expanded: no division by a
+    signal is left. A divisor that is a sum (the determinant of an algebraic loop) stands for a symbol of its
+    own until the powers have cancelled."""
+    invs = sorted(inverses, key=str)
+    stand = {v: sympy.Dummy(f"d_{v}") for v in invs}
+    out = sympy.expand(expr.xreplace({v: 1 / stand[v] for v in invs})
+                       * sympy.Mul(*[stand[v] ** d for v, d in zip(invs, degs, strict=True)]))
+    return sympy.expand(out.xreplace({stand[v]: inverses[v] for v in invs}))
+
+
+def _assemble(model: Model, solver: Solver, ids: list[str], p: Plan, name: str, note: str = "") -> Generator:
+    """The generator of plan `p` (an observer generator without its gain: `design_observer` adds it)."""
+    seq = sequence_values(model, solver, p)
+    value, inverses = seq.value, seq.inverses
+    expr = residual_value(model, solver, p, seq)
     scaled_by = ""
     if inverses:
         invs = sorted(inverses, key=str)
-        try:
-            poly = sympy.Poly(sympy.expand(expr), *invs)
-        except sympy.PolynomialError as exc:
-            raise NotRealizableError(Rejection(Reason.NOT_POLYNOMIAL, f"residual {p.residual} is not polynomial in a "
-                                               "quotient by a signal", p.residual)) from exc
-        degs = [max(m[i] for m in poly.monoms()) for i in range(len(invs))]
+        degs = division_degrees(p, expr, inverses)
         scale = sympy.Mul(*[inverses[v] ** d for v, d in zip(invs, degs, strict=True)])
-        # the residual times the divisors to their highest powers; a divisor that is a sum (the determinant of
-        # an algebraic loop) stands for a symbol of its own until the powers have cancelled
-        stand = {v: sympy.Dummy(f"d_{v}") for v in invs}
-        expr = sympy.expand(expr.xreplace({v: 1 / stand[v] for v in invs})
-                            * sympy.Mul(*[stand[v] ** d for v, d in zip(invs, degs, strict=True)]))
-        expr = sympy.expand(expr.xreplace({stand[v]: inverses[v] for v in invs}))
+        expr = cleared(expr, inverses, degs)
         scaled_by = sympy.sstr(scale)
     observer: Observer | None = None
     if p.observer:

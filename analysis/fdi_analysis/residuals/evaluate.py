@@ -110,6 +110,12 @@ def initial_values(g: Generator, signals: Mapping[str, np.ndarray]) -> np.ndarra
 def observer_residual(g: Generator, signals: Mapping[str, FloatArray], values: Mapping[Node, FloatArray],
                       design: FilterDesign) -> FloatArray:
     """The observer generator sample by sample (fdi_analysis.residuals.observer; same steps as the C)."""
+    return observer_run(g, signals, values, design)[0]
+
+
+def observer_run(g: Generator, signals: Mapping[str, FloatArray], values: Mapping[Node, FloatArray],
+                 design: FilterDesign) -> tuple[FloatArray, FloatArray]:
+    """(residual, estimate xh) of an observer generator at every sample."""
     o = g.observer
     assert o is not None
     syms = [XHAT, *[n.symbol for n in g.nodes]]
@@ -121,7 +127,9 @@ def observer_residual(g: Generator, signals: Mapping[str, FloatArray], values: M
     x0 = float(initial_values(g, {k: np.asarray(v)[:1] for k, v in signals.items()})[0])
     x0 = x0 if math.isfinite(x0) else 0.0  # as the C: the sensor outside the MSO set is not checked
     r = np.zeros(n)
+    xs = np.zeros(n)
     xh, (g_prev, _) = x0, fn_next(x0, *rows[0])
+    xs[0] = xh
     dt = design.dt
     for k in range(1, n):
         f, gain, a, c, e = fn(xh, *rows[k])
@@ -130,7 +138,23 @@ def observer_residual(g: Generator, signals: Mapping[str, FloatArray], values: M
         phi = math.expm1(jac * dt) / jac if abs(jac * dt) > SMALL_JDT else dt
         xh = xh + phi * 0.5 * (g_prev + g1)
         g_prev, r[k] = fn_next(xh, *rows[k])
-    return r
+        xs[k] = xh
+    return r, xs
+
+
+def sensitivity_series(g: Generator, signals: Mapping[str, FloatArray],
+                       design: FilterDesign | None = None) -> dict[str, FloatArray]:
+    """d r / d f of each fault of `g.sensitivities` at every sample (observer generators at their estimate)."""
+    design = design or FilterDesign()
+    if not g.sensitivities:
+        return {}
+    values = node_signals(g, signals, design)
+    syms = [XHAT, *[n.symbol for n in g.nodes]]
+    n = len(next(iter(signals.values())))
+    xs = observer_run(g, signals, values, design)[1] if g.observer is not None else np.zeros(n)
+    fn = sympy.lambdify(syms, [e for _, e in g.sensitivities], modules=VECTOR_MODULES, cse=True)
+    out = fn(xs, *[values[node] for node in g.nodes])
+    return {f: np.asarray(v, dtype=float) * np.ones(n) for (f, _), v in zip(g.sensitivities, out, strict=True)}
 
 
 def in_domain(g: Generator, signals: Mapping[str, FloatArray]) -> NDArray[np.bool_]:
@@ -156,3 +180,21 @@ def evaluable_segments(g: Generator, signals: Mapping[str, FloatArray], warmup: 
         r = residual(g, {k: np.asarray(v)[a:b] for k, v in signals.items()}, design)
         out.append((a + warmup, r[warmup:]))
     return out
+
+
+def response_time(g: Generator, design: FilterDesign | None = None, fraction: float = 0.9) -> float:
+    """Seconds after a step fault until the generator's response has reached `fraction` of its final value:
+    the step through its chain of `level` filters (each fdi_svf, the y output), plus, for an observer
+    generator, the time its error pole (-pole) takes to absorb the step's transient. A quiet test has had its
+    chance to react to a fault only once the fault has lasted this long."""
+    design = design or FilterDesign()
+    n = round(10.0 / design.dt)
+    y = np.ones(n)
+    y[0] = 0.0
+    for _ in range(g.level):
+        y = svf(y, design)[0]
+    reached = np.flatnonzero(y >= fraction)
+    t = float(reached[0]) * design.dt if reached.size else 10.0
+    if g.observer is not None and g.observer.pole > 0.0:
+        t += -math.log(1.0 - fraction) / g.observer.pole
+    return t

@@ -66,7 +66,7 @@ class Observer:
         return f"observer for {self.state} (integrates {self.equation}, {how}, lambda = {self.pole:.3g} 1/s)"
 
 
-XHAT = sympy.Symbol("xhat")  # the observer state in Observer and Generator expressions
+XHAT = sympy.Symbol("xhat", real=True)  # the observer state in Observer and Generator expressions
 
 
 @dataclass(frozen=True)

@@ -84,12 +84,8 @@ def initial_estimate(model: Model, solver: Solver, state: str) -> sympy.Expr:
 
 
 def d_dstate(expr: sympy.Expr) -> sympy.Expr:
-    """d expr / d XHAT with every symbol taken real (Abs -> sign, Max -> Heaviside; no re/im terms)."""
-    syms = sorted(expr.free_symbols, key=str)
-    real = {s: sympy.Symbol(f"_r_{s}", real=True) for s in syms}
-    back = {v: k for k, v in real.items()}
-    d = sympy.diff(expr.xreplace(real), real.get(XHAT, XHAT))
-    return d.xreplace(back)
+    """d expr / d XHAT (every symbol of a generator expression is real: Abs -> sign, Max -> Heaviside)."""
+    return sympy.diff(expr, XHAT)
 
 
 def gain_expr(a: sympy.Expr, c: sympy.Expr, lam: float, eps: float) -> sympy.Expr:

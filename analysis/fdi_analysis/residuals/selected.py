@@ -1,7 +1,8 @@
 """The selection among realizable MSO sets and its generators (what `fdi-analyze export-c` emits): the
-optimal structural selection, then the tests added for practical detectability (`fdi-tune augment`). The
-observer generators' gain design takes its `ObserverReference` from the caller (the thresholds file's
-[observer] table, or a reference drive in the closed-loop tools)."""
+practical selection of the thresholds file ([selection], `fdi-analyze practical`) when it has one, else the
+optimal structural selection. The observer generators' gain design takes its `ObserverReference` from the
+caller (the thresholds file's [observer] table, or a reference drive in the closed-loop tools); their fault
+sensitivities (`sensitivity`) are computed with them."""
 
 from __future__ import annotations
 
@@ -15,35 +16,40 @@ from fdi_analysis.residuals.causality import synthesize
 from fdi_analysis.residuals.generator import Generator
 from fdi_analysis.residuals.observer import ObserverReference
 from fdi_analysis.residuals.realizability import realizable_candidates
+from fdi_analysis.residuals.sensitivity import with_sensitivities
 from fdi_analysis.residuals.solvability import Solver
 from fdi_analysis.selection import optimal
 
 SELECTION_TIME_LIMIT_S = 900.0
 
 
-class AugmentError(ValueError):
-    """An [augment] test of the thresholds file that the model does not offer (any more)."""
+class SelectionError(ValueError):
+    """A [selection] test of the thresholds file that the model does not offer (any more)."""
 
 
 def selected_generators(model: Model, reference: ObserverReference | None, workers: int = 2,
-                        progress: bool = False,
-                        augment: Sequence[str] = ()) -> tuple[list[Candidate], list[Generator]]:
-    """Optimal method-B selection among the realizable candidates (one smallest MSO per signature, the
-    non-realizable ones dropped), followed by the `augment` tests (equation sets of realizable candidates,
-    the thresholds file's [augment] table), and the synthesised generator of each test."""
+                        progress: bool = False, selection: Sequence[str] = (),
+                        sensitivities: bool = False) -> tuple[list[Candidate], list[Generator]]:
+    """The tests on board and their synthesised generators: the `selection` (equation sets of realizable
+    candidates, the thresholds file's [selection] table) in that order, or without one the optimal method-B
+    selection among the realizable candidates (one smallest MSO per signature, the non-realizable ones
+    dropped); with `sensitivities` each generator also carries its fault sensitivities."""
     solver = Solver(model)
     keep = realizable(model, workers, progress, solver)
-    tests = structural_selection(model, keep)
-    tests += augmented_tests(model, keep, tests, augment)
-    return tests, generators(model, tests, reference, solver)
+    tests = chosen_tests(model, keep, selection) if selection else structural_selection(model, keep)
+    return tests, generators(model, tests, reference, solver, sensitivities)
 
 
 def generators(model: Model, tests: Sequence[Candidate], reference: ObserverReference | None,
-               solver: Solver | None = None) -> list[Generator]:
+               solver: Solver | None = None, sensitivities: bool = False) -> list[Generator]:
     """The synthesised residual generator of each test (named by its label)."""
     solver = solver or Solver(model)
     names = [e.id for e in model.equations]
-    return [synthesize(model, [names[i] for i in bits(t.equations)], t.label, solver, reference) for t in tests]
+    gens = [synthesize(model, [names[i] for i in bits(t.equations)], t.label, solver, reference) for t in tests]
+    if sensitivities:
+        keep_faults = Solver(model, keep_faults=True)
+        gens = [with_sensitivities(model, g, keep_faults) for g in gens]
+    return gens
 
 
 def realizable(model: Model, workers: int = 2, progress: bool = False,
@@ -64,20 +70,19 @@ def structural_selection(model: Model, keep: Sequence[Candidate]) -> list[Candid
     return list(sel.tests)
 
 
-def augmented_tests(model: Model, keep: Sequence[Candidate], selection: Sequence[Candidate],
-                    augment: Sequence[str]) -> list[Candidate]:
-    """The realizable candidates (of `keep`) named by their equation sets in `augment`, in that order."""
+def chosen_tests(model: Model, keep: Sequence[Candidate], selection: Sequence[str]) -> list[Candidate]:
+    """The realizable candidates (of `keep`) named by their equation sets in `selection`, in that order."""
     names = [e.id for e in model.equations]
     by_eqs = {" ".join(names[i] for i in bits(c.equations)): c for c in keep}
-    chosen = {c.equations for c in selection}
+    chosen: set[int] = set()
     out: list[Candidate] = []
-    for eqs in augment:
+    for eqs in selection:
         c = by_eqs.get(" ".join(eqs.split()))
         if c is None:
-            raise AugmentError(f"[augment] test '{eqs}' is not a realizable candidate MSO set of {model.name} "
-                             "(the model changed?): run `fdi-tune augment` again")
+            raise SelectionError(f"[selection] test '{eqs}' is not a realizable candidate MSO set of {model.name} "
+                                 "(the model changed?): run `fdi-tune screen` and `fdi-analyze practical` again")
         if c.equations in chosen:
-            raise AugmentError(f"[augment] test '{eqs}' ({c.label}) is already a test of the selection")
+            raise SelectionError(f"[selection] test '{eqs}' ({c.label}) is listed twice")
         chosen.add(c.equations)
         out.append(c)
     return out

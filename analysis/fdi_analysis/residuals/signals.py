@@ -9,7 +9,8 @@ differentiated `order` times (order <= level):
     (s, L, k), k >= 1    dy of the filter fed with (s, L-1, k-1)
 
 so a filter is identified by its input node and yields (s, L, k) and (s, L, k+1). A residual uses every
-signal at one common level (all terms delayed alike, as in the hand-written ARR3/ARR4 of fw/).
+signal at one common level (all terms delayed alike, as in the hand-written ARR3/ARR4 of fw/). Node symbols
+are real (as the signals are): derivatives of Abs and Max are sign and Heaviside, with no re/im terms.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ class Node:
 
     @property
     def symbol(self) -> sympy.Symbol:
-        return sympy.Symbol(f"{self.signal}__L{self.level}d{self.order}")
+        return sympy.Symbol(f"{self.signal}__L{self.level}d{self.order}", real=True)
 
     def source(self) -> Node | None:
         """The filter input node this node is an output of (None for a raw sample)."""
@@ -67,13 +68,17 @@ def raw(signal: str) -> sympy.Symbol:
     return Node(signal, 0, 0).symbol
 
 
-def derivative(expr: sympy.Expr, inverses: dict[sympy.Symbol, sympy.Expr]) -> sympy.Expr:
+def derivative(expr: sympy.Expr, inverses: dict[sympy.Symbol, sympy.Expr],
+               constants: frozenset[sympy.Symbol] = frozenset()) -> sympy.Expr:
     """d/dt of an expression of nodes by the chain rule; each node's derivative is a filter output.
-    `inverses` maps placeholders v = 1/c (divisions by signals) to c: d/dt v = -v^2 d/dt c."""
+    `inverses` maps placeholders v = 1/c (divisions by signals) to c: d/dt v = -v^2 d/dt c; `constants` are
+    symbols with no derivative (the faults, steps of constant size)."""
     total: sympy.Expr = sympy.Integer(0)
     for sym in sorted(expr.free_symbols, key=str):
+        if sym in constants:
+            continue
         if sym in inverses:
-            total += sympy.diff(expr, sym) * (-(sym**2) * derivative(inverses[sym], inverses))
+            total += sympy.diff(expr, sym) * (-(sym**2) * derivative(inverses[sym], inverses, constants))
         else:
             total += sympy.diff(expr, sym) * node_of(sym).derivative().symbol
     return total

@@ -50,12 +50,17 @@ class BlockSolution:
 
 
 class Solver:
-    """Cached solutions of the equations of one model (parameters substituted, faults set to zero)."""
+    """Cached solutions of the equations of one model (parameters substituted, faults set to zero, or kept as
+    symbols with `keep_faults`: the sequence then computes what the unknowns are under given fault sizes)."""
 
-    def __init__(self, model: Model) -> None:
+    def __init__(self, model: Model, keep_faults: bool = False) -> None:
         self.model = model
         self.params = {sympy.Symbol(k): sympy.Float(v) for k, v in model.parameter_values().items()}
-        self.fault_zero = {sympy.Symbol(f.name): sympy.Integer(0) for f in model.faults}
+        # kept faults are real symbols, as the signals (`Node.symbol`): real derivatives, no re/im terms
+        self.fault_symbols = frozenset(sympy.Symbol(f.name, real=True) for f in model.faults)
+        self.fault_zero: dict[sympy.Symbol, sympy.Expr] = {
+            sympy.Symbol(f.name): (sympy.Symbol(f.name, real=True) if keep_faults else sympy.Integer(0))
+            for f in model.faults}
         self._residuals: dict[str, sympy.Expr] = {}
         self._cache: dict[tuple[str, str], Solution | Rejection] = {}
         self._rational: dict[tuple[str, str], bool] = {}

@@ -28,7 +28,7 @@ from dataclasses import asdict, dataclass, field, is_dataclass
 from pathlib import Path
 from typing import Any
 
-from fdi_host.monitor.score import DiagRecord, TableClasses
+from fdi_host.ecu.records import DiagRecord, TableClasses
 from fdi_host.sim.faults import FAULT_IDS
 
 ORIGIN_LEAD = 0.0005  # s

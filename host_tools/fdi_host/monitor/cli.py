@@ -27,13 +27,15 @@ from typing import Any
 
 import can
 
+from fdi_analysis.cli_common import EXIT_ERROR, add_version, run, use_file_backend
 from fdi_host.can.dbc import RomoDatabase
+from fdi_host.ecu.records import DiagRecord, TableClasses
 from fdi_host.ecu.session import DIAG_ID, ORIGIN_LEAD, load_steps
 from fdi_host.live.bus import StopFlag, add_bus_arguments, open_bus, signal_ready
 from fdi_host.monitor.frames import FrameStats
 from fdi_host.monitor.gaps import Gap, GapTracker, gap_summary
 from fdi_host.monitor.report import frame_table, plot_diagnosis, plot_residuals, score_table, write_reports
-from fdi_host.monitor.score import DiagRecord, Score, TableClasses, fault_names, score_run, windows_from_truth
+from fdi_host.monitor.score import Score, fault_names, score_run, windows_from_truth
 
 EPILOG = """\
 examples:
@@ -169,7 +171,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="a silence of the diagnosis or sensor frames longer than this is a gap [s] (default 0.25)")
     ap.add_argument("--refresh", type=float, default=1.0, help="live table refresh period [s]")
     ap.add_argument("--quiet", action="store_true", help="no live table")
-    return ap
+    return add_version(ap)
 
 
 def finish(mon: Monitor, args: argparse.Namespace) -> int:
@@ -184,7 +186,7 @@ def finish(mon: Monitor, args: argparse.Namespace) -> int:
         truth = json.loads(args.truth.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:
         print(f"fdi-monitor: cannot read the truth file {args.truth}: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_ERROR
     score = mon.score(truth, args.grace)
     print(score_table(score), flush=True)
     windows = windows_from_truth(truth)
@@ -211,20 +213,26 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if args.truth is not None and not args.truth.parent.is_dir():
         ap.error(f"--truth {args.truth}: no such directory (the file itself may appear while the monitor runs)")
+    if not args.gap_threshold > 0.0:
+        ap.error("--gap-threshold must be > 0")
+    use_file_backend()
+    return run("fdi-monitor", lambda: monitor(args))
+
+
+def monitor(args: argparse.Namespace) -> int:
+    """``fdi-monitor`` after its options are parsed: listen, show, then score and report."""
     stop = StopFlag()
     try:
         classes, step = classes_for(args.table, args.classes)
     except (ImportError, OSError, RuntimeError, KeyError, ValueError) as exc:
         print(f"fdi-monitor: no fault signatures for table {args.table}: {exc}", file=sys.stderr)
-        return 2
-    if not args.gap_threshold > 0.0:
-        ap.error("--gap-threshold must be > 0")
+        return EXIT_ERROR
     mon = Monitor(RomoDatabase(), classes, step, gap_threshold=args.gap_threshold)
     try:
         bus = open_bus(args.interface, args.channel)
     except (OSError, ValueError, ImportError, can.CanError) as exc:
         print(f"fdi-monitor: cannot open {args.interface} bus: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_ERROR
     signal_ready(args.ready_file)
     tty = sys.stdout.isatty()
     shown = 0

@@ -18,10 +18,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from fdi_host.ecu.records import DiagRecord, TableClasses
 from fdi_host.ecu.session import StepRecord
 from fdi_host.monitor.frames import FrameStats
 from fdi_host.monitor.gaps import WHAT, Gap, gap_summary
-from fdi_host.monitor.score import DiagRecord, FaultWindow, Score, TableClasses
+from fdi_host.monitor.score import FaultWindow, Score
 from fdi_host.sim.faults import FAULT_IDS
 
 

@@ -1,5 +1,5 @@
-"""`fdi-quality`: the diagnosis quality suite (all faults x scenarios x sizes x step/ramp + fault-free drives)
-through the C ECU core, offline; writes quality.json and quality.md."""
+"""`fdi-quality`: the diagnosis quality suite (all faults at their required sizes x scenarios x noise seeds,
+plus fault-free drives) through the C ECU core, offline; writes quality.json and quality.md."""
 
 from __future__ import annotations
 
@@ -9,34 +9,39 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from fdi_analysis.cli_common import add_version, fail
 from fdi_host.ecu.bindings import TABLES
 from fdi_host.quality.report import markdown, write_json, write_markdown
-from fdi_host.quality.suite import DEFAULT_SIZES, QualityError, SuiteConfig, run_suite
+from fdi_host.quality.suite import CASE_SEEDS, DEFAULT_SIZES, QualityError, SuiteConfig, run_suite
 from fdi_host.sim.scenario import SCENARIOS
 
 EXAMPLES = """examples:
-  fdi-quality --table kin --out out/quality            # full run: 5 scenarios, x1 and x2, step and ramp, 30 min
-  fdi-quality --quick --out out/quality-quick          # CI size: 1 scenario, x1, step, 1 min fault-free
-  fdi-quality --table romo --faults f6 f10 --scenarios cornering slalom
+  fdi-quality --table romo --out out/quality-romo     # full run: 5 scenarios x 3 seeds, steps at the required sizes,
+                                                      # 30 min fault-free
+  fdi-quality --table romo --quick --out out/quality-quick   # CI size: cornering, one seed, 0.3 min fault-free
+  fdi-quality --table romo --faults f6 f10 --scenarios cornering slalom --shapes step ramp --multipliers 1 2
 """
 
 
 def quick_config(table: str) -> SuiteConfig:
-    return SuiteConfig(table=table, scenarios=("cornering",), multipliers=(1.0,), shapes=("step",),
-                       fault_free_minutes=0.3)
+    return SuiteConfig(table=table, scenarios=("cornering",), seeds=CASE_SEEDS[:1], fault_free_minutes=0.3)
 
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="fdi-quality", description=__doc__, epilog=EXAMPLES,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--table", choices=TABLES, default="kin", help="diagnosis table of the ECU (default kin)")
-    p.add_argument("--quick", action="store_true", help="small run for CI (one scenario, x1, step)")
+    add_version(p)
+    p.add_argument("--table", choices=TABLES, default="romo", help="diagnosis table of the ECU (default romo)")
+    p.add_argument("--quick", action="store_true", help="small run for CI (cornering, one seed)")
     p.add_argument("--scenarios", nargs="+", default=None, help=f"scenarios (default: {' '.join(SCENARIOS)})")
     p.add_argument("--faults", nargs="+", default=None, help="faults to run (default: every fault of the table)")
-    p.add_argument("--multipliers", nargs="+", type=float, default=None, help="sizes as multiples (default 1 2)")
+    p.add_argument("--seeds", nargs="+", type=int, default=None,
+                   help=f"noise seeds of the fault cases (default {' '.join(map(str, CASE_SEEDS))})")
+    p.add_argument("--multipliers", nargs="+", type=float, default=None,
+                   help="sizes as multiples of the required size (default 1)")
     p.add_argument("--shapes", nargs="+", default=None, choices=("step", "ramp"))
     p.add_argument("--fault-free-minutes", type=float, default=None, help="fault-free driving (default 30)")
-    p.add_argument("--sizes", type=Path, default=DEFAULT_SIZES, help="minimal fault sizes (TOML [sizes])")
+    p.add_argument("--sizes", type=Path, default=DEFAULT_SIZES, help="required fault sizes (TOML [requirement])")
     p.add_argument("-o", "--out", type=Path, default=None, help="folder for quality.json and quality.md")
     args = p.parse_args(argv)
     base = quick_config(args.table) if args.quick else SuiteConfig(table=args.table)
@@ -44,6 +49,7 @@ def main(argv: list[str] | None = None) -> int:
         cfg = SuiteConfig(
             table=args.table,
             scenarios=tuple(args.scenarios) if args.scenarios else base.scenarios,
+            seeds=tuple(args.seeds) if args.seeds else base.seeds,
             multipliers=tuple(args.multipliers) if args.multipliers else base.multipliers,
             shapes=tuple(args.shapes) if args.shapes else base.shapes,
             faults=tuple(args.faults) if args.faults else (),
@@ -56,9 +62,8 @@ def main(argv: list[str] | None = None) -> int:
                 bar.update(1)
 
             result = run_suite(cfg, progress)
-    except QualityError as exc:
-        print(f"fdi-quality: error: {exc}", file=sys.stderr)
-        return 2
+    except (QualityError, OSError) as exc:
+        return fail("fdi-quality", exc)
     except KeyboardInterrupt:
         print("fdi-quality: interrupted", file=sys.stderr)
         return 130

@@ -19,7 +19,6 @@ practice".
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,6 +26,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from fdi_analysis.export.fault_sizes import FaultSizes
 from fdi_analysis.residuals.evaluate import FilterDesign, evaluable_segments
 from fdi_analysis.residuals.generator import Generator
 from fdi_host.tuning.calibrate import first_alarm
@@ -195,8 +195,8 @@ def _confirmed(tests: Sequence[tuple[Generator, float]], gate: float, fault: str
 
 @dataclass(frozen=True)
 class SizeFile:
-    """The fault-size file as the sweep reads it: [sizes] (stated minimal sizes, the sweep starts at a tenth of
-    them), [limits] (physical limits, where it stops) and the generated [per_test.<fault>] tables."""
+    """The fault-size file as the sweep reads it: [requirement] (the required sizes; the sweep starts at a tenth
+    of them), [limits] (physical limits, where it stops) and the generated [per_test.<fault>] tables."""
 
     sizes: Mapping[str, float]
     limits: Mapping[str, float]
@@ -204,18 +204,17 @@ class SizeFile:
 
     @staticmethod
     def load(path: Path) -> SizeFile:
-        doc = tomllib.loads(path.read_text(encoding="utf-8"))
-        return SizeFile({f: float(v) for f, v in doc.get("sizes", {}).items()},
-                        {f: float(v) for f, v in doc.get("limits", {}).items()}, doc.get("per_test", {}))
+        f = FaultSizes.load(path)
+        return SizeFile(f.requirement, f.limits, f.per_test)
 
     def lacking(self, faults: Sequence[str]) -> list[str]:
-        """The faults without a [sizes] or a [limits] entry (they cannot be swept)."""
+        """The faults without a [requirement] or a [limits] entry (they cannot be swept)."""
         return [f for f in faults if f not in self.sizes or f not in self.limits]
 
     def detection_limits(self, gens: Sequence[Generator], sigmas: Sequence[float], gate: float, fault: str,
                          drive: Drive, seeds: Sequence[int],
                          log: Callable[[str], None] | None = None) -> list[PairLimit]:
-        """`sweep_fault` from [sizes] / 10 up to [limits]."""
+        """`sweep_fault` from [requirement] / 10 up to [limits]."""
         return sweep_fault(gens, sigmas, gate, fault, self.sizes[fault] / 10.0, self.limits[fault], drive, seeds,
                            log=log)
 

@@ -7,22 +7,25 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
+from fdi_analysis.cli_common import add_version, run
 from fdi_analysis.export.fault_sizes import FaultSizesError
 from fdi_analysis.export.table import ExportError
 from fdi_analysis.model import ModelError
 from fdi_analysis.residuals.reasons import NotRealizableError
-from fdi_analysis.residuals.selected import AugmentError
+from fdi_analysis.residuals.selected import SelectionError
+from fdi_analysis.resources import model_file
 from fdi_analysis.structure import StructureError
-from fdi_host.tuning.cli import augment, calibrate, kin, residuals
+from fdi_host.tuning.cli import calibrate, kin, residuals, screen
 
-SUBCOMMANDS = (calibrate, augment, residuals, kin)
+SUBCOMMANDS = (screen, calibrate, residuals, kin)
 
 EPILOG = """examples:
+  fdi-tune screen analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \\
+      --sizes host_tools/scenarios/fault_sizes.toml --out analysis/models/romo_screening.json
   fdi-tune calibrate analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml
   fdi-tune fault-sizes analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \\
-      --sizes host_tools/scenarios/fault_sizes.toml
-  fdi-tune augment analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \\
       --sizes host_tools/scenarios/fault_sizes.toml
   fdi-tune residuals analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \\
       --log out/drive.blf --plot out/residuals.png --compare-ecu
@@ -38,6 +41,7 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
+    add_version(parser)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for mod in SUBCOMMANDS:
         mod.register(sub)
@@ -47,15 +51,10 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    try:
-        code: int = args.func(args)
-    except (ModelError, StructureError, ExportError, FaultSizesError, AugmentError, NotRealizableError) as exc:
-        print(f"fdi-tune: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("fdi-tune: interrupted", file=sys.stderr)
-        return 130
-    return code
+    if isinstance(getattr(args, "model", None), Path):
+        args.model = model_file(args.model)  # a bare name: the shipped model
+    return run("fdi-tune", lambda: int(args.func(args)),
+               (ModelError, StructureError, ExportError, FaultSizesError, SelectionError, NotRealizableError))
 
 
 if __name__ == "__main__":

@@ -90,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
     model = load_model(args.model)
     print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
     reference = observer_reference()  # c_ref measured now on the reference drive (written to [observer])
-    _, gens = selected_generators(model, reference, workers=args.workers, augment=th.augment)
+    _, gens = selected_generators(model, reference, workers=args.workers, selection=th.selection)
     signals = fault_free_drives(args.scenarios, [None, *args.seeds], args.duration, design.dt,
                                 log=lambda s: print(s, file=sys.stderr))
     skip = round(args.warmup / design.dt)
@@ -144,7 +144,7 @@ def run_sizes(args: argparse.Namespace) -> int:
     size_file = sweep.SizeFile.load(args.sizes)
     model = load_model(args.model)
     print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
-    _, gens = selected_generators(model, observer_reference(th), workers=args.workers, augment=th.augment)
+    _, gens = selected_generators(model, observer_reference(th), workers=args.workers, selection=th.selection)
     sigmas = [float(np.sqrt(th.generated[" ".join(g.equations)])) for g in gens]
     faults = sorted({f for g in gens for f in g.faults}, key=lambda f: int(f[1:]))
     if args.faults:

@@ -67,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
         return 2
     model = load_model(args.model)
     print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
-    _, gens = selected_generators(model, th.observer_reference(), workers=args.workers, augment=th.augment)
+    _, gens = selected_generators(model, th.observer_reference(), workers=args.workers, selection=th.selection)
     missing = [g.name for g in gens if " ".join(g.equations) not in th.generated]
     if missing:
         print(f"fdi-tune: error: {args.thresholds} has no calibrated sigma for {', '.join(missing)}; run "

@@ -1,0 +1,238 @@
+"""Selection by practical isolability: the cheapest set of realizable tests that practically separates every
+pair of structurally isolable faults and practically detects every fault, in every manoeuvre.
+
+Input: per candidate test its structural signature F_t (the faults of its MSO set), its cost, and the
+(fault, manoeuvre) pairs it practically detects, D_t (its fault-to-noise ratio clears the gate with margin at
+the stated share of the manoeuvre's operating points: `fdi_host.tuning.screening`). A set of tests T must
+satisfy, for every manoeuvre s,
+
+    separation  for every pair {j, k} the realizable candidates isolate structurally (method B: their
+                signatures over all candidates differ), some t in T has (j, s) in D_t and k not in F_t, or
+                (k, s) in D_t and j not in F_t: one test sees one fault of the pair and is blind to the other;
+    detection   for every fault j, some t in T has (j, s) in D_t,
+
+and costs least (sum of the tests' costs). Requirements that no candidate can meet are not constraints: they
+are reported with the reason (`Unmet`). The problem is a weighted set cover, solved exactly: as MaxSAT with
+RC2 over CaDiCaL (python-sat, the solver of the structural SAT selection) when it is installed, otherwise as a
+0-1 linear program with HiGHS (scipy.optimize.milp); both prove optimality, and the tests check that they
+agree.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+MARGIN = 1.5  # a test practically detects a fault where its FNR clears the gate by this factor ...
+SHARE = 0.8  # ... at this share of a manoeuvre's operating points
+
+
+@dataclass(frozen=True)
+class FaultScreen:
+    """One fault of a candidate's signature: per scenario the share of operating points where the test
+    practically detects it, and the median FNR over the evaluable ones."""
+
+    share: dict[str, float]
+    median_fnr: dict[str, float]
+
+
+@dataclass(frozen=True)
+class CandidateScreen:
+    label: str
+    equations: str  # the MSO set, space separated
+    faults: tuple[str, ...]  # structural signature
+    sigma: float
+    min_speed: float  # operating domain (0: always evaluable)
+    cost: int  # operations per step of the residual (common subexpressions counted once) + filters
+    per_fault: dict[str, FaultScreen] = field(default_factory=dict)
+    rejected: str = ""  # why it has no generator after all ("" when screened)
+
+    def detects(self, fault: str, scenario: str, share: float = SHARE) -> bool:
+        fs = self.per_fault.get(fault)
+        return fs is not None and fs.share.get(scenario, 0.0) >= share
+
+
+@dataclass(frozen=True)
+class Screening:
+    """The screening file (`fdi-tune screen`): how every realizable candidate was measured, and the results."""
+
+    model: str
+    provenance: str
+    gate: float
+    margin: float
+    share: float
+    sizes: dict[str, float]
+    scenarios: tuple[str, ...]
+    candidates: tuple[CandidateScreen, ...]
+
+    def dump(self, path: Path) -> None:
+        doc = asdict(self)
+        doc["candidates"] = [asdict(c) | {"sigma": c.sigma if math.isfinite(c.sigma) else None}
+                             for c in self.candidates]
+        path.write_text(json.dumps(doc, indent=1, sort_keys=True, allow_nan=False) + "\n", encoding="utf-8")
+
+    @staticmethod
+    def load(path: Path) -> Screening:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+        cands = tuple(
+            CandidateScreen(c["label"], c["equations"], tuple(c["faults"]),
+                            float(c["sigma"]) if c["sigma"] is not None else math.nan, float(c["min_speed"]),
+                            int(c["cost"]), {f: FaultScreen(dict(v["share"]), dict(v["median_fnr"]))
+                                             for f, v in c["per_fault"].items()}, c["rejected"])
+            for c in doc["candidates"])
+        return Screening(doc["model"], doc["provenance"], float(doc["gate"]), float(doc["margin"]),
+                         float(doc["share"]), {k: float(v) for k, v in doc["sizes"].items()},
+                         tuple(doc["scenarios"]), cands)
+
+    def practical_candidates(self) -> list[PracticalCandidate]:
+        """The screened candidates (those with a generator) as the selection sees them."""
+        return [PracticalCandidate(c.label, frozenset(c.faults), c.cost,
+                                   frozenset((f, s) for f in c.faults for s in self.scenarios
+                                             if c.detects(f, s, self.share)))
+                for c in self.candidates if not c.rejected]
+
+
+@dataclass(frozen=True)
+class PracticalCandidate:
+    label: str
+    faults: frozenset[str]  # structural signature
+    cost: int
+    detects: frozenset[tuple[str, str]]  # (fault, scenario) practically detected
+
+
+@dataclass(frozen=True)
+class Unmet:
+    """A requirement no realizable candidate meets: a pair to separate (fault_b set) or a fault to detect."""
+
+    scenario: str
+    fault_a: str
+    fault_b: str  # "" for a detection requirement
+    reason: str
+
+
+@dataclass(frozen=True)
+class PracticalSelection:
+    tests: tuple[PracticalCandidate, ...]
+    cost: int
+    solver: str  # "rc2" or "highs"
+    unmet: tuple[Unmet, ...]
+    pairs: tuple[tuple[str, str], ...]  # the structurally isolable pairs required to be separated
+    scenarios: tuple[str, ...]
+
+
+def separates(t: PracticalCandidate, a: str, b: str, scenario: str) -> bool:
+    return ((a, scenario) in t.detects and b not in t.faults) or ((b, scenario) in t.detects and a not in t.faults)
+
+
+def isolable_pairs(candidates: Sequence[PracticalCandidate], faults: Sequence[str]) -> list[tuple[str, str]]:
+    """Pairs of faults whose signatures over all candidates differ (method B structural isolability)."""
+    sig = {f: frozenset(i for i, t in enumerate(candidates) if f in t.faults) for f in faults}
+    return [(a, b) for a, b in itertools.combinations(faults, 2) if sig[a] != sig[b]]
+
+
+def _unmet_reason(cands: Sequence[PracticalCandidate], a: str, b: str, s: str) -> str:
+    if not b:
+        holders = [t for t in cands if a in t.faults]
+        if not holders:
+            return f"no realizable test has {a} in its signature"
+        return (f"none of the {len(holders)} realizable tests with {a} in its signature reaches the required "
+                f"fault-to-noise ratio at the stated share of the operating points of {s}")
+    blind_a = [t for t in cands if a in t.faults and b not in t.faults]
+    blind_b = [t for t in cands if b in t.faults and a not in t.faults]
+    if not blind_a and not blind_b:
+        return f"no realizable test sees one of {a}, {b} and not the other (structurally not separable)"
+    return (f"{len(blind_a)} realizable tests see {a} without {b} and {len(blind_b)} see {b} without {a}; none of "
+            f"them detects its fault in {s} at the required fault-to-noise ratio")
+
+
+def select_practical(candidates: Sequence[PracticalCandidate], faults: Sequence[str],
+                     scenarios: Sequence[str], solver: str = "auto") -> PracticalSelection:
+    """The cheapest selection meeting every requirement some candidate meets (see the module doc)."""
+    pairs = isolable_pairs(candidates, faults)
+    rows: list[list[int]] = []
+    unmet: list[Unmet] = []
+    for s in scenarios:
+        for f in faults:
+            cover = [i for i, t in enumerate(candidates) if (f, s) in t.detects]
+            if cover:
+                rows.append(cover)
+            else:
+                unmet.append(Unmet(s, f, "", _unmet_reason(candidates, f, "", s)))
+        for a, b in pairs:
+            cover = [i for i, t in enumerate(candidates) if separates(t, a, b, s)]
+            if cover:
+                rows.append(cover)
+            else:
+                unmet.append(Unmet(s, a, b, _unmet_reason(candidates, a, b, s)))
+    if solver not in ("auto", "rc2", "highs"):
+        raise ValueError(f"solver {solver!r}: use auto, rc2 or highs")
+    costs = [max(1, t.cost) for t in candidates]
+    use = solver
+    if use == "auto":
+        try:
+            import pysat  # noqa: F401
+
+            use = "rc2"
+        except ImportError:
+            use = "highs"
+    chosen = _solve_rc2(rows, costs) if use == "rc2" else _solve_highs(rows, costs)
+    tests = tuple(candidates[i] for i in sorted(chosen))
+    return PracticalSelection(tests, sum(costs[i] for i in chosen), use, tuple(unmet), tuple(pairs),
+                              tuple(scenarios))
+
+
+def _dedupe(rows: Sequence[Sequence[int]]) -> list[tuple[int, ...]]:
+    return sorted({tuple(sorted(r)) for r in rows})
+
+
+def _solve_rc2(rows: Sequence[Sequence[int]], costs: Sequence[int]) -> list[int]:
+    from pysat.examples.rc2 import RC2
+    from pysat.formula import WCNF
+
+    w = WCNF()
+    for r in _dedupe(rows):
+        w.append([i + 1 for i in r])
+    for i, c in enumerate(costs):
+        w.append([-(i + 1)], weight=c)
+    with RC2(w, solver="cd19") as rc2:
+        model = rc2.compute()
+    if model is None:
+        raise RuntimeError("practical selection: the requirements that candidates meet are contradictory")
+    return [v - 1 for v in model if 0 < v <= len(costs)]
+
+
+def _solve_highs(rows: Sequence[Sequence[int]], costs: Sequence[int]) -> list[int]:
+    from scipy.optimize import Bounds, LinearConstraint, milp
+
+    uniq = _dedupe(rows)
+    n = len(costs)
+    a = np.zeros((len(uniq), n))
+    for k, r in enumerate(uniq):
+        a[k, list(r)] = 1.0
+    res = milp(np.asarray(costs, dtype=float), constraints=LinearConstraint(a, lb=1.0, ub=np.inf),
+               integrality=np.ones(n), bounds=Bounds(0.0, 1.0), options={"mip_rel_gap": 0.0})
+    if not res.success:
+        raise RuntimeError(f"practical selection: HiGHS found no solution ({res.message})")
+    return [i for i in range(n) if res.x[i] > 0.5]
+
+
+def practical_matrix(tests: Sequence[PracticalCandidate], faults: Sequence[str],
+                     scenarios: Sequence[str]) -> dict[tuple[str, str], int]:
+    """For each ordered pair (a, b), a != b: in how many manoeuvres the tests practically separate them."""
+    out: dict[tuple[str, str], int] = {}
+    for a, b in itertools.permutations(faults, 2):
+        out[(a, b)] = sum(any(separates(t, a, b, s) for t in tests) for s in scenarios)
+    return out
+
+
+def structural_matrix(tests: Sequence[PracticalCandidate], faults: Sequence[str]) -> dict[tuple[str, str], bool]:
+    """Method B: (a, b) isolable by the tests' signatures."""
+    sig: Mapping[str, frozenset[int]] = {f: frozenset(i for i, t in enumerate(tests) if f in t.faults)
+                                         for f in faults}
+    return {(a, b): sig[a] != sig[b] for a, b in itertools.permutations(faults, 2)}

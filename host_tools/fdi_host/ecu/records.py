@@ -1,0 +1,54 @@
+"""What an ECU's diagnosis says, step by step (`DiagRecord`: the content of an FDI_Diagnosis frame), and the
+structural facts of the table it runs (`TableClasses`): what sessions record and the monitor scores."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from fdi_host.sim.faults import FAULT_IDS
+
+
+@dataclass(frozen=True)
+class DiagRecord:
+    """One diagnosis step: its time on the drive's clock [s] and the content of the FDI_Diagnosis frame."""
+
+    t: float
+    alarm_mask: int
+    candidates: int
+    iso_class: int = 0
+    status: int = 0
+
+
+@dataclass(frozen=True)
+class TableClasses:
+    """Structural facts of a diagnosis table, per fault j (bit j = fault f(j+1))."""
+
+    signature: tuple[int, ...]  # tests sensitive to fault j (test bitmask); 0 = not detectable
+    iso_class: tuple[int, ...]  # faults with the same signature as fault j (fault bitmask)
+    test_names: tuple[str, ...] = ()
+
+    @staticmethod
+    def from_signatures(signature: Sequence[int], test_names: Sequence[str] = ()) -> TableClasses:
+        """Classes from the signatures: faults with equal (non-zero) signatures are not isolable."""
+        sig = tuple(int(s) for s in signature)
+        classes = []
+        for s in sig:
+            mask = 0
+            if s != 0:
+                for k, other in enumerate(sig):
+                    if other == s:
+                        mask |= 1 << k
+            classes.append(mask)
+        return TableClasses(sig, tuple(classes), tuple(test_names))
+
+    def detectable(self, fault: str) -> bool:
+        j = FAULT_IDS.index(fault)
+        return j < len(self.signature) and self.signature[j] != 0
+
+    def class_of(self, fault: str) -> int:
+        j = FAULT_IDS.index(fault)
+        return self.iso_class[j] if j < len(self.iso_class) else 0
+
+    def test_name(self, i: int) -> str:
+        return self.test_names[i] if i < len(self.test_names) else f"t{i}"

@@ -1,0 +1,110 @@
+"""Selection by practical isolability (fdi_analysis.selection_practical): the requirements it builds, the
+unmet ones and their reasons, optimality against brute force, and the two exact solvers agreeing."""
+
+from __future__ import annotations
+
+import itertools
+import random
+
+import pytest
+
+from fdi_analysis.selection_practical import (
+    CandidateScreen,
+    FaultScreen,
+    PracticalCandidate,
+    Screening,
+    isolable_pairs,
+    practical_matrix,
+    select_practical,
+    separates,
+    structural_matrix,
+)
+
+FAULTS = ["f1", "f2", "f3", "f4"]
+SCEN = ["a", "b"]
+
+
+def cand(label: str, faults: str, cost: int, detects: str) -> PracticalCandidate:
+    """detects: 'f1@a f2@b ...'."""
+    return PracticalCandidate(label, frozenset(faults.split()), cost,
+                              frozenset(tuple(x.split("@")) for x in detects.split()))  # type: ignore[misc]
+
+
+def meets(tests: list[PracticalCandidate], faults: list[str], scen: list[str],
+          pairs: list[tuple[str, str]], unmet: set[tuple[str, str, str]]) -> bool:
+    for s in scen:
+        for f in faults:
+            if (s, f, "") not in unmet and not any((f, s) in t.detects for t in tests):
+                return False
+        for a, b in pairs:
+            if (s, a, b) not in unmet and not any(separates(t, a, b, s) for t in tests):
+                return False
+    return True
+
+
+def test_separation_needs_detection_of_one_and_blindness_to_the_other() -> None:
+    t = cand("T", "f1 f2", 1, "f1@a")
+    assert separates(t, "f1", "f3", "a") and separates(t, "f3", "f1", "a")
+    assert not separates(t, "f1", "f2", "a")  # sees both structurally
+    assert not separates(t, "f1", "f3", "b")  # does not detect f1 in b
+    assert not separates(t, "f2", "f3", "a")  # f2 in the signature but not detected
+
+
+def test_unmet_requirements_carry_their_reason() -> None:
+    cands = [cand("A", "f1 f2", 3, "f1@a f1@b f2@a"), cand("B", "f2 f3", 2, "f2@a f2@b f3@a"),
+             cand("C", "f1 f2 f3", 1, "f1@a f2@a f3@a f1@b"), cand("D", "f4", 1, "f4@a f4@b")]
+    sel = select_practical(cands, FAULTS, SCEN, "highs")
+    unmet = {(u.scenario, u.fault_a, u.fault_b): u.reason for u in sel.unmet}
+    assert ("b", "f3", "") in unmet and "reaches the required fault-to-noise ratio" in unmet[("b", "f3", "")]
+    assert all(u.scenario == "b" for u in sel.unmet)  # every requirement of a is met
+    assert meets(list(sel.tests), FAULTS, SCEN, list(sel.pairs), set(unmet))
+    # f1/f2/f3 share no test that sees one without the other in a way that separates f1/f3 except A and B
+    assert {t.label for t in sel.tests} >= {"D"}
+
+
+def test_optimal_against_brute_force_and_both_solvers_agree() -> None:
+    rng = random.Random(5)
+    for trial in range(30):
+        faults = [f"f{i}" for i in range(1, 6)]
+        cands = []
+        for k in range(9):
+            sig = [f for f in faults if rng.random() < 0.45] or [rng.choice(faults)]
+            det = " ".join(f"{f}@{s}" for f in sig for s in SCEN if rng.random() < 0.7)
+            cands.append(cand(f"T{k}", " ".join(sig), rng.randint(1, 9), det))
+        highs = select_practical(cands, faults, SCEN, "highs")
+        rc2 = select_practical(cands, faults, SCEN, "rc2")
+        assert highs.cost == rc2.cost, trial
+        unmet = {(u.scenario, u.fault_a, u.fault_b) for u in highs.unmet}
+        pairs = isolable_pairs(cands, faults)
+        best = min((sum(max(1, t.cost) for t in sub) for r in range(len(cands) + 1)
+                    for sub in itertools.combinations(cands, r)
+                    if meets(list(sub), faults, SCEN, pairs, unmet)), default=None)
+        assert best == highs.cost, trial
+        assert meets(list(highs.tests), faults, SCEN, pairs, unmet)
+
+
+def test_isolable_pairs_and_matrices() -> None:
+    cands = [cand("A", "f1 f2", 1, "f1@a"), cand("B", "f2", 1, "f2@a f2@b")]
+    pairs = isolable_pairs(cands, ["f1", "f2", "f3"])
+    assert pairs == [("f1", "f2"), ("f1", "f3"), ("f2", "f3")]
+    assert isolable_pairs(cands, ["f3", "f4"]) == []  # f3, f4 in no test: same (empty) signature
+    prac = practical_matrix(cands, ["f1", "f2", "f3"], SCEN)
+    assert prac[("f1", "f2")] == 2 and prac[("f2", "f1")] == 2  # B sees f2 and not f1, in a and b
+    assert prac[("f1", "f3")] == 1  # A detects f1 in a only
+    assert structural_matrix(cands, ["f1", "f2", "f3"])[("f1", "f2")]
+
+
+def test_screening_file_round_trip(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    c1 = CandidateScreen("MSO7", "A B C", ("f1", "f2"), 67.9, 2.0, 136,
+                         {"f1": FaultScreen({"a": 0.9, "b": 0.1}, {"a": 12.0, "b": 3.0}),
+                          "f2": FaultScreen({"a": 0.0, "b": 0.85}, {"a": 0.1, "b": 9.0})})
+    c2 = CandidateScreen("MSO9", "A D", (), float("nan"), 0.0, 0, {}, "observer diverges")
+    scr = Screening("m", "cmd", 5.0, 1.5, 0.8, {"f1": 1.0, "f2": 2.0}, ("a", "b"), (c1, c2))
+    path = tmp_path / "s.json"
+    scr.dump(path)
+    back = Screening.load(path)
+    assert back.candidates[0] == c1 and back.candidates[1].rejected == "observer diverges"
+    pc = back.practical_candidates()
+    assert len(pc) == 1 and pc[0].detects == frozenset({("f1", "a"), ("f2", "b")})
+    with pytest.raises(ValueError):
+        select_practical(pc, ["f1", "f2"], ["a", "b"], "nonsense")
