@@ -1,13 +1,39 @@
-"""Declares the C extension of the analysis package; everything else is in pyproject.toml.
+"""Declares the C extensions and the package data; everything else is in pyproject.toml.
 
 `pip install -e .` (or scripts/bootstrap.sh) compiles fdi_analysis.mso._core and fdi_host.ecu._fdi_ecu (the fw/
 C diagnoser and ECU core for the ctypes bindings in fdi_host.ecu.bindings) with the system C compiler.
+`pip wheel .` also copies the shipped files (models, DBC, scenarios: the `PACKAGE_DATA` of
+fdi_analysis/resources.py and fdi_host/resources.py) from their one source folder into the packages.
 """
 
 import platform
+import sys
 from pathlib import Path
 
 from setuptools import Extension, setup
+from setuptools.command.build_py import build_py
+
+sys.path[:0] = ["analysis", "host_tools"]  # the resources modules (standard library only) declare the data
+from fdi_analysis import resources as analysis_resources  # noqa: E402
+from fdi_host import resources as host_resources  # noqa: E402
+
+del sys.path[:2]
+
+
+class BuildPyWithData(build_py):
+    """build_py, then the shipped folders copied from the repository into the built packages (not for an
+    editable install: the checkout reads the source folders)."""
+
+    def run(self) -> None:
+        super().run()
+        if getattr(self, "editable_mode", False):
+            return
+        for d in (*analysis_resources.PACKAGE_DATA, *host_resources.PACKAGE_DATA):
+            dest = Path(self.build_lib, d.package, *d.folder.split("/"))
+            self.mkpath(str(dest))
+            for src in d.sources(Path.cwd()):
+                self.copy_file(str(src), str(dest / src.name))
+
 
 _cflags = ["-O3", "-std=c11", "-Wall", "-Wextra", "-fno-strict-aliasing"]
 if platform.machine() in ("x86_64", "AMD64"):
@@ -17,6 +43,7 @@ if platform.machine() in ("x86_64", "AMD64"):
 _ECU_DIRS = ("fw/src", "fw/generated", "fw/generated/can", "fw/ecu/src")
 
 setup(
+    cmdclass={"build_py": BuildPyWithData},
     ext_modules=[
         Extension(
             "fdi_analysis.mso._core",

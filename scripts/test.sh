@@ -10,5 +10,6 @@ echo "== ruff"; .venv/bin/ruff check analysis host_tools tests
 echo "== mypy"; .venv/bin/mypy
 echo "== fw (C library)"; bash scripts/test_fw.sh
 echo "== pytest"; .venv/bin/python -m pytest -q --junitxml=build/pytest-junit.xml
+echo "== wheel (built from the checkout, installed in a clean venv, run outside it)"; bash scripts/test_wheel.sh
 # every skip with its reason (README: the skips to expect without root or without QEMU)
 .venv/bin/python scripts/skip_summary.py build/fw/ctest-junit.xml build/fw-san/ctest-junit.xml build/pytest-junit.xml

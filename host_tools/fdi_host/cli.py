@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from fdi_analysis.cli_common import add_version, run, use_file_backend
 from fdi_host.can import traffic
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.can.frame import Frame
@@ -59,17 +60,24 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--start-time", type=float, default=0.0, help="timestamp of t = 0 in the logs [s]")
     ap.add_argument("--list", action="store_true", help="list the scenarios and exit")
     ap.add_argument("--quiet", action="store_true", help="no progress bars")
-    return ap
+    return add_version(ap)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     args_list = list(sys.argv[1:] if argv is None else argv)
     if args_list and args_list[0] == "fig6":
-        return fig6.main(args_list[1:])
+        use_file_backend()
+        return run("fdi-sim fig6", lambda: fig6.main(args_list[1:]))
     if args_list and args_list[0] == "live":
-        return live_sim.main(args_list[1:])
+        return run("fdi-sim live", lambda: live_sim.main(args_list[1:]))
     ap = build_parser()
     args = ap.parse_args(args_list)
+    use_file_backend()
+    return run("fdi-sim", lambda: simulate_command(ap, args))
+
+
+def simulate_command(ap: argparse.ArgumentParser, args: argparse.Namespace) -> int:
+    """``fdi-sim`` after its options are parsed: list, or simulate and write the outputs."""
     if args.list:
         for name in available():
             print(f"{name:12s} {load_scenario(name).description}")

@@ -43,7 +43,7 @@ def test_convert_round_trips_through_report(models_dir: Path, tmp_path: Path) ->
 def test_bad_model_is_a_clear_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     bad = tmp_path / "bad.toml"
     bad.write_text('[[unknown]]\nname = "x"\n[[equation]]\nid = "e1"\nexpr = "x = y"\n')
-    assert main(["report", str(bad)]) == 2
+    assert main(["report", str(bad)]) == 1
     err = capsys.readouterr().err
     assert "bad.toml: equation 'e1': undeclared symbol 'y'" in err
 

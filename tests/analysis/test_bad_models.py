@@ -124,7 +124,7 @@ def test_commands_that_need_tests_refuse_a_model_without_redundancy(
     text = HEAD + var("unknown", "x") + var("known", "u") + var("fault", "f1") + eq("e1", 'expr = "x = u + f1"')
     model = str(write(tmp_path, text))
     argv = [command[0], model, *command[1:]] + ([str(tmp_path / "out")] if command[-1] == "--out" else [])
-    assert main([*argv, "--no-progress"]) == 2
+    assert main([*argv, "--no-progress"]) == 1
     err = capsys.readouterr().err
     assert "error: no structural redundancy" in err and "add measurements" in err and "Traceback" not in err
     assert not (tmp_path / "out").exists()

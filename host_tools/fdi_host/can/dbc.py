@@ -16,8 +16,9 @@ from typing import Any
 import cantools
 
 from fdi_host.can import e2e
+from fdi_host.resources import DBC
 
-DEFAULT_DBC = Path(__file__).resolve().parents[3] / "dbc" / "romo.dbc"
+DEFAULT_DBC = DBC.path() / "romo.dbc"  # dbc/romo.dbc in a checkout, the package's copy in a wheel
 
 
 @dataclass(frozen=True)

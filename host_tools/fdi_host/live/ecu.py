@@ -18,6 +18,8 @@ from typing import Any
 
 import can
 
+from fdi_analysis.cli_common import EXIT_ERROR, add_version
+from fdi_analysis.cli_common import run as run_main
 from fdi_host.can.frame import Frame
 from fdi_host.can.logs import write_log
 from fdi_host.ecu.session import DIAG_ID, EcuSession
@@ -46,7 +48,7 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--realtime", action="store_true", help="SCHED_FIFO priority (root)")
     ap.add_argument("--ready-file", type=Path, help="file created once the bus is open (for orchestration)")
     ap.add_argument("--quiet", action="store_true", help="print only the final counters")
-    return ap
+    return add_version(ap)
 
 
 def counter_summary(c: Any) -> str:
@@ -94,17 +96,22 @@ def run(bus: can.BusABC, session: EcuSession, stop: StopFlag, duration: float | 
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    return run_main("fdi-ecu", lambda: serve(args))
+
+
+def serve(args: argparse.Namespace) -> int:
+    """``fdi-ecu`` after its options are parsed: the ECU on the bus until the end of the drive or Ctrl-C."""
     stop = StopFlag()
     try:
         session = EcuSession(args.table)
     except (ImportError, OSError, RuntimeError, ValueError) as exc:
         print(f"fdi-ecu: cannot load the ECU bindings ({exc}); build them with `pip install -e .`", file=sys.stderr)
-        return 2
+        return EXIT_ERROR
     try:
         bus = open_bus(args.interface, args.channel)
     except (OSError, ValueError, ImportError, can.CanError) as exc:
         print(f"fdi-ecu: cannot open {args.interface} bus: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_ERROR
     signal_ready(args.ready_file)
     if not args.quiet:
         print(f"fdi-ecu: table {args.table} on {args.interface}; Ctrl-C to stop", flush=True)

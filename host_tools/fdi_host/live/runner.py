@@ -28,6 +28,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from fdi_analysis.cli_common import EXIT_ERROR, EXIT_USAGE, add_version, run
 from fdi_host.live.netns import check_unshare, inside_private_netns, netns_command, vcan_available
 from fdi_host.live.restart import Managed, RestartEvent, restart_schedule
 from fdi_host.live.sender import SendLog
@@ -76,7 +77,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="alive counter of each message's first frame from a restarted simulator (0..14)")
     ap.add_argument("--gap-threshold", type=float, default=0.25,
                     help="the monitor reports silences longer than this as gaps [s] (default 0.25)")
-    return ap
+    return add_version(ap)
 
 
 def _py(module: str, *args: str) -> list[str]:
@@ -181,10 +182,10 @@ def run_here(args: argparse.Namespace, interface: str, channel: str) -> int:
         schedule = restart_schedule(args.restart_ecu_at, args.restart_sim_at, args.ecu_down, args.sim_down)
     except ValueError as exc:
         print(f"fdi-live: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_USAGE
     if not 0 <= args.sim_counter_start <= 14:
         print("fdi-live: --sim-counter-start must be in 0..14", file=sys.stderr)
-        return 2
+        return EXIT_USAGE
     for f in ("ecu.ready", "monitor.ready", "ecu.json", "report.json", "origin.txt", "restarts.json"):
         (out / f).unlink(missing_ok=True)
     for old in out.glob("send.resume*.npz"):
@@ -228,7 +229,7 @@ def run_here(args: argparse.Namespace, interface: str, channel: str) -> int:
         err = _wait_ready([out / "ecu.ready", out / "monitor.ready"], procs, args.start_timeout)
         if err is not None:
             print(f"fdi-live: {err}; see {out}/ecu.txt and {out}/monitor.txt", file=sys.stderr)
-            return 2
+            return EXIT_ERROR
         sim_rc = _supervise(args, out, ecu, sim, sim_resume_cmd, schedule)
         time.sleep(0.5)  # the last diagnosis frames
     finally:
@@ -258,13 +259,18 @@ def run_here(args: argparse.Namespace, interface: str, channel: str) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     args_list = list(sys.argv[1:] if argv is None else argv)
     args = build_parser().parse_args(args_list)
+    return run("fdi-live", lambda: start(args, args_list))
+
+
+def start(args: argparse.Namespace, args_list: list[str]) -> int:
+    """``fdi-live`` after its options are parsed: choose the transport, run the three programs."""
     mode = args.transport
     if mode == "auto":
         mode = "vcan" if vcan_available() else "netns"
     if mode == "vcan":
         if not vcan_available():
             print("fdi-live: no vcan0 (kernel without AF_CAN or interface missing)", file=sys.stderr)
-            return 2
+            return EXIT_ERROR
         return run_here(args, "socketcan", "vcan0")
     if mode == "current" or inside_private_netns():
         return run_here(args, "udp_multicast", args.channel)
@@ -276,7 +282,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return run_here(args, "udp_multicast", args.channel)
         print(f"fdi-live: {chk.reason}; use --transport current to run udp_multicast in this namespace",
               file=sys.stderr)
-        return 2
+        return EXIT_ERROR
     env_cmd = netns_command([sys.executable, "-m", "fdi_host.live.runner", *args_list])
     return subprocess.run(env_cmd, check=False, env=os.environ.copy()).returncode
 

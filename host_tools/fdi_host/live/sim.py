@@ -25,6 +25,7 @@ from pathlib import Path
 
 import can
 
+from fdi_analysis.cli_common import EXIT_ERROR
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.can.frame import Frame
 from fdi_host.can.logs import LOG_SUFFIXES, read_log, write_log
@@ -129,12 +130,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     frames = _drive_frames(ap, args)
     if not frames:
         print("fdi-sim live: the drive has no frames", file=sys.stderr)
-        return 2
+        return EXIT_ERROR
     try:
         bus = open_bus(args.interface, args.channel)
     except (OSError, ValueError, ImportError) as exc:
         print(f"fdi-sim live: cannot open {args.interface} bus: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_ERROR
     try:
         print(f"sending {len(frames)} frames over {frames[-1].timestamp:.1f} s at {args.speed:g}x real time "
               f"on {args.interface}", flush=True)

@@ -12,10 +12,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
+import matplotlib.pyplot as plt  # no backend chosen here: the command lines choose Agg in their main()
 import numpy as np
 
 from fdi_host.ecu.records import DiagRecord, TableClasses

@@ -123,10 +123,7 @@ def run_fig6(
 
 
 def plot_fig6(res: Fig6Result, path: str | Path) -> Path:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # the backend is the caller's (fdi-sim fig6 chooses Agg)
 
     z = res.faulty.inputs
     fig, axs = plt.subplots(3, 1, figsize=(10, 8.5), sharex=True)

@@ -39,8 +39,9 @@ from sympy.printing.pycode import PythonCodePrinter
 from fdi_analysis.expressions import der
 from fdi_analysis.model import Equation, Model
 from fdi_analysis.model_loader import load_model
+from fdi_analysis.resources import MODELS
 
-DEFAULT_MODEL = Path(__file__).resolve().parents[3] / "analysis" / "models" / "romo_quasistatic.toml"
+DEFAULT_MODEL = MODELS.path() / "romo_quasistatic.toml"  # analysis/models/ in a checkout, the copy in a wheel
 
 STATES: tuple[str, ...] = ("vx", "vy", "psidot", "omega1", "omega2", "omega3", "omega4")
 TEAR: tuple[str, ...] = ("ax", "ay")

@@ -4,10 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
+import matplotlib.pyplot as plt  # no backend chosen here: the command lines choose Agg in their main()
 import numpy as np
 
 from fdi_host.sim.faults import FAULT_IDS, active_intervals

@@ -46,9 +46,10 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.signal import lfilter
 
+from fdi_host import resources
 from fdi_host.sim.faults import FaultSpec, fault_from_table
 
-SCENARIO_DIR = Path(__file__).resolve().parents[2] / "scenarios"
+SCENARIO_DIR = resources.SCENARIOS.path()  # host_tools/scenarios in a checkout, the package's copy in a wheel
 FAULT_SIZES_FILE = SCENARIO_DIR / "fault_sizes.toml"  # the required fault sizes, and the sizes the sweep states
 SCENARIOS: tuple[str, ...] = ("straight", "cornering", "slalom", "fig6", "low_speed")  # the five manoeuvres
 CHANNELS: tuple[str, ...] = ("speed", "sideslip", "yaw_rate")
