@@ -10,7 +10,10 @@ structural analysis `fdi_analysis` below them all):
   monitor/  scoring a run against the ground truth (``fdi-monitor``)
   quality/  the quality suite (``fdi-quality``)
   replay    recorded logs back onto a bus or through the ECU (``fdi-replay``)
+  fleet     many logs through the ECU on local processes or a Dask cluster, one quality table (``fdi-replay DIR``)
   cli       ``fdi-sim``, whose subcommands span the simulator, the paper and the live bus
+
+Beside the layers: `resources` (the shipped DBC and scenarios, in a checkout or an installed wheel).
 """
 
 __all__: list[str] = []

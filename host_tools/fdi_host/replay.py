@@ -7,29 +7,38 @@ the speed against real time is printed. By default in one C call (`ecu_lib.Ecu.p
 frame; the C core runs the steps due before a frame inside rx, so this equals EcuSession's poll-then-rx
 order, tested); with ``--ecu-log`` frame by frame through `EcuSession`, recording every step's residuals.
 With ``--truth`` the offline diagnosis is scored and reported like ``fdi-monitor`` does.
+
+Many logs (several files, a folder, a glob pattern) are a fleet (`fdi_host.fleet`): each log offline through
+its own ECU on local processes, or on a Dask cluster with ``--scheduler``, scored against the truth file beside
+it, into one table per fault and per log (fleet.json, fleet.md in ``--out-dir``).
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import can
+from tqdm import tqdm
 
+from fdi_analysis.cli_common import EXIT_ERROR, INPUT_ERRORS, add_version, fail, one_line, run, use_file_backend
+from fdi_host import fleet
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.can.frame import Frame
-from fdi_host.can.logs import LOG_SUFFIXES, read_log
+from fdi_host.can.logs import LOG_SUFFIXES, LogError, read_log
+from fdi_host.ecu.bindings import EcuError
+from fdi_host.ecu.records import DiagRecord
 from fdi_host.ecu.session import DIAG_ID, ORIGIN_LEAD, EcuSession, table_classes
 from fdi_host.live.bus import StopFlag, add_bus_arguments, open_bus
 from fdi_host.live.sender import send_paced
 from fdi_host.monitor.report import plot_diagnosis, plot_residuals, score_table, write_reports
-from fdi_host.monitor.score import DiagRecord, score_run, windows_from_truth
+from fdi_host.monitor.score import score_run, windows_from_truth
 
 EPILOG = """\
 examples:
@@ -37,6 +46,8 @@ examples:
   fdi-replay drive.log --speed 10 --interface socketcan --channel vcan0
   fdi-replay drive.blf --offline --table kin                        (through the bindings, prints x real time)
   fdi-replay drive.blf --offline --table kin --truth drive.truth.json --out-dir out/replay --ecu-log out/ecu.json
+  fdi-replay fleet/ --out-dir out/fleet                             (every log below fleet/, one process per core)
+  fdi-replay 'fleet/**/*.blf' --scheduler tcp://10.0.0.5:8786       (on a Dask cluster; quote the pattern)
 """
 
 
@@ -123,6 +134,44 @@ def replay_offline_fast(frames: Sequence[Frame], table: str) -> FastResult:
     return FastResult(records, ecu, len(frames), dur, wall)
 
 
+LOG_ERRORS: tuple[type[BaseException], ...] = (*INPUT_ERRORS, EcuError)  # a bad log, truth file or table
+
+
+def replay_log(path: str, table: str = "romo", grace: float = 3.0) -> fleet.LogResult:
+    """One log of a fleet: read, through a fresh ECU in one C call, scored against ``<log>.truth.json`` when it
+    exists. Never raises for a bad log or truth file: the result then carries the one-line error."""
+    t0 = time.perf_counter()
+    p = Path(path)
+    try:
+        frames = read_log(p)
+        if not frames:
+            raise LogError(f"{p}: holds no data frames")
+        res = replay_offline_fast(frames, table)
+        steps = len(res.records)
+        alarms = sum(1 for r in res.records if r.alarm_mask)
+        truth = fleet.truth_file(p)
+        if not truth.is_file():
+            return fleet.LogResult(str(p), res.frames, res.log_duration, time.perf_counter() - t0, steps, alarms)
+        doc = fleet.read_truth(truth)
+        try:
+            windows = windows_from_truth(doc)
+        except (KeyError, TypeError, ValueError) as exc:
+            raise LogError(f"{truth}: a fault entry without {exc}") from exc
+        score = score_run(res.records, windows, table_classes(res.ecu), grace)
+    except LOG_ERRORS as exc:
+        return fleet.LogResult(str(p), wall=time.perf_counter() - t0, error=one_line(exc))
+    return fleet.LogResult(str(p), res.frames, res.log_duration, time.perf_counter() - t0, steps, alarms,
+                           str(truth), tuple(score.faults), len(score.false_alarms), score.false_alarm_time)
+
+
+def replay_fleet(logs: Sequence[str | Path], table: str = "romo", grace: float = 3.0, *, workers: int | None = None,
+                 scheduler: str | None = None, progress: fleet.Progress | None = None) -> fleet.FleetReport:
+    """Every log of `logs` (files, folders, glob patterns) through the ECU with `replay_log`, on local processes
+    (`workers`, default one per core) or the Dask cluster at `scheduler`; one report over all of them."""
+    return fleet.run_fleet(partial(replay_log, table=table, grace=grace), fleet.find_logs(logs), workers=workers,
+                           scheduler=scheduler, progress=progress, table=table)
+
+
 def _speed(text: str) -> float | None:
     if text == "max":
         return None
@@ -138,7 +187,9 @@ def _speed(text: str) -> float | None:
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="fdi-replay", description=__doc__.splitlines()[0] if __doc__ else None,
                                  epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("log", type=Path, help="CAN log: .log (candump), .asc or .blf")
+    ap.add_argument("logs", nargs="+", metavar="LOG",
+                    help="CAN log: .log (candump), .asc or .blf; several logs, a folder or a glob pattern: a fleet "
+                    "(offline, scored against each log's .truth.json)")
     ap.add_argument("--speed", type=_speed, default=1.0, help="times real time: 1, 10, ... or max (default 1)")
     add_bus_arguments(ap)
     ap.add_argument("--offline", action="store_true", help="no bus: through the ECU bindings as fast as possible")
@@ -147,24 +198,37 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--out-dir", type=Path, default=Path("out/replay"), help="with --offline --truth: reports")
     ap.add_argument("--ecu-log", type=Path, help="with --offline: write the ECU log (every step)")
     ap.add_argument("--grace", type=float, default=3.0, help="scoring grace after a fault's end [s] (default 3)")
-    return ap
+    ap.add_argument("--workers", type=int, default=None,
+                    help="fleet: local processes (default: one per core; 1: in this process)")
+    ap.add_argument("--scheduler", metavar="ADDRESS",
+                    help="fleet: the Dask scheduler to run on, e.g. tcp://10.0.0.5:8786 (pip install romo-fdi[fleet])")
+    ap.add_argument("--quiet", action="store_true", help="fleet: no progress bar")
+    return add_version(ap)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     ap = build_parser()
     args = ap.parse_args(argv)
+    if args.workers is not None and args.workers < 1:
+        ap.error("--workers must be >= 1")
+    use_file_backend()
+    if fleet.is_fleet(args.logs) or args.scheduler is not None or args.workers is not None:
+        if args.truth is not None or args.ecu_log is not None:
+            ap.error("--truth and --ecu-log are for one log (a fleet's truth files lie beside its logs)")
+        return run("fdi-replay", lambda: _fleet(args), (fleet.FleetError,))
+    args.log = Path(args.logs[0])
     if args.log.suffix not in LOG_SUFFIXES:
         ap.error(f"{args.log}: unsupported extension; use {', '.join(LOG_SUFFIXES)}")
     if not args.log.is_file():
         ap.error(f"{args.log}: no such file")
-    try:
-        frames = read_log(args.log)
-    except (OSError, ValueError, EOFError) as exc:
-        print(f"fdi-replay: cannot read {args.log}: {exc}", file=sys.stderr)
-        return 2
+    return run("fdi-replay", lambda: _one_log(args), (EcuError,))
+
+
+def _one_log(args: argparse.Namespace) -> int:
+    """One log onto the bus, or offline through the ECU."""
+    frames = read_log(args.log)  # a LogError names the file and what is wrong
     if not frames:
-        print(f"fdi-replay: {args.log} holds no data frames", file=sys.stderr)
-        return 2
+        return fail("fdi-replay", f"{args.log}: holds no data frames")
     if args.offline:
         return _offline(args, frames)
     stop = StopFlag()
@@ -172,7 +236,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         bus = open_bus(args.interface, args.channel)
     except (OSError, ValueError, ImportError, can.CanError) as exc:
         print(f"fdi-replay: cannot open {args.interface} bus: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_ERROR
     try:
         t0 = time.perf_counter()
         log = send_paced(bus, frames, args.speed, stop)
@@ -199,7 +263,7 @@ def _offline(args: argparse.Namespace, frames: list[Frame]) -> int:
     except (ImportError, OSError, RuntimeError) as exc:
         print(f"fdi-replay: cannot load the ECU bindings ({exc}); build them with `pip install -e .`",
               file=sys.stderr)
-        return 2
+        return EXIT_ERROR
     dur = frames[-1].timestamp - frames[0].timestamp
     mode = "per frame, with ECU log" if args.ecu_log is not None else "one C call (Ecu.process)"
     print(f"offline ({mode}): {len(frames)} frames, {dur:.2f} s of log in {wall:.3f} s = {speed:.0f}x real time; "
@@ -209,7 +273,7 @@ def _offline(args: argparse.Namespace, frames: list[Frame]) -> int:
     if args.ecu_log is not None:
         print(f"wrote {res.session.write(args.ecu_log)}")
     if args.truth is not None:
-        truth = json.loads(args.truth.read_text(encoding="utf-8"))
+        truth = fleet.read_truth(args.truth)
         classes = table_classes(ecu)
         windows = windows_from_truth(truth)
         score = score_run(records, windows, classes, args.grace)
@@ -221,6 +285,32 @@ def _offline(args: argparse.Namespace, frames: list[Frame]) -> int:
             if p is not None:
                 paths.append(p)
         print("wrote " + ", ".join(str(p) for p in paths))
+    return 0
+
+
+def _fleet(args: argparse.Namespace) -> int:
+    """Many logs through the ECU (local processes or Dask), one quality table."""
+    logs = fleet.find_logs(args.logs)
+    where = f"Dask at {args.scheduler}" if args.scheduler else "local processes"
+    print(f"fleet: {len(logs)} logs, table {args.table}, on {where}", flush=True)
+    with tqdm(total=len(logs), unit="log", desc="replay", disable=args.quiet, file=sys.stderr) as bar:
+        def progress(r: fleet.LogResult) -> None:
+            bar.update(1)
+            if r.error is not None:
+                bar.write(f"fdi-replay: {r.error}", file=sys.stderr)
+
+        report = fleet.run_fleet(partial(replay_log, table=args.table, grace=args.grace), logs,
+                                 workers=args.workers, scheduler=args.scheduler, progress=progress, table=args.table)
+    print("\n".join(fleet.fault_table(report)))
+    print(fleet.free_line(report))
+    if len(report.logs) <= 20:
+        print("\n".join(fleet.log_table(report)))
+    print(fleet.summary_line(report))
+    print("wrote " + ", ".join(str(p) for p in fleet.write_reports(args.out_dir, report)))
+    if report.failed:
+        first = report.failed[0].error or ""
+        return fail("fdi-replay", f"{len(report.failed)} of {len(report.logs)} logs could not be replayed "
+                    f"(first: {first})")
     return 0
 
 

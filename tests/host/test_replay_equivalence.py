@@ -124,7 +124,7 @@ def test_replay_rejects_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[
         replay_main([str(bad), "--offline"])
     empty = tmp_path / "e.log"
     empty.write_text("")
-    assert replay_main([str(empty), "--offline"]) == 2
+    assert replay_main([str(empty), "--offline"]) == 1
     with pytest.raises(SystemExit):
         replay_main([str(empty), "--speed", "0"])
     assert "no data frames" in capsys.readouterr().err
