@@ -115,5 +115,5 @@ def test_cli_errors_and_help(capsys: pytest.CaptureFixture[str], tmp_path: Path)
     assert "example" in capsys.readouterr().out
     bad = tmp_path / "bad.toml"
     bad.write_text("[sizes]\nf1 = 0\n", encoding="utf-8")
-    assert main(["--quick", "--sizes", str(bad)]) == 2
+    assert main(["--quick", "--sizes", str(bad)]) == 1
     assert "positive number" in capsys.readouterr().err
