@@ -57,13 +57,16 @@ for cli in fdi-analyze fdi-sim fdi-ecu fdi-monitor fdi-replay fdi-live fdi-quali
   t "$bin/$cli" --version >/dev/null
 done
 t "$bin/fdi-analyze" report romo_quasistatic -o report | grep "detectable faults: 25/25"
-t "$bin/fdi-analyze" mso romo_grouped --workers 1 --no-progress | head -1
-t "$bin/fdi-analyze" select three_tank --workers 1 --no-progress -o select | grep "optimal B"  # without python-sat
-t "$bin/fdi-sim" --list | grep -q fig6
+t "$bin/fdi-analyze" mso romo_grouped --workers 1 --no-progress > mso.txt && grep "MSO sets (complete)" mso.txt
+t "$bin/fdi-analyze" select three_tank --workers 1 --no-progress -o select > select.txt  # without python-sat
+grep "optimal B" select.txt
+t "$bin/fdi-sim" --list > list.txt && grep -q fig6 list.txt
 t "$bin/fdi-sim" --scenario fig6 --duration 12 --out logs/fig6.blf --quiet
 t "$bin/fdi-sim" --scenario cornering --no-scenario-faults --fault f10@3s:-120 --duration 8 --out logs/f10.blf --quiet
-t "$bin/fdi-replay" logs/fig6.blf --offline --truth logs/fig6.truth.json --out-dir replay | tail -2
-t "$bin/fdi-replay" logs --workers 2 --out-dir fleet --quiet | tail -1
+t "$bin/fdi-replay" logs/fig6.blf --offline --truth logs/fig6.truth.json --out-dir replay > replay.txt
+grep "^offline" replay.txt
+t "$bin/fdi-replay" logs --workers 2 --out-dir fleet --quiet > fleet.txt
+grep "2 of 2 logs" fleet.txt
 test -s fleet/fleet.md
 "$bin/python" -c "import os; open('bad.blf', 'wb').write(b'LOGG' + os.urandom(400))"
 rc=0; t "$bin/fdi-replay" bad.blf --offline 2> err.txt || rc=$?

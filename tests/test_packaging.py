@@ -80,6 +80,7 @@ def test_shipped_files_have_one_source_in_the_repository() -> None:
     assert DEFAULT_DBC == REPO / "dbc" / "romo.dbc" and DEFAULT_MODEL == REPO / "analysis/models/romo_quasistatic.toml"
     assert FAULT_SIZES_FILE == REPO / "host_tools/scenarios/fault_sizes.toml"
     assert {"fig6", "cornering", "straight", "slalom", "low_speed"} <= set(available())
+    assert "fault_sizes" not in available()  # the file beside the scenarios is not one
     assert analysis_resources.model_file("romo_grouped") == REPO / "analysis/models/romo_grouped.toml"
     assert analysis_resources.model_file("romo_grouped.toml") == Path("romo_grouped.toml")  # a path stays a path
 

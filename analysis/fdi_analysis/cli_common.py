@@ -14,6 +14,7 @@ errors it names, ends as that one line.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Callable
 
@@ -57,6 +58,10 @@ def run(prog: str, body: Callable[[], int], errors: tuple[type[BaseException], .
     `EXIT_INTERRUPTED`. Anything else is a bug and keeps its traceback."""
     try:
         return body()
+    except BrokenPipeError:  # the reader went away (`| head`): no message, as Python's documentation advises
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return EXIT_ERROR
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED

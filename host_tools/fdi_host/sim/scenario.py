@@ -173,7 +173,8 @@ def scenario_from_dict(doc: Mapping[str, Any], source: Path | None = None) -> Sc
 
 
 def available() -> list[str]:
-    return sorted(p.stem for p in SCENARIO_DIR.glob("*.toml"))
+    """The scenario names of the scenario folder (the fault-size file beside them is not one)."""
+    return sorted(p.stem for p in SCENARIO_DIR.glob("*.toml") if p.name != FAULT_SIZES_FILE.name)
 
 
 def load_scenario(name_or_path: str | Path) -> Scenario:
