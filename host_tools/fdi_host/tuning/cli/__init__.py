@@ -9,7 +9,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from fdi_analysis.cli_common import add_version, run
+from fdi_analysis.cli_common import add_version, run, use_file_backend
 from fdi_analysis.export.fault_sizes import FaultSizesError
 from fdi_analysis.export.table import ExportError
 from fdi_analysis.model import ModelError
@@ -53,6 +53,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if isinstance(getattr(args, "model", None), Path):
         args.model = model_file(args.model)  # a bare name: the shipped model
+    use_file_backend()
     return run("fdi-tune", lambda: int(args.func(args)),
                (ModelError, StructureError, ExportError, FaultSizesError, SelectionError, NotRealizableError))
 
