@@ -180,7 +180,7 @@ def run_fleet(task: Task, logs: Sequence[Path], *, workers: int | None = None, s
         return _collect(_on_dask(task, logs, scheduler), progress, table)
     n = max(1, workers or os.cpu_count() or 1)
     if n == 1:
-        return _collect(("one process", (task(str(p)) for p in logs)), progress, table)
+        return _collect(_in_process(task, logs), progress, table)
     return _collect(_on_processes(task, logs, n), progress, table)
 
 
@@ -199,6 +199,17 @@ def _collect(source: tuple[str, Iterator[LogResult]], progress: Progress | None,
 def _failed(log: str, exc: BaseException) -> LogResult:
     """A task that raised instead of returning its error (a bug, or a worker lost): still one row."""
     return LogResult(log, error=f"{type(exc).__name__}: {' '.join(str(exc).split())}")
+
+
+def _in_process(task: Task, logs: Sequence[Path]) -> tuple[str, Iterator[LogResult]]:
+    def results() -> Iterator[LogResult]:
+        for p in logs:
+            try:
+                yield task(str(p))
+            except Exception as exc:  # as on processes and Dask: one failed task is one row
+                yield _failed(str(p), exc)
+
+    return "one process", results()
 
 
 def _on_processes(task: Task, logs: Sequence[Path], n: int) -> tuple[str, Iterator[LogResult]]:

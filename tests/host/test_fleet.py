@@ -122,3 +122,15 @@ def test_cli_on_a_dask_cluster(fleet_dir: Path, tmp_path: Path, capsys: pytest.C
     assert rc == 0, out
     assert f"on Dask {cluster.scheduler_address}: 2 threads on 1 workers" in out
     assert "4 of 4 logs" in out and (tmp_path / "fleet.md").is_file()
+
+
+def _broken_task(path: str) -> fleet.LogResult:
+    raise RuntimeError(f"cannot replay {Path(path).name}")
+
+
+def test_a_task_that_raises_is_a_row_on_every_executor(fleet_dir: Path) -> None:
+    logs = fleet.find_logs([fleet_dir])
+    for workers in (1, 2):
+        report = fleet.run_fleet(_broken_task, logs, workers=workers)
+        assert [r.error for r in report.logs] == [f"RuntimeError: cannot replay {p.name}" for p in logs]
+        assert report.replayed == [] and report.drive_hours == 0.0
