@@ -71,4 +71,6 @@ test -s fleet/fleet.md
 "$bin/python" -c "import os; open('bad.blf', 'wb').write(b'LOGG' + os.urandom(400))"
 rc=0; t "$bin/fdi-replay" bad.blf --offline 2> err.txt || rc=$?
 [ "$rc" -eq 1 ] && [ "$(wc -l < err.txt)" -eq 1 ] || { echo "bad log: exit $rc, stderr:"; cat err.txt; exit 1; }
+rc=0; t "$bin/fdi-replay" logs --scheduler tcp://127.0.0.1:8786 2> err.txt || rc=$?  # Dask is an extra
+[ "$rc" -eq 1 ] && grep -q "pip install 'romo-fdi\[fleet\]'" err.txt || { echo "no Dask: exit $rc"; cat err.txt; exit 1; }
 echo "wheel smoke test passed (in $work/run, outside the checkout)"
