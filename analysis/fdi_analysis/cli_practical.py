@@ -15,6 +15,8 @@ from fdi_analysis.plots import plot_practical_isolability, save
 from fdi_analysis.selection_practical import (
     PracticalSelection,
     Screening,
+    Unmet,
+    UnmetKind,
     practical_matrix,
     select_practical,
     structural_matrix,
@@ -82,17 +84,32 @@ def _num(f: str) -> int:
 
 
 def unmet_lines(sel: PracticalSelection) -> list[str]:
-    """The requirements no realizable test meets, grouped by reason."""
+    """The requirements no realizable test meets, grouped by manoeuvre and kind (detections first, then pairs,
+    each with the closest test)."""
     if not sel.unmet:
         return ["every requirement is met in every manoeuvre"]
-    groups: dict[str, list[str]] = {}
-    for u in sel.unmet:
-        key = f"{u.fault_a}/{u.fault_b}" if u.fault_b else u.fault_a
-        groups.setdefault(u.reason, []).append(f"{key} in {u.scenario}")
     out = [f"{len(sel.unmet)} requirements no realizable test meets:"]
-    for reason, items in sorted(groups.items(), key=lambda kv: -len(kv[1])):
-        out.append(f"  {', '.join(items[:8])}{' ...' if len(items) > 8 else ''} ({len(items)}): {reason}")
+    for sc in sel.scenarios:
+        for kind in UnmetKind:
+            items = [u for u in sel.unmet if u.scenario == sc and u.kind is kind]
+            if not items:
+                continue
+            det = [u for u in items if not u.fault_b]
+            pairs = [u for u in items if u.fault_b]
+            out.append(f"  {sc}, {kind.value}:")
+            if det:
+                out.append(f"    detect {', '.join(_unmet_item(u) for u in det)}")
+            if pairs:
+                shown = ", ".join(_unmet_item(u) for u in pairs[:12])
+                out.append(f"    separate {shown}{f' and {len(pairs) - 12} more pairs' if len(pairs) > 12 else ''}")
     return out
+
+
+def _unmet_item(u: Unmet) -> str:
+    what = f"{u.fault_a}/{u.fault_b}" if u.fault_b else u.fault_a
+    if u.kind is UnmetKind.WEAK:
+        return f"{what} ({u.best_test} {u.best_share:.0%})"
+    return what
 
 
 def write_report(out: Path, name: str, faults: Sequence[str], sel: PracticalSelection, scr: Screening) -> None:
@@ -108,6 +125,7 @@ def write_report(out: Path, name: str, faults: Sequence[str], sel: PracticalSele
         "tests": [{"label": t.label, "cost": t.cost, "faults": sorted(t.faults, key=_num),
                    "detects": sorted(f"{f}@{s}" for f, s in t.detects)} for t in sel.tests],
         "unmet": [{"scenario": u.scenario, "faults": [u.fault_a, *([u.fault_b] if u.fault_b else [])],
+                   "kind": u.kind.name, "tests": u.tests, "closest_test": u.best_test, "closest_share": u.best_share,
                    "reason": u.reason} for u in sel.unmet],
         "structurally_isolable_pairs": len(sel.pairs),
         "pairs": {f"{a}/{b}": {"structural": struct[(a, b)], "practical_scenarios": prac[(a, b)]}

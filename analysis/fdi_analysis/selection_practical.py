@@ -12,19 +12,22 @@ satisfy, for every manoeuvre s,
     detection   for every fault j, some t in T has (j, s) in D_t,
 
 and costs least (sum of the tests' costs). Requirements that no candidate can meet are not constraints: they
-are reported with the reason (`Unmet`). The problem is a weighted set cover, solved exactly: as MaxSAT with
-RC2 over CaDiCaL (python-sat, the solver of the structural SAT selection) when it is installed, otherwise as a
-0-1 linear program with HiGHS (scipy.optimize.milp); both prove optimality, and the tests check that they
-agree.
+are reported with the reason (`Unmet`). The problem is a weighted set cover, solved exactly: as weighted
+MaxSAT by RC2 over CaDiCaL (python-sat, the solver of the structural SAT selection), stratified by weight
+levels with core exhaustion and minimisation (plain RC2 did not finish in 12 minutes on the ROMO screening's
+632 distinct rows and 580 candidates; stratified, 0.1 s), or without python-sat as a 0-1 linear program with
+HiGHS (scipy.optimize.milp, 8 s there); both prove optimality, and the tests check that they agree.
 """
 
 from __future__ import annotations
 
+import gzip
 import itertools
 import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
+from enum import Enum
 from pathlib import Path
 
 import numpy as np
@@ -52,6 +55,7 @@ class CandidateScreen:
     cost: int  # operations per step of the residual (common subexpressions counted once) + filters
     per_fault: dict[str, FaultScreen] = field(default_factory=dict)
     rejected: str = ""  # why it has no generator after all ("" when screened)
+    evaluable: dict[str, float] = field(default_factory=dict)  # scenario -> share of its points in the domain
 
     def detects(self, fault: str, scenario: str, share: float = SHARE) -> bool:
         fs = self.per_fault.get(fault)
@@ -72,19 +76,26 @@ class Screening:
     candidates: tuple[CandidateScreen, ...]
 
     def dump(self, path: Path) -> None:
+        """Write as JSON, gzip-compressed (no time stamp) when the name ends in .gz."""
         doc = asdict(self)
         doc["candidates"] = [asdict(c) | {"sigma": c.sigma if math.isfinite(c.sigma) else None}
                              for c in self.candidates]
-        path.write_text(json.dumps(doc, indent=1, sort_keys=True, allow_nan=False) + "\n", encoding="utf-8")
+        text = json.dumps(doc, separators=(",", ":"), sort_keys=True, allow_nan=False) + "\n"
+        if path.suffix == ".gz":
+            path.write_bytes(gzip.compress(text.encode("utf-8"), mtime=0))
+        else:
+            path.write_text(text, encoding="utf-8")
 
     @staticmethod
     def load(path: Path) -> Screening:
-        doc = json.loads(path.read_text(encoding="utf-8"))
+        raw = path.read_bytes()
+        doc = json.loads(gzip.decompress(raw) if path.suffix == ".gz" else raw)
         cands = tuple(
             CandidateScreen(c["label"], c["equations"], tuple(c["faults"]),
                             float(c["sigma"]) if c["sigma"] is not None else math.nan, float(c["min_speed"]),
                             int(c["cost"]), {f: FaultScreen(dict(v["share"]), dict(v["median_fnr"]))
-                                             for f, v in c["per_fault"].items()}, c["rejected"])
+                                             for f, v in c["per_fault"].items()}, c["rejected"],
+                            {k: float(v) for k, v in c.get("evaluable", {}).items()})
             for c in doc["candidates"])
         return Screening(doc["model"], doc["provenance"], float(doc["gate"]), float(doc["margin"]),
                          float(doc["share"]), {k: float(v) for k, v in doc["sizes"].items()},
@@ -94,7 +105,10 @@ class Screening:
         """The screened candidates (those with a generator) as the selection sees them."""
         return [PracticalCandidate(c.label, frozenset(c.faults), c.cost,
                                    frozenset((f, s) for f in c.faults for s in self.scenarios
-                                             if c.detects(f, s, self.share)))
+                                             if c.detects(f, s, self.share)),
+                                   {(f, s): fs.share.get(s, 0.0) for f, fs in c.per_fault.items()
+                                    for s in self.scenarios},
+                                   c.evaluable)
                 for c in self.candidates if not c.rejected]
 
 
@@ -104,16 +118,43 @@ class PracticalCandidate:
     faults: frozenset[str]  # structural signature
     cost: int
     detects: frozenset[tuple[str, str]]  # (fault, scenario) practically detected
+    share: Mapping[tuple[str, str], float] = field(default_factory=dict)  # (fault, scenario) -> detecting share
+    evaluable: Mapping[str, float] = field(default_factory=dict)  # scenario -> share in the operating domain
+
+
+class UnmetKind(Enum):
+    """Why no realizable test meets a requirement."""
+
+    NOT_IN_SIGNATURE = "no realizable test has the fault in its signature"
+    OUT_OF_DOMAIN = "every realizable test that could meet it is outside its operating domain throughout"
+    WEAK = "realizable tests could meet it, none reaches the fault-to-noise ratio at the stated share"
 
 
 @dataclass(frozen=True)
 class Unmet:
-    """A requirement no realizable candidate meets: a pair to separate (fault_b set) or a fault to detect."""
+    """A requirement no realizable candidate meets: a pair to separate (fault_b set) or a fault to detect.
+    `tests`: the realizable tests that could meet it structurally (see the fault, and for a pair not the other
+    one); `best_test`, `best_share`: the one of them that comes closest (share of the manoeuvre's operating
+    points where it detects)."""
 
     scenario: str
     fault_a: str
     fault_b: str  # "" for a detection requirement
-    reason: str
+    kind: UnmetKind
+    tests: int
+    best_test: str = ""
+    best_share: float = 0.0
+
+    @property
+    def reason(self) -> str:
+        what = f"{self.fault_a}/{self.fault_b}" if self.fault_b else self.fault_a
+        if self.kind is UnmetKind.NOT_IN_SIGNATURE:
+            return f"no realizable test has {self.fault_a} in its signature"
+        if self.kind is UnmetKind.OUT_OF_DOMAIN:
+            return (f"all {self.tests} realizable tests for {what} are outside their operating domain at every "
+                    f"operating point of {self.scenario}")
+        return (f"{self.tests} realizable tests for {what}; the closest, {self.best_test}, detects at "
+                f"{self.best_share:.0%} of the operating points of {self.scenario}")
 
 
 @dataclass(frozen=True)
@@ -136,19 +177,19 @@ def isolable_pairs(candidates: Sequence[PracticalCandidate], faults: Sequence[st
     return [(a, b) for a, b in itertools.combinations(faults, 2) if sig[a] != sig[b]]
 
 
-def _unmet_reason(cands: Sequence[PracticalCandidate], a: str, b: str, s: str) -> str:
-    if not b:
-        holders = [t for t in cands if a in t.faults]
-        if not holders:
-            return f"no realizable test has {a} in its signature"
-        return (f"none of the {len(holders)} realizable tests with {a} in its signature reaches the required "
-                f"fault-to-noise ratio at the stated share of the operating points of {s}")
-    blind_a = [t for t in cands if a in t.faults and b not in t.faults]
-    blind_b = [t for t in cands if b in t.faults and a not in t.faults]
-    if not blind_a and not blind_b:
-        return f"no realizable test sees one of {a}, {b} and not the other (structurally not separable)"
-    return (f"{len(blind_a)} realizable tests see {a} without {b} and {len(blind_b)} see {b} without {a}; none of "
-            f"them detects its fault in {s} at the required fault-to-noise ratio")
+def _unmet(cands: Sequence[PracticalCandidate], a: str, b: str, s: str) -> Unmet:
+    """Why no candidate meets the requirement (a, b) in scenario s (b = "": detect a)."""
+    if b:
+        options = [(t, t.share.get((a, s), 0.0)) for t in cands if a in t.faults and b not in t.faults]
+        options += [(t, t.share.get((b, s), 0.0)) for t in cands if b in t.faults and a not in t.faults]
+    else:
+        options = [(t, t.share.get((a, s), 0.0)) for t in cands if a in t.faults]
+    if not options:
+        return Unmet(s, a, b, UnmetKind.NOT_IN_SIGNATURE, 0)
+    best, share = max(options, key=lambda o: (o[1], -o[0].cost))
+    if all(t.evaluable.get(s, 1.0) == 0.0 for t, _ in options):
+        return Unmet(s, a, b, UnmetKind.OUT_OF_DOMAIN, len(options), best.label, share)
+    return Unmet(s, a, b, UnmetKind.WEAK, len(options), best.label, share)
 
 
 def select_practical(candidates: Sequence[PracticalCandidate], faults: Sequence[str],
@@ -163,13 +204,13 @@ def select_practical(candidates: Sequence[PracticalCandidate], faults: Sequence[
             if cover:
                 rows.append(cover)
             else:
-                unmet.append(Unmet(s, f, "", _unmet_reason(candidates, f, "", s)))
+                unmet.append(_unmet(candidates, f, "", s))
         for a, b in pairs:
             cover = [i for i, t in enumerate(candidates) if separates(t, a, b, s)]
             if cover:
                 rows.append(cover)
             else:
-                unmet.append(Unmet(s, a, b, _unmet_reason(candidates, a, b, s)))
+                unmet.append(_unmet(candidates, a, b, s))
     if solver not in ("auto", "rc2", "highs"):
         raise ValueError(f"solver {solver!r}: use auto, rc2 or highs")
     costs = [max(1, t.cost) for t in candidates]
@@ -192,7 +233,7 @@ def _dedupe(rows: Sequence[Sequence[int]]) -> list[tuple[int, ...]]:
 
 
 def _solve_rc2(rows: Sequence[Sequence[int]], costs: Sequence[int]) -> list[int]:
-    from pysat.examples.rc2 import RC2
+    from pysat.examples.rc2 import RC2Stratified
     from pysat.formula import WCNF
 
     w = WCNF()
@@ -200,7 +241,7 @@ def _solve_rc2(rows: Sequence[Sequence[int]], costs: Sequence[int]) -> list[int]
         w.append([i + 1 for i in r])
     for i, c in enumerate(costs):
         w.append([-(i + 1)], weight=c)
-    with RC2(w, solver="cd19") as rc2:
+    with RC2Stratified(w, solver="cd19", adapt=True, exhaust=True, minz=True) as rc2:
         model = rc2.compute()
     if model is None:
         raise RuntimeError("practical selection: the requirements that candidates meet are contradictory")

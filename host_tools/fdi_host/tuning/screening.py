@@ -239,7 +239,7 @@ def screen_candidate(setup: ScreenSetup, c: Candidate, solver: Solver, solver_f:
     try:
         g = synthesize(model, eqs, c.label, solver, setup.reference)
     except NotRealizableError as exc:
-        return CandidateScreen(c.label, " ".join(eqs), (), math.nan, 0.0, 0, {}, exc.reason)
+        return CandidateScreen(c.label, " ".join(eqs), (), math.nan, 0.0, 0, {}, str(exc))
     warm = round(WARMUP_S / setup.design.dt)
     runs = _residuals(g, bank)
     segs = [r[warm:] for r, _ in runs if len(r) > warm]
@@ -250,8 +250,10 @@ def screen_candidate(setup: ScreenSetup, c: Candidate, solver: Solver, solver_f:
     sens_fn = _sensitivity_fn(model, g, solver_f)
     steps = {f: setup.sizes.get(f, 1.0) for f in g.faults}
     per: dict[str, dict[str, tuple[float, float]]] = {f: {} for f in g.faults}
+    evaluable: dict[str, float] = {}
     for sc, d in setup.scenarios.items():
         total = max(1, len(next(iter(setup.calibration[d].values()))) - warm)
+        evaluable[sc] = round(sum(b - a - warm for drive_index, a, b in bank.runs(g) if drive_index == d) / total, 3)
         hits = dict.fromkeys(g.faults, 0)
         fnrs: dict[str, list[FloatArray]] = {f: [] for f in g.faults}
         mine = [k for k, (drive_index, _, _) in enumerate(bank.runs(g)) if drive_index == d]
@@ -272,7 +274,8 @@ def screen_candidate(setup: ScreenSetup, c: Candidate, solver: Solver, solver_f:
             per[f][sc] = (round(hits[f] / total, 3), float(f"{np.median(allf):.3g}") if allf.size else 0.0)
     per_fault = {f: FaultScreen({s: v[0] for s, v in d.items()}, {s: v[1] for s, v in d.items()})
                  for f, d in per.items()}
-    return CandidateScreen(c.label, " ".join(eqs), g.faults, sigma, g.min_speed, operation_count(g), per_fault)
+    return CandidateScreen(c.label, " ".join(eqs), g.faults, sigma, g.min_speed, operation_count(g), per_fault,
+                           evaluable=evaluable)
 
 
 # ------------------------------------------------------------------------------------------ the whole pool
