@@ -43,7 +43,7 @@ import sympy
 
 from fdi_analysis.expressions import ExpressionError, der, derivative_symbols, parse_equation, parse_side
 from fdi_analysis.model import Equation, Model, ModelError, Parameter, Role, Variable
-from fdi_analysis.structure import Structure, StructureError
+from fdi_analysis.structure import Structure, StructureError, warn_structure
 
 _ROLES: tuple[Role, ...] = ("unknown", "known", "fault")
 
@@ -83,7 +83,11 @@ def _from_fdt_json(path: Path) -> Model:
 
 
 def model_from_structure(st: Structure, source: Path | None = None) -> Model:
-    """A structural-only Model from incidence matrices."""
+    """A structural-only Model from incidence matrices (an FDT structure).
+
+    What Fault Diagnosis Toolbox accepts loads: a variable that appears in no equation is a warning naming it
+    (it takes no part in the analysis), not an error as in a TOML model; repeated names were renamed, with a
+    warning, by Structure.from_fdt_dict. A structure without equations stays an error."""
     eqs = []
     for r, eid in enumerate(st.equations):
         unk = tuple(st.unknowns[c] for c in range(st.nx) if st.X[r, c])
@@ -109,7 +113,13 @@ def model_from_structure(st: Structure, source: Path | None = None) -> Model:
         equations=tuple(eqs),
         source=source,
     )
-    _check_usage(model, str(source or ""))
+    where = str(source or model.name)
+    if not model.equations:
+        raise ModelError("the model has no equations (X has no rows)", file=where)
+    for names, mat, role in ((st.unknowns, st.X, "unknown"), (st.knowns, st.Z, "known"), (st.faults, st.F, "fault")):
+        for c, n in enumerate(names):
+            if not mat[:, c].any():
+                warn_structure(where, f"{role} {n!r} appears in no equation; loaded, it takes no part in the analysis")
     return model
 
 

@@ -12,6 +12,8 @@ integrated variable ``x`` is marked 2. F and Z are 0/1.
 from __future__ import annotations
 
 import json
+import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -28,6 +30,39 @@ DIFF_DERIVATIVE = 3
 
 class StructureError(ValueError):
     """A structure that is not well formed (wrong shapes, bad markings, duplicate names)."""
+
+
+class StructureWarning(UserWarning):
+    """A structure Fault Diagnosis Toolbox accepts and this project loads after a change it names (a repeated
+    name renamed) or with a part that takes no part in the analysis (a variable in no equation)."""
+
+
+def warn_structure(source: str, message: str) -> None:
+    """One warning line ``<source>: <message>`` (no source-code line under it)."""
+    warnings.warn_explicit(message, StructureWarning, filename=source, lineno=0)
+
+
+def unique_names(names: Sequence[str], label: str, source: str) -> tuple[str, ...]:
+    """The names with repeats renamed (second ``e3`` -> ``e3_2``), each rename warned about."""
+    taken = set(names)
+    seen: dict[str, int] = {}
+    out = []
+    for n in names:
+        if n not in seen:
+            seen[n] = 1
+            out.append(n)
+            continue
+        k = seen[n]
+        while True:
+            k += 1
+            new = f"{n}_{k}"
+            if new not in taken:
+                break
+        seen[n] = k
+        taken.add(new)
+        out.append(new)
+        warn_structure(source, f"{label} name {n!r} repeats; this one renamed to {new!r}")
+    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -147,6 +182,11 @@ class Structure:
 
     @staticmethod
     def from_fdt_dict(d: dict[str, Any], source: str = "<dict>") -> Structure:
+        """A structure from Fault Diagnosis Toolbox's model definition: ``MatrixStruc`` (X, F, Z matrices, name
+        lists e, x, f, z optional) or ``VarStruc`` (``rels``: the variable names of each equation). Repeated
+        names are renamed with a warning, as FDT accepts them (its AddSensors repeats e1, e2, ...)."""
+        if d.get("type") == "VarStruc" or ("rels" in d and "X" not in d):
+            d = _matrices_from_rels(d, source)
         if "X" not in d:
             raise StructureError(f"{source}: missing key 'X'")
         mats: dict[str, npt.NDArray[np.int8]] = {}
@@ -178,10 +218,10 @@ class Structure:
             raise StructureError(f"{source}: F and Z must hold only 0 and 1")
         try:
             return Structure(
-                equations=tuple(map(str, e)),
-                unknowns=tuple(map(str, x)),
-                knowns=tuple(map(str, z)),
-                faults=tuple(map(str, f)),
+                equations=unique_names([str(n) for n in e], "equation", source),
+                unknowns=unique_names([str(n) for n in x], "unknown", source),
+                knowns=unique_names([str(n) for n in z], "known", source),
+                faults=unique_names([str(n) for n in f], "fault", source),
                 X=X,
                 F=F,
                 Z=Z,
@@ -214,3 +254,31 @@ class Structure:
             name=self.name,
             equation_kinds=tuple(self.equation_kinds[i] for i in idx) if self.equation_kinds else (),
         )
+
+
+def _matrices_from_rels(d: dict[str, Any], source: str) -> dict[str, Any]:
+    """FDT's VarStruc form (``rels``: a list of variable-name lists, one per equation) as matrices."""
+    rels = d.get("rels")
+    if not isinstance(rels, list):
+        raise StructureError(f"{source}: 'rels' must be a list with the variable names of each equation")
+    cols: dict[str, list[str]] = {}
+    for key in ("x", "f", "z"):
+        names = d.get(key, [])
+        if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+            raise StructureError(f"{source}: {key!r} must be a list of names")
+        cols[key] = names
+    where = {n: (key, i) for key in ("z", "f", "x") for i, n in enumerate(cols[key])}
+    mats = {key: [[0] * len(cols[key]) for _ in rels] for key in ("x", "f", "z")}
+    for r, rel in enumerate(rels):
+        if not isinstance(rel, list):
+            raise StructureError(f"{source}: equation {r + 1} of 'rels' is not a list of variable names")
+        for n in rel:
+            if n not in where:
+                raise StructureError(
+                    f"{source}: equation {r + 1} of 'rels': variable {n!r} is not declared in x, f or z"
+                )
+            key, i = where[n]
+            mats[key][r][i] = 1
+    out = {k: v for k, v in d.items() if k != "rels"}
+    out.update(type="MatrixStruc", X=mats["x"], F=mats["f"], Z=mats["z"])
+    return out

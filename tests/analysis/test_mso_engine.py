@@ -79,10 +79,10 @@ def test_medium_random_matches_fdt(seed: int, ne: int, phi: int) -> None:
     assert set(ours) == theirs
 
 
-@pytest.mark.parametrize("width", [130, 250])
+@pytest.mark.parametrize("width", [130, 250, 282, 700])
 def test_wide_bitsets_same_msos_after_padding(width: int) -> None:
-    """More than 128 equations (4-word bitsets): pad a structure with non-redundant equations at random
-    positions; the MSO sets are the original ones under the index map."""
+    """More than 128 equations (3, 4, 5 and 12-word bitsets): pad a structure with non-redundant equations at
+    random positions; the MSO sets are the original ones under the index map."""
     base = random_structure(102, 80, 6)
     rng = np.random.default_rng(width)
     npad = width - base.ne
@@ -219,10 +219,30 @@ def _interrupt_search(g: Structure, workers: int) -> tuple[MsoSummary | None, bo
     return part, sent_during_search
 
 
-def test_rejects_too_many_equations() -> None:
+def test_no_size_limit_at_256_equations() -> None:
     s = Structure.from_fdt_dict({"X": np.eye(300, 10, dtype=int).tolist()})
-    with pytest.raises(ValueError, match="at most 256"):
-        find_msos(s, progress=False)
+    # the 290 equations without unknowns are one MSO set each
+    assert find_msos(s, progress=False).count == sum(1 for _ in iter_msos(s)) == 290
+
+
+@pytest.mark.parametrize("nf", [64, 65, 150])
+def test_more_than_64_faults_keep_their_signatures(nf: int) -> None:
+    """The engine keys signatures on 64 bits; above 64 faults it keys on distinct fault rows and the keys are
+    merged back into fault sets: the signature table equals the one computed from the yielded sets."""
+    base = random_structure(11, 90, 6)
+    F = np.zeros((base.ne, nf), dtype=np.int8)
+    rng = np.random.default_rng(nf)
+    for j in range(nf):  # faults on 50 equations, some on two
+        F[rng.integers(50, size=1 + j % 2), j] = 1
+    s = Structure.from_fdt_dict({"X": base.X.tolist(), "F": F.tolist()})
+    p = prepare(s)
+    expected: dict[int, int] = {}
+    for m in iter_msos(s):
+        f = p.faults_of(m)
+        expected[f] = expected.get(f, 0) + 1
+    summary = find_msos(s, workers=1, progress=False)
+    assert {e.faults: e.count for e in summary.signatures} == expected
+    assert max(expected).bit_length() > 64 or nf < 100
 
 
 def test_no_redundancy_gives_no_mso() -> None:

@@ -1,9 +1,12 @@
 /*
  * fdi_analysis.mso._core -- native MSO / MTES search (CPython extension, plain C API, C11).
  *
- * Equation sets are bitsets of 1, 2 or 4 64-bit words (up to 64, 128, 256 equations); the engine in
- * _core_impl.h is instantiated for each width. Python sees equation sets as non-negative ints
- * (bit e = equation e) and opaque capsules for the model, the aggregator and the iterators.
+ * Equation sets are bitsets of NW 64-bit words; the engine in _core_impl.h is instantiated for each width of
+ * a ladder (1, 2, 3, 4, 5, 6, 8, 12, 16, 24, 32, 64, 128, 256 words) and a model runs on the narrowest one
+ * that holds its equations (a 41-equation model on one word, 282 equations on five). The ladder ends at
+ * 16384 equations, where the int16 indices end; memory, not a constant, limits the search before that.
+ * Python sees equation sets as non-negative ints (bit e = equation e) and opaque capsules for the model,
+ * the aggregator and the iterators.
  *
  * Functions (all internal; the typed API is fdi_analysis.mso):
  *   model_new(ne, nv, rows, eqfault)        rows[e] = unknown indices of equation e, eqfault[e] = fault mask
@@ -12,8 +15,8 @@
  *   split(model, S, R) -> (phi, [(S', R')]) children of search node (S, R)
  *   agg_new(model) / agg_run(model, agg, S, R, check_signals) -> interrupted / agg_result(agg)
  *   iter_new(model, S, R, mode, emit_all) / iter_next(it, limit) -> [int]
- * Memory: an iterator holds (ne + 2) frames of O(ne) words; the aggregator a histogram and one hash entry
- * per distinct fault signature. Nothing grows with the number of MSO sets.
+ * Memory: an iterator holds (redundancy + 2) frames of O(ne) bitsets; the aggregator a histogram and one
+ * hash entry per distinct fault signature. Nothing grows with the number of MSO sets.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -22,7 +25,8 @@
 #include <string.h>
 
 typedef uint64_t w64;
-#define NWMAX 4
+#define NWMAX 256          /* widest instance: 16384 equations */
+#define MAX_INDEX 32000    /* equations and unknowns are int16 indices */
 #define CAT_(a, b) a##_##b
 #define CAT(a, b) CAT_(a, b)
 
@@ -32,12 +36,19 @@ typedef uint64_t w64;
         for (w64 i##_x = (a).w[i##_k]; i##_x; i##_x &= i##_x - 1)                              \
             for (int i = i##_k * 64 + __builtin_ctzll(i##_x), i##_once = 1; i##_once; i##_once = 0)
 
+/* Result of adding equations to the set T every MSO set of a subtree must hold (see _core_impl.h). */
+enum { T_MATCHABLE = 0, T_IS_MSO = 1, T_DEAD = 2 };
+
+struct engine;
+
 typedef struct {
     int ne, nv, nw;
+    int phimax;       /* structural redundancy of the whole model: no search node has more */
     int *row_off;     /* ne + 1 */
     int16_t *row_var; /* row_off[ne] */
-    w64 *col;         /* nv * NWMAX: equations holding each unknown */
+    w64 *col;         /* nv * nw: equations holding each unknown */
     w64 *eqfault;     /* ne: fault mask (<= 64 faults) */
+    const struct engine *eng;
 } model_t;
 
 /* ---- aggregation without storing MSO sets --------------------------------------------------------- */
@@ -46,7 +57,6 @@ typedef struct {
     uint64_t count;
     int32_t size;
     int32_t used;
-    w64 best[NWMAX];
 } sigent_t;
 
 typedef struct {
@@ -54,6 +64,7 @@ typedef struct {
     uint64_t count;
     uint64_t *hist; /* ne + 1, by number of equations */
     sigent_t *tab;
+    w64 *best;      /* cap * nw: the smallest MSO set of each entry */
     size_t cap, n;
     int shift;
 } agg_t;
@@ -62,6 +73,7 @@ static void agg_free(agg_t *a) {
     if (a) {
         free(a->hist);
         free(a->tab);
+        free(a->best);
         free(a);
     }
 }
@@ -75,7 +87,8 @@ static agg_t *agg_create(int ne, int nw) {
     a->shift = 64 - 10;
     a->hist = (uint64_t *)calloc((size_t)ne + 1, sizeof(uint64_t));
     a->tab = (sigent_t *)calloc(a->cap, sizeof(sigent_t));
-    if (!a->hist || !a->tab) {
+    a->best = (w64 *)calloc(a->cap * (size_t)nw, sizeof(w64));
+    if (!a->hist || !a->tab || !a->best) {
         agg_free(a);
         return NULL;
     }
@@ -96,11 +109,18 @@ static inline int lex_less(const w64 *a, const w64 *b, int nw) {
 }
 
 static int agg_grow(agg_t *a) {
-    size_t oldcap = a->cap;
+    const size_t oldcap = a->cap, nw = (size_t)a->nw;
     sigent_t *old = a->tab;
+    w64 *oldbest = a->best;
     sigent_t *t = (sigent_t *)calloc(oldcap * 2, sizeof(sigent_t));
-    if (!t) return -1;
+    w64 *b = (w64 *)calloc(oldcap * 2 * nw, sizeof(w64));
+    if (!t || !b) {
+        free(t);
+        free(b);
+        return -1;
+    }
     a->tab = t;
+    a->best = b;
     a->cap = oldcap * 2;
     a->shift -= 1;
     for (size_t i = 0; i < oldcap; i++) {
@@ -108,9 +128,11 @@ static int agg_grow(agg_t *a) {
             size_t j = agg_slot(a, old[i].key);
             while (t[j].used) j = (j + 1) & (a->cap - 1);
             t[j] = old[i];
+            memcpy(b + j * nw, oldbest + i * nw, nw * sizeof(w64));
         }
     }
     free(old);
+    free(oldbest);
     return 0;
 }
 
@@ -141,22 +163,80 @@ static inline void agg_add(agg_t *a, const w64 *S, int nw, int size, w64 sig) {
         return;
     }
     e->count++;
-    if (size < e->size || (size == e->size && lex_less(S, e->best, nw))) {
+    w64 *best = a->best + (size_t)(e - a->tab) * (size_t)nw;
+    if (size < e->size || (size == e->size && lex_less(S, best, nw))) {
         e->size = size;
-        for (int k = 0; k < nw; k++) e->best[k] = S[k];
+        for (int k = 0; k < nw; k++) best[k] = S[k];
     }
 }
 
 /* ---- engine instances ------------------------------------------------------------------------------- */
+/* Width-independent entry points of one instance (the search itself is in _core_impl.h). */
+typedef struct engine {
+    int nw;
+    void *(*alloc)(const model_t *m, int nframes);
+    void (*release)(void *it);
+    int (*start)(void *it, const w64 *s, const w64 *r, int mode, int emit_all);
+    int (*run)(void *it, agg_t *agg, w64 *buf, w64 *sigbuf, size_t *n, size_t limit, int check, int *interrupted);
+    int (*error)(void *it);
+    int (*split)(void *it, const w64 *s, const w64 *r, w64 *out, int *nout);
+    int (*mplus)(const model_t *m, const w64 *s, w64 *out);
+} engine_t;
+
+/* the ladder of widths; a model uses the first that holds its equations */
 #define NW 1
 #include "_core_impl.h"
 #undef NW
 #define NW 2
 #include "_core_impl.h"
 #undef NW
+#define NW 3
+#include "_core_impl.h"
+#undef NW
 #define NW 4
 #include "_core_impl.h"
 #undef NW
+#define NW 5
+#include "_core_impl.h"
+#undef NW
+#define NW 6
+#include "_core_impl.h"
+#undef NW
+#define NW 8
+#include "_core_impl.h"
+#undef NW
+#define NW 12
+#include "_core_impl.h"
+#undef NW
+#define NW 16
+#include "_core_impl.h"
+#undef NW
+#define NW 24
+#include "_core_impl.h"
+#undef NW
+#define NW 32
+#include "_core_impl.h"
+#undef NW
+#define NW 64
+#include "_core_impl.h"
+#undef NW
+#define NW 128
+#include "_core_impl.h"
+#undef NW
+#define NW 256
+#include "_core_impl.h"
+#undef NW
+
+static const engine_t *const ENGINES[] = {&engine_1,  &engine_2,  &engine_3,  &engine_4,  &engine_5,
+                                          &engine_6,  &engine_8,  &engine_12, &engine_16, &engine_24,
+                                          &engine_32, &engine_64, &engine_128, &engine_256};
+
+static const engine_t *engine_for(int ne) {
+    const int need = (ne + 63) / 64;
+    for (size_t i = 0; i < sizeof ENGINES / sizeof ENGINES[0]; i++)
+        if (ENGINES[i]->nw >= need) return ENGINES[i];
+    return NULL;
+}
 
 /* ---- Python glue ------------------------------------------------------------------------------------ */
 static void model_free(model_t *m) {
@@ -171,6 +251,68 @@ static void model_free(model_t *m) {
 
 static void model_capsule_destructor(PyObject *cap) {
     model_free((model_t *)PyCapsule_GetPointer(cap, "fdi_mso.model"));
+}
+
+/* Kuhn augmenting path from equation e (recursion depth <= number of equations). */
+static int kuhn(const model_t *m, int e, int *varmatch, int *vis, int stamp) {
+    for (int k = m->row_off[e]; k < m->row_off[e + 1]; k++) {
+        const int x = m->row_var[k];
+        if (vis[x] == stamp) continue;
+        vis[x] = stamp;
+        if (varmatch[x] < 0 || kuhn(m, varmatch[x], varmatch, vis, stamp)) {
+            varmatch[x] = e;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Allocation and the derived fields once rows are known: column bitsets, engine, redundancy bound. */
+static model_t *model_alloc(int ne, int nv, size_t nnz) {
+    model_t *m = (model_t *)calloc(1, sizeof(model_t));
+    if (!m) return NULL;
+    m->ne = ne;
+    m->nv = nv;
+    m->eng = engine_for(ne);
+    m->nw = m->eng->nw;
+    m->row_off = (int *)calloc((size_t)ne + 1, sizeof(int));
+    m->col = (w64 *)calloc((size_t)(nv > 0 ? nv : 1) * (size_t)m->nw, sizeof(w64));
+    m->eqfault = (w64 *)calloc((size_t)ne, sizeof(w64));
+    m->row_var = (int16_t *)calloc(nnz + 1, sizeof(int16_t));
+    if (!m->row_off || !m->col || !m->eqfault || !m->row_var) {
+        model_free(m);
+        return NULL;
+    }
+    return m;
+}
+
+static int model_finish(model_t *m) {
+    int *buf = (int *)malloc((size_t)(2 * m->nv + 1) * sizeof(int));
+    if (!buf) return -1;
+    int *varmatch = buf, *vis = buf + m->nv;
+    for (int x = 0; x < m->nv; x++) varmatch[x] = vis[x] = -1;
+    int matched = 0;
+    for (int e = 0; e < m->ne; e++) {
+        matched += kuhn(m, e, varmatch, vis, e);
+        for (int k = m->row_off[e]; k < m->row_off[e + 1]; k++)
+            m->col[(size_t)m->row_var[k] * (size_t)m->nw + (size_t)(e >> 6)] |= (w64)1 << (e & 63);
+    }
+    m->phimax = m->ne - matched;
+    free(buf);
+    return 0;
+}
+
+static int check_sizes(int ne, int nv, int nf) {
+    if (ne < 1 || ne > MAX_INDEX || nv < 0 || nv > MAX_INDEX || nf < 0 || nf > 64) {
+        PyErr_Format(PyExc_ValueError, "need 1 <= equations <= %d, unknowns <= %d, faults <= 64 (got %d, %d, %d)",
+                     MAX_INDEX, MAX_INDEX, ne, nv, nf);
+        return -1;
+    }
+    if (!engine_for(ne)) {
+        PyErr_Format(PyExc_ValueError, "%d equations: the widest compiled bitset holds %d", ne, 64 * NWMAX);
+        return -1;
+    }
+    return 0;
 }
 
 static int py_to_words(PyObject *o, w64 *out, int nw) {
@@ -193,7 +335,6 @@ static int py_to_words(PyObject *o, w64 *out, int nw) {
         Py_DECREF(v);
         return -1;
     }
-    for (int k = 0; k < NWMAX; k++) out[k] = 0;
     for (int k = 0; k < nw; k++) {
         out[k] = (w64)PyLong_AsUnsignedLongLongMask(v);
         PyObject *nv = PyNumber_Rshift(v, sh);
@@ -223,42 +364,37 @@ static PyObject *words_to_py(const w64 *w, int nw) {
 
 static model_t *get_model(PyObject *cap) { return (model_t *)PyCapsule_GetPointer(cap, "fdi_mso.model"); }
 
+static PyObject *model_capsule(model_t *m) {
+    if (model_finish(m) != 0) {
+        model_free(m);
+        return PyErr_NoMemory();
+    }
+    PyObject *cap = PyCapsule_New(m, "fdi_mso.model", model_capsule_destructor);
+    if (!cap) model_free(m);
+    return cap;
+}
+
 static PyObject *py_model_new(PyObject *self, PyObject *args) {
     (void)self;
     int ne, nv;
     PyObject *rows, *faults;
     if (!PyArg_ParseTuple(args, "iiOO", &ne, &nv, &rows, &faults)) return NULL;
-    if (ne < 1 || ne > 64 * NWMAX || nv < 0 || nv > 32000) {
-        PyErr_SetString(PyExc_ValueError, "need 1 <= equations <= 256 and unknowns <= 32000");
-        return NULL;
-    }
+    if (check_sizes(ne, nv, 0) != 0) return NULL;
     if (!PyList_Check(rows) || PyList_GET_SIZE(rows) != ne || !PyList_Check(faults) || PyList_GET_SIZE(faults) != ne) {
         PyErr_SetString(PyExc_ValueError, "rows and eqfault must be lists with one entry per equation");
         return NULL;
     }
-    model_t *m = (model_t *)calloc(1, sizeof(model_t));
-    if (!m) return PyErr_NoMemory();
-    m->ne = ne;
-    m->nv = nv;
-    m->nw = ne <= 64 ? 1 : (ne <= 128 ? 2 : 4);
-    m->row_off = (int *)calloc((size_t)ne + 1, sizeof(int));
-    m->col = (w64 *)calloc((size_t)(nv > 0 ? nv : 1) * NWMAX, sizeof(w64));
-    m->eqfault = (w64 *)calloc((size_t)ne, sizeof(w64));
     size_t total = 0;
     for (int e = 0; e < ne; e++) {
         PyObject *r = PyList_GET_ITEM(rows, e);
         if (!PyList_Check(r)) {
-            model_free(m);
             PyErr_SetString(PyExc_TypeError, "each row must be a list of unknown indices");
             return NULL;
         }
         total += (size_t)PyList_GET_SIZE(r);
     }
-    m->row_var = (int16_t *)calloc(total + 1, sizeof(int16_t));
-    if (!m->row_off || !m->col || !m->eqfault || !m->row_var) {
-        model_free(m);
-        return PyErr_NoMemory();
-    }
+    model_t *m = model_alloc(ne, nv, total);
+    if (!m) return PyErr_NoMemory();
     int pos = 0;
     for (int e = 0; e < ne; e++) {
         PyObject *r = PyList_GET_ITEM(rows, e);
@@ -271,7 +407,6 @@ static PyObject *py_model_new(PyObject *self, PyObject *args) {
                 return NULL;
             }
             m->row_var[pos++] = (int16_t)x;
-            m->col[(size_t)x * NWMAX + (size_t)(e >> 6)] |= (w64)1 << (e & 63);
         }
         m->eqfault[e] = (w64)PyLong_AsUnsignedLongLongMask(PyList_GET_ITEM(faults, e));
         if (PyErr_Occurred()) {
@@ -280,9 +415,7 @@ static PyObject *py_model_new(PyObject *self, PyObject *args) {
         }
     }
     m->row_off[ne] = pos;
-    PyObject *cap = PyCapsule_New(m, "fdi_mso.model", model_capsule_destructor);
-    if (!cap) model_free(m);
-    return cap;
+    return model_capsule(m);
 }
 
 /* model_dense(ne, nv, nf, inc, fmat): inc = ne*nv bytes (row-major, nonzero = incidence), fmat = ne*nf bytes.
@@ -294,10 +427,7 @@ static PyObject *py_model_dense(PyObject *self, PyObject *args) {
     if (!PyArg_ParseTuple(args, "iiiy*y*", &ne, &nv, &nf, &inc, &fm)) return NULL;
     PyObject *cap = NULL;
     model_t *m = NULL;
-    if (ne < 1 || ne > 64 * NWMAX || nv < 0 || nv > 32000 || nf < 0 || nf > 64) {
-        PyErr_SetString(PyExc_ValueError, "need 1 <= equations <= 256, unknowns <= 32000, faults <= 64");
-        goto done;
-    }
+    if (check_sizes(ne, nv, nf) != 0) goto done;
     if (inc.len != (Py_ssize_t)ne * nv || fm.len != (Py_ssize_t)ne * nf) {
         PyErr_SetString(PyExc_ValueError, "inc must have ne*nv bytes and fmat ne*nf bytes");
         goto done;
@@ -306,41 +436,23 @@ static PyObject *py_model_dense(PyObject *self, PyObject *args) {
     const unsigned char *fp = (const unsigned char *)fm.buf;
     size_t total = 0;
     for (Py_ssize_t k = 0; k < inc.len; k++) total += ip[k] != 0;
-    m = (model_t *)calloc(1, sizeof(model_t));
+    m = model_alloc(ne, nv, total);
     if (!m) {
-        PyErr_NoMemory();
-        goto done;
-    }
-    m->ne = ne;
-    m->nv = nv;
-    m->nw = ne <= 64 ? 1 : (ne <= 128 ? 2 : 4);
-    m->row_off = (int *)calloc((size_t)ne + 1, sizeof(int));
-    m->col = (w64 *)calloc((size_t)(nv > 0 ? nv : 1) * NWMAX, sizeof(w64));
-    m->eqfault = (w64 *)calloc((size_t)ne, sizeof(w64));
-    m->row_var = (int16_t *)calloc(total + 1, sizeof(int16_t));
-    if (!m->row_off || !m->col || !m->eqfault || !m->row_var) {
-        model_free(m);
-        m = NULL;
         PyErr_NoMemory();
         goto done;
     }
     int pos = 0;
     for (int e = 0; e < ne; e++) {
         m->row_off[e] = pos;
-        for (int x = 0; x < nv; x++) {
-            if (ip[(size_t)e * (size_t)nv + (size_t)x]) {
-                m->row_var[pos++] = (int16_t)x;
-                m->col[(size_t)x * NWMAX + (size_t)(e >> 6)] |= (w64)1 << (e & 63);
-            }
-        }
+        for (int x = 0; x < nv; x++)
+            if (ip[(size_t)e * (size_t)nv + (size_t)x]) m->row_var[pos++] = (int16_t)x;
         w64 f = 0;
         for (int j = 0; j < nf; j++)
             if (fp[(size_t)e * (size_t)nf + (size_t)j]) f |= (w64)1 << j;
         m->eqfault[e] = f;
     }
     m->row_off[ne] = pos;
-    cap = PyCapsule_New(m, "fdi_mso.model", model_capsule_destructor);
-    if (!cap) model_free(m);
+    cap = model_capsule(m);
 done:
     PyBuffer_Release(&inc);
     PyBuffer_Release(&fm);
@@ -355,86 +467,26 @@ static PyObject *py_mplus(PyObject *self, PyObject *args) {
     if (!m) return NULL;
     w64 s[NWMAX], r[NWMAX];
     if (py_to_words(so, s, m->nw) != 0) return NULL;
-    int rc = m->nw == 1 ? mplus_1(m, s, r) : (m->nw == 2 ? mplus_2(m, s, r) : mplus_4(m, s, r));
-    if (rc != 0) return PyErr_NoMemory();
+    if (m->eng->mplus(m, s, r) != 0) return PyErr_NoMemory();
     return words_to_py(r, m->nw);
 }
 
 /* ---- iterator capsule (also used internally by split and agg_run) ---------------------------------- */
 typedef struct {
-    int nw;
+    const engine_t *eng;
     void *it;
     PyObject *model; /* strong reference */
 } iterbox_t;
 
-static void iter_free_any(int nw, void *it) {
-    if (nw == 1)
-        iter_free_1((iter_1 *)it);
-    else if (nw == 2)
-        iter_free_2((iter_2 *)it);
-    else
-        iter_free_4((iter_4 *)it);
-}
-
-static void *iter_alloc_any(const model_t *m) {
-    int nf = m->ne + 2;
-    if (m->nw == 1) return iter_alloc_1(m, nf);
-    if (m->nw == 2) return iter_alloc_2(m, nf);
-    return iter_alloc_4(m, nf);
-}
+static void *iter_alloc_any(const model_t *m) { return m->eng->alloc(m, m->phimax + 2); }
 
 static void iterbox_destructor(PyObject *cap) {
     iterbox_t *b = (iterbox_t *)PyCapsule_GetPointer(cap, "fdi_mso.iter");
     if (b) {
-        iter_free_any(b->nw, b->it);
+        b->eng->release(b->it);
         Py_XDECREF(b->model);
         free(b);
     }
-}
-
-static int start_any(const model_t *m, void *it, const w64 *s, const w64 *r, int mode, int emit_all) {
-    if (m->nw == 1) {
-        iter_1 *i = (iter_1 *)it;
-        i->mode = mode;
-        i->emit_all = emit_all;
-        return iter_start_1(i, bs_load_1(s), bs_load_1(r));
-    }
-    if (m->nw == 2) {
-        iter_2 *i = (iter_2 *)it;
-        i->mode = mode;
-        i->emit_all = emit_all;
-        return iter_start_2(i, bs_load_2(s), bs_load_2(r));
-    }
-    iter_4 *i = (iter_4 *)it;
-    i->mode = mode;
-    i->emit_all = emit_all;
-    return iter_start_4(i, bs_load_4(s), bs_load_4(r));
-}
-
-static int iter_error_any(int nw, void *it) {
-    return nw == 1 ? ((iter_1 *)it)->error : (nw == 2 ? ((iter_2 *)it)->error : ((iter_4 *)it)->error);
-}
-
-/* run with either an aggregator or a buffer; returns 1 finished, 0 buffer full, -1 interrupted/error */
-static int run_any(int nw, void *it, agg_t *agg, w64 *buf, w64 *sigbuf, size_t *n, size_t limit, int check, int *interrupted) {
-    int rc;
-    if (nw == 1) {
-        sink_1 sk = {agg, buf, sigbuf, 0, 0, check, 0};
-        rc = iter_run_1((iter_1 *)it, &sk, limit);
-        *n = sk.n;
-        *interrupted = sk.interrupted;
-    } else if (nw == 2) {
-        sink_2 sk = {agg, buf, sigbuf, 0, 0, check, 0};
-        rc = iter_run_2((iter_2 *)it, &sk, limit);
-        *n = sk.n;
-        *interrupted = sk.interrupted;
-    } else {
-        sink_4 sk = {agg, buf, sigbuf, 0, 0, check, 0};
-        rc = iter_run_4((iter_4 *)it, &sk, limit);
-        *n = sk.n;
-        *interrupted = sk.interrupted;
-    }
-    return rc;
 }
 
 static PyObject *py_iter_new(PyObject *self, PyObject *args) {
@@ -452,15 +504,15 @@ static PyObject *py_iter_new(PyObject *self, PyObject *args) {
     if (py_to_words(so, s, m->nw) != 0 || py_to_words(ro, r, m->nw) != 0) return NULL;
     iterbox_t *b = (iterbox_t *)calloc(1, sizeof(iterbox_t));
     if (!b) return PyErr_NoMemory();
-    b->nw = m->nw;
+    b->eng = m->eng;
     b->it = iter_alloc_any(m);
     if (!b->it) {
         free(b);
         return PyErr_NoMemory();
     }
-    int phi = start_any(m, b->it, s, r, mode, emit_all);
+    int phi = m->eng->start(b->it, s, r, mode, emit_all);
     if (phi < 0) {
-        iter_free_any(b->nw, b->it);
+        b->eng->release(b->it);
         free(b);
         PyErr_SetString(PyExc_ValueError, "start set is not a proper structurally overdetermined (PSO) set");
         return NULL;
@@ -470,7 +522,7 @@ static PyObject *py_iter_new(PyObject *self, PyObject *args) {
     PyObject *cap = PyCapsule_New(b, "fdi_mso.iter", iterbox_destructor);
     if (!cap) {
         Py_DECREF(mc);
-        iter_free_any(b->nw, b->it);
+        b->eng->release(b->it);
         free(b);
     }
     return cap;
@@ -489,15 +541,16 @@ static PyObject *py_iter_next(PyObject *self, PyObject *args) {
     if (!m) return NULL;
     /* slack: one node can emit up to ne results at once */
     size_t cap = (size_t)limit + (size_t)m->ne + 1;
-    w64 *buf = (w64 *)malloc(cap * ((size_t)b->nw + 1) * sizeof(w64));
+    const int nw = b->eng->nw;
+    w64 *buf = (w64 *)malloc(cap * ((size_t)nw + 1) * sizeof(w64));
     if (!buf) return PyErr_NoMemory();
-    w64 *sigbuf = with_faults ? buf + cap * (size_t)b->nw : NULL;
+    w64 *sigbuf = with_faults ? buf + cap * (size_t)nw : NULL;
     size_t n = 0;
     int interrupted = 0;
-    int rc = run_any(b->nw, b->it, NULL, buf, sigbuf, &n, (size_t)limit, 0, &interrupted);
-    if (rc < 0 && iter_error_any(b->nw, b->it)) {
+    int rc = b->eng->run(b->it, NULL, buf, sigbuf, &n, (size_t)limit, 0, &interrupted);
+    if (rc < 0 && b->eng->error(b->it)) {
         free(buf);
-        PyErr_Format(PyExc_RuntimeError, "MSO engine internal error %d", iter_error_any(b->nw, b->it));
+        PyErr_Format(PyExc_RuntimeError, "MSO engine internal error %d", b->eng->error(b->it));
         return NULL;
     }
     PyObject *out = PyList_New((Py_ssize_t)n);
@@ -506,7 +559,7 @@ static PyObject *py_iter_next(PyObject *self, PyObject *args) {
         return NULL;
     }
     for (size_t i = 0; i < n; i++) {
-        PyObject *v = words_to_py(buf + i * (size_t)b->nw, b->nw);
+        PyObject *v = words_to_py(buf + i * (size_t)nw, nw);
         if (v && sigbuf) {
             PyObject *f = PyLong_FromUnsignedLongLong(sigbuf[i]);
             PyObject *t = f ? PyTuple_Pack(2, v, f) : NULL;
@@ -534,20 +587,15 @@ static PyObject *py_split(PyObject *self, PyObject *args) {
     w64 s[NWMAX], r[NWMAX];
     if (py_to_words(so, s, m->nw) != 0 || py_to_words(ro, r, m->nw) != 0) return NULL;
     void *it = iter_alloc_any(m);
-    w64 *out = (w64 *)calloc((size_t)m->ne * 2 * NWMAX, sizeof(w64));
+    w64 *out = (w64 *)calloc((size_t)m->ne * 2 * (size_t)m->nw, sizeof(w64));
     if (!it || !out) {
         free(out);
-        if (it) iter_free_any(m->nw, it);
+        if (it) m->eng->release(it);
         return PyErr_NoMemory();
     }
     int nout = 0, phi;
-    if (m->nw == 1)
-        phi = split_1((iter_1 *)it, bs_load_1(s), bs_load_1(r), out, &nout);
-    else if (m->nw == 2)
-        phi = split_2((iter_2 *)it, bs_load_2(s), bs_load_2(r), out, &nout);
-    else
-        phi = split_4((iter_4 *)it, bs_load_4(s), bs_load_4(r), out, &nout);
-    iter_free_any(m->nw, it);
+    phi = m->eng->split(it, s, r, out, &nout);
+    m->eng->release(it);
     if (phi < 0) {
         free(out);
         PyErr_SetString(PyExc_ValueError, "node set is not a proper structurally overdetermined (PSO) set");
@@ -603,17 +651,17 @@ static PyObject *py_agg_run(PyObject *self, PyObject *args) {
     if (py_to_words(so, s, m->nw) != 0 || py_to_words(ro, r, m->nw) != 0) return NULL;
     void *it = iter_alloc_any(m);
     if (!it) return PyErr_NoMemory();
-    if (start_any(m, it, s, r, mode, 0) < 0) {
-        iter_free_any(m->nw, it);
+    if (m->eng->start(it, s, r, mode, 0) < 0) {
+        m->eng->release(it);
         PyErr_SetString(PyExc_ValueError, "node set is not a proper structurally overdetermined (PSO) set");
         return NULL;
     }
     size_t n = 0;
     int interrupted = 0;
     agg_oom = 0;
-    int rc = run_any(m->nw, it, a, NULL, NULL, &n, 0, check, &interrupted);
-    int err = iter_error_any(m->nw, it);
-    iter_free_any(m->nw, it);
+    int rc = m->eng->run(it, a, NULL, NULL, &n, 0, check, &interrupted);
+    int err = m->eng->error(it);
+    m->eng->release(it);
     if (interrupted) {
         PyErr_Clear(); /* KeyboardInterrupt raised by the handler: reported as a partial result */
         Py_RETURN_TRUE;
@@ -645,7 +693,7 @@ static PyObject *py_agg_result(PyObject *self, PyObject *args) {
         const sigent_t *e = &a->tab[i];
         if (!e->used) continue;
         PyObject *t = Py_BuildValue("(KKiN)", (unsigned long long)e->key, (unsigned long long)e->count, (int)e->size,
-                                    words_to_py(e->best, a->nw));
+                                    words_to_py(a->best + i * (size_t)a->nw, a->nw));
         if (!t) {
             Py_DECREF(hist);
             Py_DECREF(sigs);

@@ -4,6 +4,12 @@ The search tree of the Krysander-Aslund-Nyberg algorithm is split at its top lev
 subproblems (node S, removable set R). The no-repeated-removal rule makes the subtrees disjoint, so every
 MSO set is found in exactly one of them. Workers aggregate in C (count, size histogram, signature table)
 and send one table each at the end; memory does not grow with the number of MSO sets.
+
+Size: no fixed limit. The engine picks the narrowest compiled bitset width that holds the equations
+(1 word up to 64 equations, 5 words for 282, ... up to 16384, where its int16 indices end); a search node
+costs O(edges x words). The engine keys fault signatures on 64 bits: a model with more faults is keyed on
+its distinct fault rows (the equations' fault sets, at most 64 distinct ones), and the keys are merged
+back into fault sets here.
 """
 
 from __future__ import annotations
@@ -14,7 +20,7 @@ import os
 import queue
 import signal
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from functools import cached_property
 from types import FrameType
@@ -26,10 +32,9 @@ from ..structure import Structure
 from . import _core
 from .results import MsoSummary, SignatureEntry, lex_before
 
-MAX_EQUATIONS = 256
-MAX_FAULTS = 64
+KEY_BITS = 64  # the engine's fault-signature key
 
-# (equations, unknowns, faults, incidence bytes ne x nv, fault bytes ne x nf): picklable, cheap to build
+# (equations, unknowns, key bits, incidence bytes ne x nv, key bytes ne x key bits): picklable, cheap to build
 ModelArgs = tuple[int, int, int, bytes, bytes]
 
 
@@ -40,6 +45,8 @@ class Prepared:
     args: ModelArgs
     model: _core.Model
     root: int  # overdetermined part M+ of the whole model (bitset over equations)
+    fault_masks: tuple[int, ...]  # fault bitmask of each equation (any number of faults)
+    key_faults: tuple[int, ...] | None = None  # engine key bit k -> fault mask; None: bit j is fault j
 
     @property
     def ne(self) -> int:
@@ -51,11 +58,9 @@ class Prepared:
         ne, nv, _, inc, _ = self.args
         return [[x for x in range(nv) if inc[e * nv + x]] for e in range(ne)]
 
-    @cached_property
-    def fault_masks(self) -> list[int]:
-        """Fault bitmask of each equation."""
-        ne, _, nf, _, fm = self.args
-        return [sum(1 << j for j in range(nf) if fm[e * nf + j]) for e in range(ne)]
+    def signature(self, key: int) -> int:
+        """The fault set of an engine signature key."""
+        return key if self.key_faults is None else _key_to_faults(key, self.key_faults)
 
     def faults_of(self, eqs: int) -> int:
         f = 0
@@ -67,15 +72,39 @@ class Prepared:
         return f
 
 
+def _key_to_faults(key: int, key_faults: tuple[int, ...]) -> int:
+    f = 0
+    while key:
+        low = key & -key
+        f |= key_faults[low.bit_length() - 1]
+        key ^= low
+    return f
+
+
+def fault_keys(structure: Structure) -> tuple[bytes, int, tuple[int, ...] | None]:
+    """Fault key bytes (ne x bits), key bits, and the fault mask of each key bit (None: bit j = fault j)."""
+    F = structure.F != 0
+    if structure.nf <= KEY_BITS:
+        return F.tobytes(), structure.nf, None
+    rows = sorted({tuple(int(j) for j in r.nonzero()[0]) for r in F if r.any()})
+    if len(rows) > KEY_BITS:
+        raise ValueError(
+            f"{structure.name or 'structure'}: {structure.nf} faults in {len(rows)} distinct equation fault sets; "
+            f"the engine keys fault signatures on at most {KEY_BITS} distinct ones"
+        )
+    index = {r: k for k, r in enumerate(rows)}
+    keys = bytearray(structure.ne * len(rows))
+    for e, r in enumerate(F):
+        if r.any():
+            keys[e * len(rows) + index[tuple(int(j) for j in r.nonzero()[0])]] = 1
+    return bytes(keys), len(rows), tuple(sum(1 << j for j in r) for r in rows)
+
+
 def model_args(structure: Structure) -> ModelArgs:
-    if structure.ne > MAX_EQUATIONS:
-        raise ValueError(f"{structure.ne} equations: the engine handles at most {MAX_EQUATIONS}")
-    if structure.nf > MAX_FAULTS:
-        raise ValueError(f"{structure.nf} faults: the engine handles at most {MAX_FAULTS}")
     # dense bytes: per-row Python or numpy work costs more than the whole search on small models
     inc = (structure.X != 0).tobytes()
-    fm = (structure.F != 0).tobytes()
-    return structure.ne, structure.nx, structure.nf, inc, fm
+    keys, nk, _ = fault_keys(structure)
+    return structure.ne, structure.nx, nk, inc, keys
 
 
 def _model(args: ModelArgs) -> _core.Model:
@@ -83,10 +112,13 @@ def _model(args: ModelArgs) -> _core.Model:
 
 
 def prepare(structure: Structure) -> Prepared:
-    args = model_args(structure)
+    inc = (structure.X != 0).tobytes()
+    keys, nk, key_faults = fault_keys(structure)
+    args = (structure.ne, structure.nx, nk, inc, keys)
     model = _model(args)
     root = _core.mplus(model, (1 << structure.ne) - 1)
-    return Prepared(args=args, model=model, root=root)
+    masks = tuple(sum(1 << int(j) for j in row.nonzero()[0]) for row in structure.F)
+    return Prepared(args=args, model=model, root=root, fault_masks=masks, key_faults=key_faults)
 
 
 def mplus(structure: Structure | Prepared, eqs: int) -> int:
@@ -150,19 +182,21 @@ def _n_unknowns(p: Prepared, eqs: int) -> int:
 
 
 class _Acc:
-    """Merges aggregates coming from tasks or workers."""
+    """Merges aggregates coming from tasks or workers (engine keys translated to fault sets)."""
 
-    def __init__(self, ne: int) -> None:
+    def __init__(self, ne: int, signature: Callable[[int], int]) -> None:
         self.count = 0
         self.hist = [0] * (ne + 1)
         self.sigs: dict[int, list[int]] = {}
+        self.signature = signature
 
     def add(self, res: tuple[int, list[int], list[tuple[int, int, int, int]]]) -> None:
         count, hist, sigs = res
         self.count += count
         for i, h in enumerate(hist):
             self.hist[i] += h
-        for key, c, size, best in sigs:
+        for k, c, size, best in sigs:
+            key = self.signature(k)
             cur = self.sigs.get(key)
             if cur is None:
                 self.sigs[key] = [c, size, best]
@@ -237,7 +271,7 @@ def find_msos(
     t0 = time.perf_counter()
     p = structure if isinstance(structure, Prepared) else prepare(structure)
     workers = max(1, int(workers))
-    acc = _Acc(p.ne)
+    acc = _Acc(p.ne, p.signature)
     if p.root == 0:
         return acc.summary(True, time.perf_counter() - t0, workers, 0)
     tasks = split_tasks(p, 1 if (workers == 1 and not progress) else workers * tasks_per_worker)
