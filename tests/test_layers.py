@@ -37,7 +37,14 @@ LAYERS: tuple[tuple[str, int], ...] = (
 )
 
 
+# A package root that re-exports an upper layer's names (PEP 562 `__getattr__`, loaded on first use) is a facade
+# above its whole package: `fdi_analysis` re-exports the API (layer 5).
+FACADES = {"fdi_analysis": 6}
+
+
 def layer(module: str) -> int:
+    if module in FACADES:
+        return FACADES[module]
     best = ("", -1)
     for prefix, lay in LAYERS:
         if (module == prefix or module.startswith(prefix + ".") or module.startswith(prefix + "_")) and len(
@@ -65,7 +72,11 @@ def imports(name: str, path: Path, known: set[str]) -> set[str]:
     pkg = name if path.name == "__init__.py" else name.rpartition(".")[0]
     out: set[str] = set()
     for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
+        if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "import_module"
+                and node.args and isinstance(node.args[0], ast.Constant) and isinstance(node.args[0].value, str)
+                and node.args[0].value.split(".")[0] in ROOTS):  # importlib.import_module("fdi_...") counts too
+            out.add(node.args[0].value)
+        elif isinstance(node, ast.Import):
             out |= {a.name for a in node.names if a.name.split(".")[0] in ROOTS}
         elif isinstance(node, ast.ImportFrom):
             base = node.module or ""
@@ -142,3 +153,7 @@ def test_the_layer_check_sees_an_upward_import(tmp_path: Path) -> None:
     bad.write_text("def f():\n    from fdi_host.quality.suite import run_suite\n", encoding="utf-8")
     found = imports("fdi_host.sim.m", bad, {"fdi_host.quality.suite"})
     assert found == {"fdi_host.quality.suite"} and layer("fdi_host.quality.suite") > layer("fdi_host.sim.m")
+    bad.write_text("import importlib\ndef f():\n    return importlib.import_module('fdi_analysis.api')\n",
+                   encoding="utf-8")
+    assert imports("fdi_analysis.dm", bad, {"fdi_analysis.api"}) == {"fdi_analysis.api"}
+    assert layer("fdi_analysis.api") > layer("fdi_analysis.dm") and layer("fdi_analysis") > layer("fdi_analysis.api")

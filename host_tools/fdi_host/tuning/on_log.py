@@ -111,9 +111,6 @@ def write_csv(res: LogResiduals, path: Path) -> None:
 
 def plot(res: LogResiduals, path: Path, title: str) -> None:
     """|r| / sigma per test over time with the gate; the first raw alarm marked."""
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     n = len(res.tests)

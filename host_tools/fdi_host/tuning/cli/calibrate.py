@@ -7,6 +7,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from fdi_analysis.cli_common import EXIT_ERROR
+
 EXAMPLE = ("example: fdi-tune calibrate analysis/models/romo_grouped.toml "
            "--thresholds analysis/models/romo_thresholds.toml --scenarios cornering slalom straight")
 
@@ -151,8 +153,9 @@ def run_sizes(args: argparse.Namespace) -> int:
         faults = [f for f in faults if f in set(args.faults)]
     missing = size_file.lacking(faults)
     if missing:
-        print(f"error: {args.sizes} lacks [sizes] or [limits] for {', '.join(missing)}", file=sys.stderr)
-        return 2
+        print(f"fdi-tune: error: {args.sizes} lacks [requirement] or [limits] for {', '.join(missing)}",
+              file=sys.stderr)
+        return EXIT_ERROR
     run_drive = sweep.scenario_drive(args.scenario)
     others = [s for s in (DEFAULT_SCENARIOS if args.other_scenarios is None else args.other_scenarios)
               if s != args.scenario]

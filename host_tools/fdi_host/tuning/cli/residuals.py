@@ -8,6 +8,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from fdi_analysis.cli_common import EXIT_ERROR
+
 if TYPE_CHECKING:
     from fdi_host.can.frame import Frame
     from fdi_host.tuning.on_log import LogResiduals
@@ -61,10 +63,10 @@ def run(args: argparse.Namespace) -> int:
         frames = sorted(read_log(args.log), key=lambda f: f.timestamp)
     except (OSError, ValueError) as exc:
         print(f"fdi-tune: error: cannot read {args.log}: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_ERROR
     if len(frames) < 2:
         print(f"fdi-tune: error: {args.log} holds {len(frames)} frame(s); nothing to evaluate", file=sys.stderr)
-        return 2
+        return EXIT_ERROR
     model = load_model(args.model)
     print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
     _, gens = selected_generators(model, th.observer_reference(), workers=args.workers, selection=th.selection)
@@ -72,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
     if missing:
         print(f"fdi-tune: error: {args.thresholds} has no calibrated sigma for {', '.join(missing)}; run "
               "fdi-tune calibrate", file=sys.stderr)
-        return 2
+        return EXIT_ERROR
     sigmas = [float(np.sqrt(th.generated[" ".join(g.equations)])) for g in gens]
     t, sig = ecu_view(frames, design.dt)
     warmup = round(args.warmup / design.dt)
@@ -80,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
         res = log_residuals(gens, sigmas, th.gate, t, sig, design, warmup)
     except LogError as exc:
         print(f"fdi-tune: error: {args.log}: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_ERROR
     print(f"{args.log}: {len(frames)} frames, {t.size} steps of {design.dt * 1e3:g} ms, gate {th.gate:g} sigma")
     print(f"{'test':10} {'evaluated':>9} {'RMS/sigma':>9} {'peak/sigma':>10}  first raw alarm")
     for tr in res.tests:
@@ -108,13 +110,13 @@ def _compare(res: LogResiduals, frames: Sequence[Frame], warmup: int) -> int:
     if labels != [tr.name for tr in res.tests]:
         print(f"fdi-tune: error: the ECU's generated table holds {labels}, the model's selection "
               f"{[tr.name for tr in res.tests]}: regenerate (scripts/generate.sh) and rebuild", file=sys.stderr)
-        return 2
+        return EXIT_ERROR
     ecu = replay("romo", frames)
     steps = np.asarray([r.step for r in ecu])
     if steps.size and not np.array_equal(steps, np.arange(1, steps.size + 1)):
         print("fdi-tune: error: the ECU skipped steps (a gap in the log); compare on a gap-free log",
               file=sys.stderr)
-        return 2
+        return EXIT_ERROR
     r_ecu = np.asarray([r.residuals for r in ecu], dtype=float).reshape(len(ecu), len(labels))
     ev = np.asarray([[s != "not_evaluable" for s in r.test_status] for r in ecu], dtype=bool).reshape(r_ecu.shape)
     worst = 0.0
