@@ -6,7 +6,8 @@
 
 Goal per structure: our `iter_msos` (one core, every MSO set returned as a Python int) at least 10x faster
 than FDT's `DiagnosisModel.MSO()` on the same structure, with the same sets (checked in the run). FDT runs in a
-child process with a time limit (`--fdt-timeout`); when it does not finish, the ratio is a lower bound
+child process with a time limit: `--fdt-timeout`, raised to 10.5x our time where that is longer, so that a
+structure FDT does not finish still shows whether the goal holds; the ratio is then a lower bound
 (limit / our time). Structures whose MSO sets do not fit FDT's in-memory list (more than `--fdt-max-sets`)
 are timed for us only, on `--workers` processes (counting, no per-set Python objects). Nothing is
 hard-coded: every number printed is measured now; the goal line says PASS or MISS per structure.
@@ -170,9 +171,10 @@ def measure(name: str, st: Structure, fdt_timeout: float) -> Row:
     sets, t_ours = timed(lambda: list(iter_msos(st)))
     ours = set(sets)
     assert len(ours) == len(sets), f"{name}: duplicate MSO set"
-    t_fdt, theirs = fdt_msos(st, fdt_timeout)
+    limit = max(fdt_timeout, (GOAL + 0.5) * t_ours)  # a timeout still decides the goal
+    t_fdt, theirs = fdt_msos(st, limit)
     if t_fdt is None:
-        return Row(name, st.ne, mp_, phi, len(ours), t_ours, fdt_timeout, False, None, f"FDT > {fdt_timeout:.0f} s")
+        return Row(name, st.ne, mp_, phi, len(ours), t_ours, limit, False, None, f"FDT > {limit:.0f} s")
     return Row(name, st.ne, mp_, phi, len(ours), t_ours, t_fdt, True, theirs == ours)
 
 
@@ -209,21 +211,22 @@ def header(title: str) -> None:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="CI size: a subset, FDT capped at 10 s")
-    ap.add_argument("--fdt-timeout", type=float, default=None, help="FDT time limit per structure [s] (default 60)")
+    ap.add_argument("--fdt-timeout", type=float, default=None,
+                    help="FDT time limit per structure [s] (default 30, quick 10; at least 10.5x ours)")
     ap.add_argument("--fdt-max-sets", type=int, default=2_000_000,
                     help="structures with more MSO sets are counted on workers, without FDT (default 2e6)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--stretch", action="store_true",
                     help="also count every MSO set of romo_full_vertical.toml (about 1.6e9) on the workers")
     args = ap.parse_args(argv)
-    timeout = args.fdt_timeout if args.fdt_timeout is not None else (10.0 if args.quick else 60.0)
+    timeout = args.fdt_timeout if args.fdt_timeout is not None else (10.0 if args.quick else 30.0)
     try:
         import faultdiagnosistoolbox as fdt
     except ImportError:
         print("faultdiagnosistoolbox is not importable; the benchmark needs it as the anchor", file=sys.stderr)
         return 2
     print(f"FDT {fdt.__version__}; wall clock on this machine, both tools in this run (calls under 50 ms repeated, "
-          f"best of 3 batches, for both); FDT limit {timeout:.0f} s per structure; load average "
+          f"best of 3 batches, for both); FDT limit max({timeout:.0f} s, 10.5x ours) per structure; load average "
           f"{os.getloadavg()[0]:.2f}")
     rows: list[Row] = []
 

@@ -26,6 +26,7 @@ from functools import cached_property
 from types import FrameType
 from typing import Any
 
+import numpy.typing as npt
 from tqdm import tqdm
 
 from ..structure import Structure
@@ -83,9 +84,9 @@ def _key_to_faults(key: int, key_faults: tuple[int, ...]) -> int:
 
 def fault_keys(structure: Structure) -> tuple[bytes, int, tuple[int, ...] | None]:
     """Fault key bytes (ne x bits), key bits, and the fault mask of each key bit (None: bit j = fault j)."""
-    F = structure.F != 0
     if structure.nf <= KEY_BITS:
-        return F.tobytes(), structure.nf, None
+        return _nonzero_bytes(structure.F), structure.nf, None
+    F = structure.F != 0
     rows = sorted({tuple(int(j) for j in r.nonzero()[0]) for r in F if r.any()})
     if len(rows) > KEY_BITS:
         raise ValueError(
@@ -100,9 +101,14 @@ def fault_keys(structure: Structure) -> tuple[bytes, int, tuple[int, ...] | None
     return bytes(keys), len(rows), tuple(sum(1 << j for j in r) for r in rows)
 
 
+def _nonzero_bytes(a: npt.NDArray[Any]) -> bytes:
+    """Row-major bytes, nonzero where `a` is (the engine reads any nonzero byte as an incidence)."""
+    return a.tobytes() if a.dtype.itemsize == 1 else (a != 0).tobytes()
+
+
 def model_args(structure: Structure) -> ModelArgs:
     # dense bytes: per-row Python or numpy work costs more than the whole search on small models
-    inc = (structure.X != 0).tobytes()
+    inc = _nonzero_bytes(structure.X)
     keys, nk, _ = fault_keys(structure)
     return structure.ne, structure.nx, nk, inc, keys
 
@@ -112,7 +118,7 @@ def _model(args: ModelArgs) -> _core.Model:
 
 
 def prepare(structure: Structure) -> Prepared:
-    inc = (structure.X != 0).tobytes()
+    inc = _nonzero_bytes(structure.X)
     keys, nk, key_faults = fault_keys(structure)
     args = (structure.ne, structure.nx, nk, inc, keys)
     model = _model(args)
@@ -137,11 +143,13 @@ def iter_msos(structure: Structure | Prepared, *, batch: int = 8192) -> Iterator
     if root == 0:
         return
     it = _core.iter_new(model, root, root)
+    size = 64  # small first batches: a large result buffer costs more than a small model's whole search
     while True:
-        chunk = _core.iter_next(it, batch)
+        chunk = _core.iter_next(it, size)
         yield from chunk
-        if len(chunk) < batch:
+        if len(chunk) < size:
             return
+        size = min(batch, size * 4)
 
 
 def split_tasks(p: Prepared, target: int) -> list[tuple[int, int]]:
