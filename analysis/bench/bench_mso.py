@@ -195,11 +195,13 @@ def fmt_time(s: float | None) -> str:
 
 def print_row(r: Row) -> None:
     ratio = "-" if r.ratio is None else (f"{r.ratio:.1f}x" if r.fdt_done else f">={r.ratio:.0f}x")
-    fdt = fmt_time(r.fdt_s) if r.fdt_done else (r.note.split(";")[0] if r.fdt_s is None else f">{r.fdt_s:.0f} s")
+    fdt = fmt_time(r.fdt_s) if r.fdt_done else ("not run" if r.fdt_s is None else f">{r.fdt_s:.0f} s")
     same = "-" if r.same is None else ("yes" if r.same else "NO")
     us = r.ours_s / r.sets * 1e6 if r.sets else float("nan")
     print(f"{r.name:<28} {r.ne:>4} {r.mplus:>4} {r.phi:>4} {r.sets:>13,} {same:>4} {fmt_time(r.ours_s):>10} "
           f"{fdt:>12} {ratio:>9} {us:>9.3g}  {r.verdict}", flush=True)
+    if r.fdt_s is None and r.note:
+        print(f"  ({r.note})")
 
 
 def header(title: str) -> None:
