@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fdi_analysis.mso import MsoSummary, bits, find_msos, iter_msos, load_reference, prepare, reference
+from fdi_analysis.mso import MsoSummary, bits, find_msos, iter_msos, load_reference, mtes, prepare, reference
 from fdi_analysis.mso.engine import split_tasks
 from fdi_analysis.random_structures import sparse_random_structure
 from fdi_analysis.structure import Structure
@@ -225,15 +225,18 @@ def test_no_size_limit_at_256_equations() -> None:
     assert find_msos(s, progress=False).count == sum(1 for _ in iter_msos(s)) == 290
 
 
-@pytest.mark.parametrize("nf", [64, 65, 150])
-def test_more_than_64_faults_keep_their_signatures(nf: int) -> None:
+@pytest.mark.parametrize(
+    ("ne", "phi", "nf", "faulty"), [(90, 6, 64, 50), (90, 6, 65, 50), (90, 6, 150, 50), (70, 4, 150, 70)]
+)
+def test_more_than_64_faults_keep_their_signatures(ne: int, phi: int, nf: int, faulty: int) -> None:
     """The engine keys signatures on 64 bits; above 64 faults it keys on distinct fault rows and the keys are
-    merged back into fault sets: the signature table equals the one computed from the yielded sets."""
-    base = random_structure(11, 90, 6)
+    merged back into fault sets (over 64 distinct rows the signatures come from the yielded sets): the
+    signature table equals the one computed from the yielded sets, and MTES carry their fault sets."""
+    base = random_structure(11, ne, phi)
     F = np.zeros((base.ne, nf), dtype=np.int8)
-    rng = np.random.default_rng(nf)
-    for j in range(nf):  # faults on 50 equations, some on two
-        F[rng.integers(50, size=1 + j % 2), j] = 1
+    rng = np.random.default_rng(nf + faulty)
+    for j in range(nf):  # faults on `faulty` equations, some on two
+        F[rng.integers(faulty, size=1 + j % 2), j] = 1
     s = Structure.from_fdt_dict({"X": base.X.tolist(), "F": F.tolist()})
     p = prepare(s)
     expected: dict[int, int] = {}
@@ -242,7 +245,10 @@ def test_more_than_64_faults_keep_their_signatures(nf: int) -> None:
         expected[f] = expected.get(f, 0) + 1
     summary = find_msos(s, workers=1, progress=False)
     assert {e.faults: e.count for e in summary.signatures} == expected
+    assert summary.count == sum(expected.values())
     assert max(expected).bit_length() > 64 or nf < 100
+    assert p.keyed == (faulty == 50)
+    assert all(t.faults == p.faults_of(t.equations) for t in mtes(s).mtes)
 
 
 def test_no_redundancy_gives_no_mso() -> None:

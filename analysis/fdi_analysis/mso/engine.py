@@ -8,8 +8,9 @@ and send one table each at the end; memory does not grow with the number of MSO 
 Size: no fixed limit. The engine picks the narrowest compiled bitset width that holds the equations
 (1 word up to 64 equations, 5 words for 282, ... up to 16384, where its int16 indices end); a search node
 costs O(edges x words). The engine keys fault signatures on 64 bits: a model with more faults is keyed on
-its distinct fault rows (the equations' fault sets, at most 64 distinct ones), and the keys are merged
-back into fault sets here.
+its distinct fault rows (the equations' fault sets) and the keys are merged back into fault sets here;
+with more than 64 distinct fault rows the engine only tells faulty equations apart and the signatures
+are computed here from the yielded sets (one process, about a microsecond of Python per MSO set).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from functools import cached_property
 from types import FrameType
 from typing import Any
 
+import numpy as np
 import numpy.typing as npt
 from tqdm import tqdm
 
@@ -48,6 +50,7 @@ class Prepared:
     root: int  # overdetermined part M+ of the whole model (bitset over equations)
     fault_masks: tuple[int, ...]  # fault bitmask of each equation (any number of faults)
     key_faults: tuple[int, ...] | None = None  # engine key bit k -> fault mask; None: bit j is fault j
+    keyed: bool = True  # False: engine keys only mark faulty equations (over 64 distinct fault rows)
 
     @property
     def ne(self) -> int:
@@ -83,16 +86,14 @@ def _key_to_faults(key: int, key_faults: tuple[int, ...]) -> int:
 
 
 def fault_keys(structure: Structure) -> tuple[bytes, int, tuple[int, ...] | None]:
-    """Fault key bytes (ne x bits), key bits, and the fault mask of each key bit (None: bit j = fault j)."""
+    """Fault key bytes (ne x bits), key bits, and the fault mask of each key bit (None: bit j = fault j).
+    Over 64 distinct fault rows: one key bit that marks the faulty equations, and an empty mask tuple."""
     if structure.nf <= KEY_BITS:
         return _nonzero_bytes(structure.F), structure.nf, None
     F = structure.F != 0
     rows = sorted({tuple(int(j) for j in r.nonzero()[0]) for r in F if r.any()})
     if len(rows) > KEY_BITS:
-        raise ValueError(
-            f"{structure.name or 'structure'}: {structure.nf} faults in {len(rows)} distinct equation fault sets; "
-            f"the engine keys fault signatures on at most {KEY_BITS} distinct ones"
-        )
+        return F.any(axis=1).astype(np.uint8).tobytes(), 1, ()
     index = {r: k for k, r in enumerate(rows)}
     keys = bytearray(structure.ne * len(rows))
     for e, r in enumerate(F):
@@ -124,7 +125,8 @@ def prepare(structure: Structure) -> Prepared:
     model = _model(args)
     root = _core.mplus(model, (1 << structure.ne) - 1)
     masks = tuple(sum(1 << int(j) for j in row.nonzero()[0]) for row in structure.F)
-    return Prepared(args=args, model=model, root=root, fault_masks=masks, key_faults=key_faults)
+    keyed = key_faults is None or len(key_faults) > 0
+    return Prepared(args=args, model=model, root=root, fault_masks=masks, key_faults=key_faults, keyed=keyed)
 
 
 def mplus(structure: Structure | Prepared, eqs: int) -> int:
@@ -282,6 +284,8 @@ def find_msos(
     acc = _Acc(p.ne, p.signature)
     if p.root == 0:
         return acc.summary(True, time.perf_counter() - t0, workers, 0)
+    if not p.keyed:
+        return _aggregate_here(p, acc, t0)
     tasks = split_tasks(p, 1 if (workers == 1 and not progress) else workers * tasks_per_worker)
     bar = tqdm(total=len(tasks), unit="task", disable=not progress, desc="MSO search", leave=False)
     try:
@@ -290,6 +294,32 @@ def find_msos(
     finally:
         bar.close()
     return acc.summary(complete, time.perf_counter() - t0, workers, len(tasks))
+
+
+def _aggregate_here(p: Prepared, acc: _Acc, t0: float) -> MsoSummary:
+    """find_msos for models with over 64 distinct fault rows: signatures from the yielded sets, in Python."""
+    count = 0
+    hist = [0] * (p.ne + 1)
+    sigs: dict[int, list[int]] = {}
+    complete = True
+    try:
+        for eqs in iter_msos(p):
+            count += 1
+            size = eqs.bit_count()
+            hist[size] += 1
+            f = p.faults_of(eqs)
+            cur = sigs.get(f)
+            if cur is None:
+                sigs[f] = [1, size, eqs]
+            else:
+                cur[0] += 1
+                if size < cur[1] or (size == cur[1] and lex_before(eqs, cur[2])):
+                    cur[1], cur[2] = size, eqs
+    except KeyboardInterrupt:
+        complete = False
+    acc.signature = lambda k: k
+    acc.add((count, hist, [(f, c, size, best) for f, (c, size, best) in sigs.items()]))
+    return acc.summary(complete, time.perf_counter() - t0, 1, 1)
 
 
 def _run_serial(p: Prepared, tasks: list[tuple[int, int]], acc: _Acc, bar: tqdm[Any], workers: int) -> bool:

@@ -46,7 +46,9 @@ def _search(p: Prepared, *, all_tes: bool, batch: int) -> list[TestSupport]:
             chunk = _core.iter_next(it, batch, 1)
             if not chunk:
                 break
-            found.extend(TestSupport(equations=s, faults=p.signature(f)) for s, f in chunk)
+            found.extend(
+                TestSupport(equations=s, faults=p.signature(f) if p.keyed else p.faults_of(s)) for s, f in chunk
+            )
     return found
 
 
