@@ -39,8 +39,12 @@ _cflags = ["-O3", "-std=c11", "-Wall", "-Wextra", "-fno-strict-aliasing"]
 if platform.machine() in ("x86_64", "AMD64"):
     _cflags.append("-mpopcnt")
 
-# Sources of the ECU bindings: the fw library, its generated table, the generated CAN code, the ECU core.
-_ECU_DIRS = ("fw/src", "fw/generated", "fw/generated/can", "fw/ecu/src")
+# Sources of the ECU bindings: the generic fw core and ECU core, and the vehicle targets (ROMO: tables, generators,
+# CAN bus; three-tank: table, generators).
+_ECU_DIRS = ("fw/src", "fw/ecu/src", "fw/vehicles/romo/src", "fw/vehicles/romo/generated",
+             "fw/vehicles/romo/generated/can", "fw/vehicles/three_tank/generated")
+_ECU_INCLUDES = ("fw/include", "fw/src", "fw/ecu/include", "fw/vehicles/romo/include", "fw/vehicles/romo/generated",
+                 "fw/vehicles/romo/generated/can", "fw/vehicles/three_tank/generated")
 
 setup(
     cmdclass={"build_py": BuildPyWithData},
@@ -58,8 +62,8 @@ setup(
                 ["host_tools/fdi_host/ecu/_fdi_ecu.c"]
                 + [str(p) for d in _ECU_DIRS for p in Path(d).glob("*.c")]
             ),
-            include_dirs=["fw/include", "fw/src", "fw/generated", "fw/generated/can", "fw/ecu/include"],
-            depends=sorted(str(p) for d in (*_ECU_DIRS, "fw/include", "fw/ecu/include") for p in Path(d).glob("*.h")),
+            include_dirs=list(_ECU_INCLUDES),
+            depends=sorted(str(p) for d in (*_ECU_DIRS, *_ECU_INCLUDES) for p in Path(d).glob("*.h")),
             extra_compile_args=["-O2", "-std=c99", "-Wall", "-Wextra"],
             libraries=["m"],
         ),

@@ -4,7 +4,8 @@
 #   FUZZ_RUNS=10000000 bash scripts/fuzz.sh   run each harness for that many executions instead
 #   FUZZ_ONLY="diag ecu"   run only these harnesses;  FUZZ_MAX_LEN=1024   longest input (default 4096 bytes)
 # Harnesses: fuzz_iso (table check + isolation), fuzz_diag (diagnoser step path), and fuzz_ecu (CAN frame
-# ingestion + step through fw/ecu) when the ECU core exists. The corpus persists in build/fuzz/corpus_<name>.
+# ingestion + step through fw/ecu on the ROMO bus); the generic core with the ROMO target (fw/vehicles/romo).
+# The corpus persists in build/fuzz/corpus_<name>.
 # Prints the executions per harness; exits non-zero on any crash, invariant violation or sanitizer report
 # (the reproducer is left in build/fuzz/crash-*).
 set -euo pipefail
@@ -14,10 +15,11 @@ seconds="${1:-30}"
 out=build/fuzz
 mkdir -p "$out"
 cc="${FUZZ_CC:-clang}"
+romo=fw/vehicles/romo
 flags=(-g -O2 -std=c99 -Wall -Wextra -Werror -fsanitize=fuzzer,address,undefined,float-divide-by-zero
-       -fno-sanitize-recover=all -fno-omit-frame-pointer -Ifw/include -Ifw/src -Ifw/generated -Itests/fw -Itests/fuzz)
-lib=(fw/src/*.c)
-for f in fw/generated/*.c; do [ -e "$f" ] && lib+=("$f"); done
+       -fno-sanitize-recover=all -fno-omit-frame-pointer -Ifw/include -Ifw/src -I"$romo/include" -I"$romo/generated"
+       -Itests/fw -Itests/fuzz)
+lib=(fw/src/*.c "$romo"/src/fdi_romo_kin.c "$romo"/src/fdi_kin_table.c "$romo"/generated/*.c)
 
 harnesses=(iso diag)
 build() { # name, extra sources...
@@ -27,10 +29,9 @@ build() { # name, extra sources...
 pids=()
 build iso & pids+=($!)
 build diag & pids+=($!)
-if [ -f fw/ecu/src/fdi_ecu.c ] && [ -f tests/fuzz/fuzz_ecu.c ]; then
-  build ecu -Ifw/ecu/include -Ifw/generated/can fw/ecu/src/fdi_ecu.c fw/generated/can/*.c & pids+=($!)
-  harnesses+=(ecu)
-fi
+build ecu -Ifw/ecu/include -I"$romo/generated/can" fw/ecu/src/fdi_ecu.c "$romo"/src/fdi_romo_ecu.c \
+  "$romo"/generated/can/*.c & pids+=($!)
+harnesses+=(ecu)
 for p in "${pids[@]}"; do wait "$p"; done  # set -e: a failed build stops the script
 
 limit=(-max_total_time="$seconds")

@@ -1,11 +1,16 @@
 #!/usr/bin/env bash
 # Regenerates every committed generated file from its source (tests fail when a committed copy is stale):
-#   fw/generated/fdi_romo_table.{h,c}, fdi_romo_generators.{h,c}   <- analysis/models/romo_grouped.toml +
-#     romo_thresholds.toml + fault sizes;  fdi_kin_calibration.h <- simulated drives;  can/ <- dbc/romo.dbc
+#   fw/vehicles/romo/generated/fdi_romo_{table,generators,signals}.{h,c}  <- analysis/models/romo_grouped.toml +
+#     romo_thresholds.toml + fault sizes;  fdi_kin_calibration.h <- simulated drives;
+#   fw/vehicles/romo/generated/can/  <- dbc/romo.dbc (cantools code + the ECU core's bus description);
+#   fw/vehicles/three_tank/generated/  <- analysis/models/three_tank.toml + three_tank_thresholds.toml + fault sizes,
+#     whose generated tables come from drives of the generic simulator (host_tools/scenarios/three_tank.toml)
 set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$top"
 [ -x .venv/bin/fdi-analyze ] || bash scripts/bootstrap.sh
+romo=fw/vehicles/romo/generated
+tank=fw/vehicles/three_tank/generated
 # analysis/models/romo_thresholds.toml [generated]  <- fault-free simulated drives, their CAN frames as the ECU's
 #   steps see them (fdi_host.can.ecu_view), through the generators (~1.5 min; checked by test_calibration_current.py)
 .venv/bin/fdi-tune calibrate analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml
@@ -29,14 +34,25 @@ if [ "${FDI_SWEEP_SIZES:-0}" = 1 ]; then
     sweep_sizes
   fi
 fi
-# fw/generated/fdi_romo_table.{h,c}, fdi_romo_generators.{h,c}  <- model + thresholds (realizable MSOs only)
+# fw/vehicles/romo/generated/fdi_romo_{table,generators,signals}.{h,c}  <- model + thresholds (realizable MSOs only)
 #   + the per-test fault sizes (which quiet tests may exonerate which fault); not committed: the generator report
 #   out/romo_grouped/generators.{md,json,png} (per test: residual equation, causality, inputs, stated fault sizes)
 .venv/bin/fdi-analyze export-c analysis/models/romo_grouped.toml \
   --thresholds analysis/models/romo_thresholds.toml --fault-sizes host_tools/scenarios/fault_sizes.toml \
-  --out fw/generated --report out/romo_grouped
-# fw/generated/fdi_kin_calibration.h  <- the hand-written kinematic table's variances and reaction sizes from
-#   simulated drives through the C ECU core (~4 min)
-.venv/bin/fdi-tune kin-calibration --out fw/generated/fdi_kin_calibration.h
-# fw/generated/can/romo_can.{h,c}, romo_can_e2e.h   <- dbc/romo.dbc (cantools generate_c_source + E2E data IDs)
-.venv/bin/python fw/ecu/tools/gen_romo_can.py --dbc dbc/romo.dbc --out fw/generated/can
+  --out "$romo" --report out/romo_grouped
+# fw/vehicles/romo/generated/fdi_kin_calibration.h  <- the hand-written kinematic table's variances and reaction
+#   sizes from simulated drives through the C ECU core (~4 min)
+.venv/bin/fdi-tune kin-calibration --out "$romo/fdi_kin_calibration.h"
+# fw/vehicles/romo/generated/can/romo_can.{h,c}, fdi_romo_bus.{h,c}  <- dbc/romo.dbc (cantools generate_c_source;
+#   the bus of the ECU core: messages, their frame signals and decoding, the diagnosis frame)
+.venv/bin/python fw/ecu/tools/gen_romo_can.py --dbc dbc/romo.dbc --out "$romo/can"
+# analysis/models/three_tank_thresholds.toml [generated], [observer]  <- fault-free drives of the generic simulator
+#   (~1 min); host_tools/scenarios/three_tank_fault_sizes.toml [per_test.*]  <- the step-fault sweep (~1 min)
+generic=(analysis/models/three_tank.toml --thresholds analysis/models/three_tank_thresholds.toml
+         --scenario host_tools/scenarios/three_tank.toml)
+.venv/bin/python -m fdi_host.tuning.generic calibrate "${generic[@]}"
+.venv/bin/python -m fdi_host.tuning.generic fault-sizes "${generic[@]}" --sizes host_tools/scenarios/three_tank_fault_sizes.toml
+# fw/vehicles/three_tank/generated/fdi_three_tank_{table,generators,signals}.{h,c}
+.venv/bin/fdi-analyze export-c analysis/models/three_tank.toml \
+  --thresholds analysis/models/three_tank_thresholds.toml --fault-sizes host_tools/scenarios/three_tank_fault_sizes.toml \
+  --out "$tank" --name fdi_three_tank_table

@@ -9,14 +9,17 @@ from typing import Any
 
 from fdi_analysis.export import generators as emit_c
 from fdi_analysis.export import report
+from fdi_analysis.export import signals as emit_signals
+from fdi_analysis.export import table as emit_table
+from fdi_analysis.export.c_names import VehicleNames
+from fdi_analysis.export.c_text import banner
 from fdi_analysis.export.fault_sizes import FaultSizes
-from fdi_analysis.export.table import render
 from fdi_analysis.export.thresholds import Thresholds
 from fdi_analysis.model_loader import load_model
 
 EXAMPLE = ("example: fdi-analyze export-c analysis/models/romo_grouped.toml "
            "--thresholds analysis/models/romo_thresholds.toml --fault-sizes host_tools/scenarios/fault_sizes.toml "
-           "--out fw/generated")
+           "--out fw/vehicles/romo/generated")
 
 
 def register(sub: Any) -> None:
@@ -25,10 +28,11 @@ def register(sub: Any) -> None:
         help="write the C diagnosis table (fdi_table_t) and residual generators of the tests on board",
         description="Take the tests of the thresholds file's [selection] table (fdi-analyze practical: selection "
         "by practical isolability) or, without one, the optimal MSO selection of MODEL (method B, fewest tests "
-        "then fewest unknowns) among the realizable candidates, and write NAME.h / NAME.c for fw/ (tests with "
-        "fault bitmasks, signals, "
-        "generator kinds, gates and variances, fault names, the signature matrix and the isolability classes) "
-        "and the residual generators of the tests.",
+        "then fewest unknowns) among the realizable candidates, and write the vehicle target's generated C: "
+        "NAME.h / NAME.c (tests with fault bitmasks, signals, generator descriptors, gates and variances, fault "
+        "names, the signature matrix and the isolability classes), fdi_<vehicle>_generators.h/.c (the residual "
+        "generators, with their fault sensitivities) and fdi_<vehicle>_signals.h/.c (the signal frame); the "
+        "vehicle is NAME without fdi_ and _table.",
         epilog=EXAMPLE,
     )
     p.add_argument("model", type=Path, help="model file (.toml) or FDT structure (.json)")
@@ -36,7 +40,7 @@ def register(sub: Any) -> None:
     p.add_argument("--fault-sizes", type=Path, default=None,
                    help="stated fault sizes per test (fdi-tune fault-sizes); a test exonerates a fault only when "
                    "it reacts at the fault's stated size (default: every test of the signature exonerates)")
-    p.add_argument("--out", type=Path, required=True, help="output folder (fw/generated)")
+    p.add_argument("--out", type=Path, required=True, help="output folder (fw/vehicles/<vehicle>/generated)")
     p.add_argument("--report", type=Path, default=None,
                    help="also write generators.md / .json / .png here: per test its MSO set, residual equation, "
                    "causality, inputs, domain, sigma and the stated fault sizes of --fault-sizes")
@@ -71,21 +75,24 @@ def generate_all(model_path: Path, thresholds_path: Path, out: Path, name: str, 
     thresholds = Thresholds.load(thresholds_path)
     tests, gens = selected_generators(model, thresholds.observer_reference(), workers=workers, progress=progress,
                                       selection=thresholds.selection, sensitivities=True)
-    header, source = render(model, tests, thresholds, name, command,
-                            generated=[True] * len(tests), sizes=sizes)
+    names = VehicleNames.of_table(name)
+    top = banner(command)
+    header, source = emit_table.render_file(emit_table.table_file(model, tests, thresholds, names, top, sizes=sizes))
     if report_dir is not None:
         sigmas = [math.sqrt(thresholds.generated[" ".join(g.equations)]) for g in gens]
         rows = report.rows(gens, sigmas, thresholds.gate, sizes, sizes.limits if sizes is not None else {})
         for path in report.write(report_dir, name, rows, list(model.structure().faults),
                                  sizes_path.as_posix() if sizes_path is not None else "(no fault-size file)"):
             print(f"wrote {path}")
-    gname = generators_name(name)
-    gh, gc = emit_c.render(gens, gname, command)
-    return {f"{name}.h": header, f"{name}.c": source, f"{gname}.h": gh, f"{gname}.c": gc}
+    faults = [f.name for f in model.faults]
+    gh, gc = emit_c.render(emit_c.generators_file(gens, names, faults, top))
+    sh, sc = emit_signals.render(emit_signals.signals_file(model, names, top))
+    return {f"{name}.h": header, f"{name}.c": source, f"{names.generators}.h": gh, f"{names.generators}.c": gc,
+            f"{names.signals}.h": sh, f"{names.signals}.c": sc}
 
 
 def generators_name(table_name: str) -> str:
-    return table_name.replace("_table", "") + "_generators"
+    return VehicleNames.of_table(table_name).generators
 
 
 def run(args: argparse.Namespace) -> int:

@@ -17,6 +17,7 @@
 #ifndef FDI_DERIV_H
 #define FDI_DERIV_H
 
+#include "fdi_static_assert.h"
 #include "fdi_status.h"
 
 typedef struct
@@ -37,6 +38,11 @@ typedef struct
     float y;      /* last derivative output */
     float u_prev; /* last input */
 } fdi_deriv_t;  /* opaque by convention */
+
+/* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
+FDI_STATIC_ASSERT(sizeof(fdi_deriv_coef_t) == 12U, fdi_sa_deriv_coef_size);
+/* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
+FDI_STATIC_ASSERT(sizeof(fdi_deriv_t) == 8U, fdi_sa_deriv_size);
 
 typedef struct
 {

@@ -19,6 +19,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "fdi_static_assert.h"
 #include "fdi_status.h"
 
 typedef enum
@@ -52,6 +53,9 @@ typedef struct
     uint16_t n_quiet; /* consecutive quiet samples (while alarmed) */
     bool alarm;
 } fdi_eval_t; /* opaque by convention */
+
+/* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
+FDI_STATIC_ASSERT(sizeof(fdi_eval_t) == 36U, fdi_sa_eval_size);
 
 typedef struct
 {

@@ -47,7 +47,7 @@ typedef enum
 
 typedef struct
 {
-    uint32_t candidates; /* candidate faults (bit j = fault f(j+1)) */
+    uint32_t candidates; /* candidate faults (bit j = fault j of the table) */
     uint32_t class_mask; /* union of the isolability classes of the candidates */
     uint8_t n_classes;   /* distinct classes among the candidates */
     bool detected;       /* at least one test in alarm */

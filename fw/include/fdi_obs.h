@@ -18,6 +18,7 @@
 #ifndef FDI_OBS_H
 #define FDI_OBS_H
 
+#include "fdi_static_assert.h"
 #include "fdi_status.h"
 
 typedef struct
@@ -39,6 +40,11 @@ typedef struct
     float xh;     /* state estimate */
     float g_prev; /* f + L*y of the previous step */
 } fdi_obs_t;  /* opaque by convention */
+
+/* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
+FDI_STATIC_ASSERT(sizeof(fdi_obs_coef_t) == 12U, fdi_sa_obs_coef_size);
+/* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
+FDI_STATIC_ASSERT(sizeof(fdi_obs_t) == 8U, fdi_sa_obs_size);
 
 /* Design the coefficients. BAD_ARG: NULL, dt <= 0, a - gain >= 0; NOT_FINITE: NaN/Inf in cfg. */
 fdi_status_t fdi_obs_design(fdi_obs_coef_t *coef, const fdi_obs_config_t *cfg);

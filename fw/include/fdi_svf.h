@@ -21,6 +21,7 @@
 #ifndef FDI_SVF_H
 #define FDI_SVF_H
 
+#include "fdi_static_assert.h"
 #include "fdi_status.h"
 
 typedef struct
@@ -43,6 +44,11 @@ typedef struct
     float x2;     /* filtered derivative */
     float u_prev; /* last input */
 } fdi_svf_t;    /* opaque by convention */
+
+/* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
+FDI_STATIC_ASSERT(sizeof(fdi_svf_coef_t) == 12U, fdi_sa_svf_coef_size);
+/* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
+FDI_STATIC_ASSERT(sizeof(fdi_svf_t) == 12U, fdi_sa_svf_size);
 
 typedef struct
 {

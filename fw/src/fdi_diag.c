@@ -8,6 +8,12 @@
 #include "fdi_gen_internal.h"
 
 #define FDI_TWO_PI_F 6.28318530717959f
+#define WARMUP_MARGIN_STEPS 20U
+/* Isolation episodes: a quiet test exonerates only after 3 s, the response window in which the analysis states the
+   per-test fault sizes (fdi-tune fault-sizes: alarm within a 3 s step); an episode ends after 3 s without any
+   alarm. */
+#define ISO_SETTLE_S 3.0f
+#define EPISODE_CLEAR_S 3.0f
 
 /* Settling time of the design point in steps (see fdi_diag.h); 0 if it is not representable. */
 static uint32_t settle_steps(const fdi_table_design_t *d)
@@ -26,6 +32,73 @@ static uint32_t settle_steps(const fdi_table_design_t *d)
         }
     }
     return steps;
+}
+
+/* Sensitivity offsets of the table's tests; false when they exceed FDI_DIAG_MAX_SENS. */
+static bool sens_layout(const fdi_table_t *t, uint8_t *offset)
+{
+    uint32_t total = 0U;
+    uint32_t i;
+    for (i = 0U; i < (uint32_t)t->n_tests; ++i)
+    {
+        offset[i] = (uint8_t)((total < FDI_DIAG_MAX_SENS) ? total : FDI_DIAG_MAX_SENS);
+        total += fdi_gen_sens_count(t->tests[i].gen);
+    }
+    for (i = (uint32_t)t->n_tests; i <= FDI_DIAG_MAX_TESTS; ++i)
+    {
+        offset[i] = (uint8_t)((total < FDI_DIAG_MAX_SENS) ? total : FDI_DIAG_MAX_SENS);
+    }
+    return total <= FDI_DIAG_MAX_SENS;
+}
+
+/* Whole steps of t seconds at dt (>= 1, saturating at 65535). */
+static uint16_t steps_of(float t, float dt)
+{
+    const float n = (t / dt) + 0.5f;
+    uint16_t k = 1U;
+    if (n >= 65535.0f)
+    {
+        k = 0xFFFFU;
+    }
+    else if (n >= 1.0f)
+    {
+        k = (uint16_t)n;
+    }
+    else
+    {
+        /* at least one step */
+    }
+    return k;
+}
+
+fdi_status_t fdi_diag_config_default(fdi_diag_config_t *cfg, const fdi_table_t *table)
+{
+    fdi_status_t st = FDI_BAD_ARG;
+    if ((cfg != NULL) && (table != NULL))
+    {
+        const uint32_t settle = settle_steps(&table->design);
+        st = FDI_BAD_TABLE;
+        if ((settle > 0U) && ((settle + WARMUP_MARGIN_STEPS) <= 0xFFFFU))
+        {
+            uint32_t i;
+            cfg->table = table;
+            for (i = 0U; i < FDI_GEN_N_PARAMS; ++i)
+            {
+                cfg->gen_param[i] = 0.0f;
+            }
+            cfg->cusum_k = 1.5f;
+            cfg->cusum_h = 150.0f;
+            cfg->set_count = 10U;
+            cfg->clear_count = 100U;
+            cfg->warmup_steps = (uint16_t)(settle + WARMUP_MARGIN_STEPS);
+            cfg->mode = FDI_ISO_EXONERATION;
+            cfg->iso_settle_steps = steps_of(ISO_SETTLE_S, table->design.dt);
+            cfg->episode_clear_steps = steps_of(EPISODE_CLEAR_S, table->design.dt);
+            cfg->sensitivities = false;
+            st = FDI_OK;
+        }
+    }
+    return st;
 }
 
 static fdi_status_t check_config(const fdi_diag_config_t *cfg)
@@ -65,19 +138,33 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
     if (st == FDI_OK)
     {
         const fdi_table_t *t = cfg->table;
-        const fdi_gen_config_t gcfg = {t->design.dt, t->design.cutoff_hz, t->design.zeta, t->design.obs_gain,
-                                       cfg->d_x, cfg->d_y};
+        fdi_gen_config_t gcfg = {t->design.dt, t->design.cutoff_hz, t->design.zeta, t->design.obs_gain,
+                                 {0.0f, 0.0f, 0.0f, 0.0f}};
         uint32_t i;
+        for (i = 0U; i < FDI_GEN_N_PARAMS; ++i)
+        {
+            gcfg.param[i] = cfg->gen_param[i];
+        }
         st = fdi_gen_param_init(&self->par, &gcfg);
+        if ((st == FDI_OK) && !sens_layout(t, self->sens_offset) && cfg->sensitivities)
+        {
+            st = FDI_BAD_ARG;
+        }
+        for (i = 0U; i < FDI_DIAG_MAX_SENS; ++i)
+        {
+            self->sens[i] = 0.0f;
+        }
+        self->signals = 0U;
         for (i = 0U; (st == FDI_OK) && (i < (uint32_t)t->n_tests); ++i)
         {
             const fdi_test_desc_t *d = &t->tests[i];
             const fdi_eval_config_t ecfg = {d->gate,        d->variance,    cfg->cusum_k,
                                             cfg->cusum_h,   cfg->set_count, cfg->clear_count};
+            self->signals |= d->input_mask;
             st = fdi_eval_init(&self->eval[i], &ecfg);
-            if ((st == FDI_OK) && (d->kind != FDI_GEN_NONE))
+            if ((st == FDI_OK) && (d->gen != NULL))
             {
-                st = fdi_gen_init(&self->gen[i], d->kind);
+                st = fdi_gen_init(&self->gen[i], d->gen);
             }
             self->residual[i] = 0.0f;
             self->ratio[i] = 0.0f;
@@ -95,6 +182,7 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             self->calm = 0U;
             self->accused = 0U;
             self->n_tests = t->n_tests;
+            self->sensitivities = cfg->sensitivities;
             self->rearm = 0xFFFFFFFFU;
             self->alarm = 0U;
             self->evaluable = 0U;
@@ -112,17 +200,28 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
     return st;
 }
 
+/* The sensitivities of test i back to 0. */
+static void clear_sens(fdi_diag_t *self, uint32_t i)
+{
+    uint32_t k;
+    for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
+    {
+        self->sens[k] = 0.0f;
+    }
+}
+
 /* Run test i on a usable frame; returns true if it is evaluable this step (then *alarm is set). */
-static bool run_test(fdi_diag_t *self, uint32_t i, const fdi_inputs_t *in, bool *alarm)
+static bool run_test(fdi_diag_t *self, uint32_t i, const fdi_frame_t *in, bool *alarm)
 {
     const uint32_t bit = (uint32_t)1U << i;
+    float *sens = self->sensitivities ? &self->sens[self->sens_offset[i]] : NULL;
     bool evaluable = false;
     fdi_status_t st = FDI_OK;
     float r = 0.0f;
     if ((self->rearm & bit) != 0U)
     {
         float r0 = 0.0f;
-        st = fdi_gen_run_checked(&self->gen[i], &self->par, in, true, &r0);
+        st = fdi_gen_run_checked(&self->gen[i], &self->par, in, true, &r0, sens);
         if (st == FDI_OK)
         {
             st = fdi_eval_reset(&self->eval[i]);
@@ -132,13 +231,14 @@ static bool run_test(fdi_diag_t *self, uint32_t i, const fdi_inputs_t *in, bool 
     }
     if (st == FDI_OK)
     {
-        st = fdi_gen_run_checked(&self->gen[i], &self->par, in, false, &r); /* inputs checked by the caller */
+        st = fdi_gen_run_checked(&self->gen[i], &self->par, in, false, &r, sens); /* inputs checked by the caller */
     }
     if (st != FDI_OK)
     {
         self->rearm |= bit;
         self->residual[i] = 0.0f;
         self->ratio[i] = 0.0f;
+        clear_sens(self, i);
     }
     else if (self->warm[i] > 0U)
     {
@@ -219,16 +319,16 @@ static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable
     return fdi_iso_run(self->table, self->accused, self->accused | exonerate, self->mode, &self->iso);
 }
 
-fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_inputs_t *inputs, uint32_t validity)
+fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t validity)
 {
     fdi_status_t st = FDI_OK;
-    if ((self == NULL) || (inputs == NULL) || (self->table == NULL))
+    if ((self == NULL) || (frame == NULL) || (self->table == NULL))
     {
         st = FDI_BAD_ARG;
     }
     else
     {
-        const uint32_t usable = validity & fdi_signals_finite_mask(inputs);
+        const uint32_t usable = fdi_frame_finite_mask(frame, validity & self->signals);
         uint32_t alarm = 0U;
         uint32_t evaluable = 0U;
         uint32_t i;
@@ -237,14 +337,17 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_inputs_t *inputs, uint32_
             const fdi_test_desc_t *d = &self->table->tests[i];
             const uint32_t bit = (uint32_t)1U << i;
             bool test_alarm = false;
-            if ((d->kind == FDI_GEN_NONE) || ((usable & d->input_mask) != d->input_mask) ||
-                !fdi_gen_in_domain(d->kind, inputs))
+            if ((d->gen == NULL) || ((usable & d->input_mask) != d->input_mask) || !fdi_gen_in_domain(d->gen, frame))
             {
+                if ((self->rearm & bit) == 0U)
+                {
+                    clear_sens(self, i);
+                }
                 self->rearm |= bit;
                 self->residual[i] = 0.0f;
                 self->ratio[i] = 0.0f;
             }
-            else if (run_test(self, i, inputs, &test_alarm))
+            else if (run_test(self, i, frame, &test_alarm))
             {
                 evaluable |= bit;
                 alarm |= test_alarm ? bit : 0U;
@@ -287,6 +390,14 @@ fdi_status_t fdi_diag_result(const fdi_diag_t *self, fdi_diag_result_t *out)
         }
         out->accused_mask = self->accused;
         out->iso = self->iso;
+        for (i = 0U; i <= FDI_DIAG_MAX_TESTS; ++i)
+        {
+            out->sens_offset[i] = self->sensitivities ? self->sens_offset[i] : 0U;
+        }
+        for (i = 0U; self->sensitivities && (i < (uint32_t)self->sens_offset[FDI_DIAG_MAX_TESTS]); ++i)
+        {
+            out->sens[i] = self->sens[i];
+        }
         st = FDI_OK;
     }
     return st;

@@ -1,13 +1,13 @@
-/* fdi_gen.c - generator parameters, input masks and dispatch on the kind (see fdi_gen.h). */
+/* fdi_gen.c - generator parameters, descriptors, dispatch and the building blocks (see fdi_gen.h). */
 #include "fdi_gen.h"
 
 #include <math.h>
 #include <stdbool.h>
 #include <stddef.h>
 
-#include "fdi_arr_kin.h"
-#include "fdi_gen_internal.h"
 #include "fdi_float.h"
+#include "fdi_gen_impl.h"
+#include "fdi_gen_internal.h"
 
 fdi_status_t fdi_gen_param_init(fdi_gen_param_t *par, const fdi_gen_config_t *cfg)
 {
@@ -18,96 +18,75 @@ fdi_status_t fdi_gen_param_init(fdi_gen_param_t *par, const fdi_gen_config_t *cf
         fdi_obs_coef_t obs = {0.0f, 0.0f, 0.0f};
         const fdi_svf_config_t svf_cfg = {cfg->dt, cfg->cutoff_hz, cfg->zeta};
         const fdi_obs_config_t obs_cfg = {cfg->dt, 0.0f, cfg->obs_gain};
+        uint32_t i;
         st = fdi_svf_design(&svf, &svf_cfg);
         if (st == FDI_OK)
         {
             st = fdi_obs_design(&obs, &obs_cfg);
         }
-        if ((st == FDI_OK) && (!fdi_float_is_finite(cfg->d_x) || !fdi_float_is_finite(cfg->d_y)))
+        for (i = 0U; (st == FDI_OK) && (i < FDI_GEN_N_PARAMS); ++i)
         {
-            st = FDI_NOT_FINITE;
+            if (!fdi_float_is_finite(cfg->param[i]))
+            {
+                st = FDI_NOT_FINITE;
+            }
         }
         if (st == FDI_OK)
         {
             par->svf = svf;
             par->obs = obs;
-            par->d_x = cfg->d_x;
-            par->d_y = cfg->d_y;
+            for (i = 0U; i < FDI_GEN_N_PARAMS; ++i)
+            {
+                par->param[i] = cfg->param[i];
+            }
         }
     }
     return st;
 }
 
-/* Slot of a generated kind, FDI_GEN_GENERATED_MAX for any other kind. */
-static uint32_t generated_slot(fdi_gen_kind_t kind)
+fdi_status_t fdi_gen_desc_check(const fdi_gen_desc_t *desc)
 {
-    const uint32_t k = (uint32_t)kind;
-    const uint32_t first = (uint32_t)FDI_GEN_GENERATED_1;
-    uint32_t slot = FDI_GEN_GENERATED_MAX;
-    if (k >= first)
+    fdi_status_t st = FDI_BAD_ARG;
+    if ((desc != NULL) && (desc->name != NULL) && (desc->step != NULL) && (desc->input_mask != 0U) &&
+        ((uint32_t)desc->n_filters <= FDI_GEN_MAX_FILTERS) && (desc->n_obs <= 1U))
     {
-        const uint32_t d = k - first;
-        if (d < FDI_GEN_GENERATED_MAX)
+        st = FDI_OK;
+    }
+    return st;
+}
+
+uint32_t fdi_gen_sens_count(const fdi_gen_desc_t *desc)
+{
+    uint32_t n = 0U;
+    if (desc != NULL)
+    {
+        uint32_t m = desc->sens_mask;
+        while (m != 0U)
         {
-            slot = d;
+            m &= m - 1U; /* clear the lowest set bit */
+            ++n;
         }
     }
-    return slot;
+    return n;
 }
 
-static uint32_t generated_slot_inputs(fdi_gen_kind_t kind)
-{
-    const uint32_t slot = generated_slot(kind);
-    return (slot < FDI_GEN_GENERATED_MAX) ? fdi_gen_generated_inputs(slot) : 0U;
-}
-
-uint32_t fdi_gen_inputs(fdi_gen_kind_t kind)
-{
-    uint32_t m;
-    switch (kind)
-    {
-    case FDI_GEN_KIN_X_DERIV:
-    case FDI_GEN_KIN_X_OBS:
-        m = FDI_SIGM_AX_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M;
-        break;
-    case FDI_GEN_KIN_Y_DERIV:
-    case FDI_GEN_KIN_Y_OBS:
-        m = FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M;
-        break;
-    case FDI_GEN_KIN_ARR3:
-        m = FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M;
-        break;
-    case FDI_GEN_KIN_ARR4:
-        m = FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VY_M;
-        break;
-    case FDI_GEN_NONE:
-        m = 0U;
-        break;
-    default:
-        m = generated_slot_inputs(kind);
-        break;
-    }
-    return m;
-}
-
-bool fdi_gen_in_domain(fdi_gen_kind_t kind, const fdi_inputs_t *in)
+bool fdi_gen_in_domain(const fdi_gen_desc_t *desc, const fdi_frame_t *in)
 {
     bool ok = false;
-    if (in != NULL)
+    if ((desc != NULL) && (in != NULL))
     {
-        const uint32_t slot = generated_slot(kind);
-        ok = (slot < FDI_GEN_GENERATED_MAX) ? fdi_gen_generated_in_domain(slot, in) : true;
+        ok = (desc->in_domain == NULL) || desc->in_domain(in);
     }
     return ok;
 }
 
-fdi_status_t fdi_gen_init(fdi_gen_t *self, fdi_gen_kind_t kind)
+fdi_status_t fdi_gen_init(fdi_gen_t *self, const fdi_gen_desc_t *desc)
 {
     fdi_status_t st = FDI_BAD_ARG;
-    if ((self != NULL) && (fdi_gen_inputs(kind) != 0U))
+    if ((self != NULL) && (fdi_gen_desc_check(desc) == FDI_OK))
     {
         uint32_t i;
-        self->kind = kind;
+        self->desc = desc;
         for (i = 0U; i < FDI_GEN_MAX_FILTERS; ++i)
         {
             self->filt[i].x1 = 0.0f;
@@ -121,78 +100,45 @@ fdi_status_t fdi_gen_init(fdi_gen_t *self, fdi_gen_kind_t kind)
     return st;
 }
 
-fdi_status_t fdi_gen_run_checked(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi_inputs_t *in, bool reset,
-                                 float *r)
+fdi_status_t fdi_gen_run_checked(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset,
+                                 float *r, float *sens)
 {
-    fdi_status_t st;
-    switch (self->kind)
-    {
-    case FDI_GEN_KIN_X_DERIV:
-        st = fdi_arr_kin_x_deriv(self, par, in, reset, r);
-        break;
-    case FDI_GEN_KIN_Y_DERIV:
-        st = fdi_arr_kin_y_deriv(self, par, in, reset, r);
-        break;
-    case FDI_GEN_KIN_ARR3:
-        st = fdi_arr_kin_arr3(self, par, in, reset, r);
-        break;
-    case FDI_GEN_KIN_ARR4:
-        st = fdi_arr_kin_arr4(self, par, in, reset, r);
-        break;
-    case FDI_GEN_KIN_X_OBS:
-        st = fdi_arr_kin_x_obs(self, par, in, reset, r);
-        break;
-    case FDI_GEN_KIN_Y_OBS:
-        st = fdi_arr_kin_y_obs(self, par, in, reset, r);
-        break;
-    case FDI_GEN_NONE:
-        st = FDI_BAD_ARG;
-        break;
-    default:
-    {
-        const uint32_t slot = generated_slot(self->kind);
-        st = (slot < FDI_GEN_GENERATED_MAX) ? fdi_gen_generated_step(slot, self, par, in, reset, r) : FDI_BAD_ARG;
-        break;
-    }
-    }
-    return st;
+    return self->desc->step(self, par, in, reset, r, sens);
 }
 
-static fdi_status_t run(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi_inputs_t *in, bool reset, float *r)
+static fdi_status_t run(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
+                        float *sens)
 {
     fdi_status_t st;
-    if ((self == NULL) || (par == NULL) || (in == NULL) || (r == NULL))
+    if ((self == NULL) || (par == NULL) || (in == NULL) || (r == NULL) || (self->desc == NULL))
     {
         st = FDI_BAD_ARG;
     }
     else
     {
-        const uint32_t need = fdi_gen_inputs(self->kind);
-        if (need == 0U)
-        {
-            st = FDI_BAD_ARG;
-        }
-        else if ((fdi_signals_finite_mask(in) & need) != need)
+        const uint32_t need = self->desc->input_mask;
+        if (fdi_frame_finite_mask(in, need) != need)
         {
             st = FDI_NOT_FINITE;
         }
         else
         {
-            st = fdi_gen_run_checked(self, par, in, reset, r);
+            st = fdi_gen_run_checked(self, par, in, reset, r, sens);
         }
     }
     return st;
 }
 
-fdi_status_t fdi_gen_reset(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi_inputs_t *in)
+fdi_status_t fdi_gen_reset(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi_frame_t *in)
 {
     float r = 0.0f;
-    return run(self, par, in, true, &r);
+    return run(self, par, in, true, &r, NULL);
 }
 
-fdi_status_t fdi_gen_step(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi_inputs_t *in, float *r)
+fdi_status_t fdi_gen_step(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi_frame_t *in, float *r,
+                          float *sens)
 {
-    return run(self, par, in, false, r);
+    return run(self, par, in, false, r, sens);
 }
 
 fdi_status_t fdi_gen_filter_step(fdi_gen_t *g, const fdi_gen_param_t *par, uint32_t idx, float u, bool reset,
@@ -239,6 +185,27 @@ fdi_status_t fdi_gen_finish(fdi_status_t st, float value, bool reset, float *r)
     else
     {
         /* the failing status is returned unchanged */
+    }
+    return res;
+}
+
+fdi_status_t fdi_gen_sens_finish(fdi_status_t st, const float *sens, uint32_t n)
+{
+    fdi_status_t res = st;
+    if (sens == NULL)
+    {
+        res = FDI_BAD_ARG;
+    }
+    else
+    {
+        uint32_t i;
+        for (i = 0U; (res == FDI_OK) && (i < n); ++i)
+        {
+            if (!fdi_float_is_finite(sens[i]))
+            {
+                res = FDI_NOT_FINITE;
+            }
+        }
     }
     return res;
 }

@@ -5,13 +5,8 @@
 #include <stddef.h>
 
 #include "fdi_float.h"
+#include "fdi_frame.h"
 #include "fdi_gen.h"
-#include "fdi_signals.h"
-
-static uint32_t table_low_bits(uint32_t n)
-{
-    return (n >= 32U) ? 0xFFFFFFFFU : (((uint32_t)1U << (n & 31U)) - 1U);
-}
 
 static bool table_positive_finite(float x)
 {
@@ -20,7 +15,8 @@ static bool table_positive_finite(float x)
 
 static bool header_ok(const fdi_table_t *t)
 {
-    return (t->format_version == FDI_TABLE_FORMAT_VERSION) && (t->n_faults >= 1U) &&
+    return (t->format_version == FDI_TABLE_FORMAT_VERSION) && (t->n_signals >= 1U) &&
+           (t->n_signals <= FDI_FRAME_MAX_SIGNALS) && (t->signal_names != NULL) && (t->n_faults >= 1U) &&
            (t->n_faults <= FDI_TABLE_MAX_FAULTS) && (t->n_tests >= 1U) && (t->n_tests <= FDI_TABLE_MAX_TESTS) &&
            (t->fault_names != NULL) && (t->tests != NULL) && (t->fault_signature != NULL) &&
            (t->iso_class != NULL) && (t->test_size != NULL) && fdi_float_is_finite(t->exoneration_margin) &&
@@ -29,15 +25,27 @@ static bool header_ok(const fdi_table_t *t)
            table_positive_finite(t->design.zeta) && table_positive_finite(t->design.obs_gain);
 }
 
-static bool test_ok(const fdi_test_desc_t *d, uint32_t fault_universe)
+static bool test_ok(const fdi_test_desc_t *d, uint32_t fault_universe, uint32_t signal_universe)
 {
-    bool ok = (d->interpretation != NULL) && ((uint32_t)d->kind < FDI_GEN_KIND_COUNT) &&
-              (d->fault_mask != 0U) && ((d->fault_mask & ~fault_universe) == 0U) &&
-              ((d->input_mask & ~FDI_SIGM_ALL) == 0U) && table_positive_finite(d->gate) && table_positive_finite(d->variance);
-    if (ok)
+    bool ok = (d->interpretation != NULL) && (d->fault_mask != 0U) && ((d->fault_mask & ~fault_universe) == 0U) &&
+              ((d->input_mask & ~signal_universe) == 0U) && table_positive_finite(d->gate) &&
+              table_positive_finite(d->variance);
+    if (ok && (d->gen != NULL))
     {
-        const uint32_t need = fdi_gen_inputs(d->kind);
-        ok = ((d->input_mask & need) == need) && ((d->kind == FDI_GEN_NONE) || (need != 0U));
+        const uint32_t need = d->gen->input_mask;
+        ok = (fdi_gen_desc_check(d->gen) == FDI_OK) && ((d->input_mask & need) == need) &&
+             ((d->gen->sens_mask & ~d->fault_mask) == 0U);
+    }
+    return ok;
+}
+
+static bool names_ok(const char *const *names, uint32_t n)
+{
+    bool ok = true;
+    uint32_t k;
+    for (k = 0U; ok && (k < n); ++k)
+    {
+        ok = names[k] != NULL;
     }
     return ok;
 }
@@ -98,11 +106,16 @@ fdi_status_t fdi_table_check(const fdi_table_t *table)
     }
     else
     {
-        const uint32_t universe = table_low_bits((uint32_t)table->n_faults);
+        const uint32_t universe = fdi_frame_low_mask((uint32_t)table->n_faults);
+        const uint32_t signals = fdi_frame_low_mask((uint32_t)table->n_signals);
         uint32_t i;
+        if (!names_ok(table->signal_names, (uint32_t)table->n_signals))
+        {
+            st = FDI_BAD_TABLE;
+        }
         for (i = 0U; (st == FDI_OK) && (i < (uint32_t)table->n_tests); ++i)
         {
-            if (!test_ok(&table->tests[i], universe))
+            if (!test_ok(&table->tests[i], universe, signals))
             {
                 st = FDI_BAD_TABLE;
             }

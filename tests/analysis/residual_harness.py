@@ -1,10 +1,14 @@
-"""Shared helpers of the residual tests: simulated drives and a C harness that runs fw generators."""
+"""Shared helpers of the residual tests: a C harness that runs generator descriptors of a vehicle target on the
+generic core (fw/src), and the generators of the committed ROMO table re-synthesised."""
 
 from __future__ import annotations
 
+import itertools
 import re
 import shutil
 import subprocess
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -15,40 +19,52 @@ from fdi_analysis.model import Model
 from fdi_analysis.residuals.causality import synthesize
 from fdi_analysis.residuals.generator import Generator
 
+ROMO = Path("fw/vehicles/romo")
 SIGNALS = ["ax_m", "ay_m", "psidot_m", "vx_m", "vy_m", "delta1_m", "delta2_m", "delta3_m", "delta4_m", "iTM1_m",
            "iTM2_m", "iTM3_m", "iTM4_m", "P_f_m", "P_r_m", "omega1_m", "omega2_m", "omega3_m", "omega4_m"]
+ROMO_KIN = {"x_deriv": "&fdi_romo_kin_x_deriv", "y_deriv": "&fdi_romo_kin_y_deriv", "arr3": "&fdi_romo_kin_arr3",
+            "arr4": "&fdi_romo_kin_arr4", "x_obs": "&fdi_romo_kin_x_obs", "y_obs": "&fdi_romo_kin_y_obs"}
 
 HARNESS = r"""
 #include <stdio.h>
 #include <stdlib.h>
 #include "fdi_gen.h"
-/* argv: d_x d_y kind... ; stdin: 19 signals per line; stdout: one residual per kind per line */
+extern const fdi_gen_desc_t *const harness_gens[];
+extern const int harness_n_gens;
+/* argv: n_signals, sensitivities (0/1), 4 generator parameters; stdin: n_signals values per line;
+   stdout per line: for each generator its residual, then (with sensitivities) its sensitivities */
 int main(int argc, char **argv) {
     fdi_gen_param_t par;
-    fdi_gen_t gen[16];
-    int nk = argc - 3, k, first = 1;
-    fdi_gen_config_t cfg = {0.01f, 1.0f, 0.7071f, 2.0f, 0.0f, 0.0f};
-    float v[19];
-    cfg.d_x = strtof(argv[1], NULL);
-    cfg.d_y = strtof(argv[2], NULL);
+    fdi_gen_t gen[32];
+    int k, first = 1, i, ns, with_sens;
+    fdi_gen_config_t cfg = {0.01f, 1.0f, 0.7071f, 2.0f, {0.0f, 0.0f, 0.0f, 0.0f}};
+    float sens[32];
+    if (argc != 7) return 1;
+    ns = atoi(argv[1]);
+    with_sens = atoi(argv[2]);
+    for (i = 0; i < 4; ++i) cfg.param[i] = strtof(argv[3 + i], NULL);
     if (fdi_gen_param_init(&par, &cfg) != FDI_OK) return 2;
-    for (k = 0; k < nk; ++k) {
-        if (fdi_gen_init(&gen[k], (fdi_gen_kind_t)atoi(argv[3 + k])) != FDI_OK) return 3;
+    for (k = 0; k < harness_n_gens; ++k) {
+        if (fdi_gen_init(&gen[k], harness_gens[k]) != FDI_OK) return 3;
     }
     for (;;) {
-        fdi_inputs_t in;
-        int i;
-        for (i = 0; i < 19; ++i) { if (scanf("%f", &v[i]) != 1) return 0; }
-        in.ax_m = v[0]; in.ay_m = v[1]; in.psidot_m = v[2]; in.vx_m = v[3]; in.vy_m = v[4];
-        in.delta1_m = v[5]; in.delta2_m = v[6]; in.delta3_m = v[7]; in.delta4_m = v[8];
-        in.iTM1_m = v[9]; in.iTM2_m = v[10]; in.iTM3_m = v[11]; in.iTM4_m = v[12];
-        in.P_f_m = v[13]; in.P_r_m = v[14];
-        in.omega1_m = v[15]; in.omega2_m = v[16]; in.omega3_m = v[17]; in.omega4_m = v[18];
-        for (k = 0; k < nk; ++k) {
+        fdi_frame_t in;
+        for (i = 0; i < 32; ++i) in.value[i] = 0.0f;
+        for (i = 0; i < ns; ++i) { if (scanf("%f", &in.value[i]) != 1) return 0; }
+        for (k = 0; k < harness_n_gens; ++k) {
             float r = 0.0f;
-            fdi_status_t st = first ? fdi_gen_reset(&gen[k], &par, &in) : fdi_gen_step(&gen[k], &par, &in, &r);
+            unsigned j, n = with_sens ? fdi_gen_sens_count(harness_gens[k]) : 0U;
+            fdi_status_t st;
+            if (first) {
+                st = fdi_gen_reset(&gen[k], &par, &in);
+                for (j = 0U; j < n; ++j) sens[j] = 0.0f;
+            } else {
+                st = fdi_gen_step(&gen[k], &par, &in, &r, with_sens ? sens : NULL);
+            }
             if (st != FDI_OK) return 4;
-            printf("%.9g%s", (double)r, (k + 1 < nk) ? " " : "\n");
+            printf("%.9g", (double)r);
+            for (j = 0U; j < n; ++j) printf(" %.9g", (double)sens[j]);
+            printf("%s", (k + 1 < harness_n_gens) ? " " : "\n");
         }
         first = 0;
     }
@@ -56,38 +72,76 @@ int main(int argc, char **argv) {
 """
 
 
-def build_harness(repo: Path, folder: Path, generators_c: Path | None = None) -> Path:
-    """The harness over fw/src and a generated generator file (default: the committed
-    fw/generated/fdi_romo_generators.c)."""
+@dataclass(frozen=True)
+class Harness:
+    exe: Path
+    signals: tuple[str, ...]  # the frame's signals, in index order
+    sens_counts: tuple[int, ...]  # sensitivities each generator outputs
+
+
+def build_harness(repo: Path, folder: Path, descriptors: Sequence[str], *, sources: Sequence[Path] = (),
+                  include_dirs: Sequence[Path] = (), headers: Sequence[str] = ("fdi_romo_generators.h",
+                                                                                "fdi_romo_kin.h"),
+                  signals: Sequence[str] = tuple(SIGNALS), sens_counts: Sequence[int] | None = None) -> Harness:
+    """The harness over the generic core (fw/src) running `descriptors` (C expressions of descriptor pointers,
+    e.g. "&fdi_romo_generators[2]"), defined in `sources` (default: the committed ROMO target's generated and
+    hand-written generators) with `include_dirs` for their headers."""
     cc = shutil.which("gcc") or shutil.which("cc")
     if cc is None:
         pytest.skip("no C compiler")
+    romo = repo / ROMO
+    if not sources:
+        sources = [romo / "generated" / "fdi_romo_generators.c", romo / "src" / "fdi_romo_kin.c"]
+        include_dirs = [romo / "generated", romo / "include", *include_dirs]
     main = folder / "harness.c"
     main.write_text(HARNESS)
+    table = folder / "harness_gens.c"
+    table.write_text("".join(f'#include "{h}"\n' for h in headers)
+                     + "extern const fdi_gen_desc_t *const harness_gens[];\nextern const int harness_n_gens;\n"
+                     + f"const fdi_gen_desc_t *const harness_gens[] = {{{', '.join(descriptors)}}};\n"
+                     + f"const int harness_n_gens = {len(descriptors)};\n")
     exe = folder / "harness"
     srcs = sorted(str(p) for p in (repo / "fw/src").glob("*.c"))
     flags = ["-std=c99", "-O1", "-Wall", "-Wextra", "-Wconversion", "-Wdouble-promotion", "-Werror"]
-    gen = generators_c or repo / "fw/generated/fdi_romo_generators.c"
-    subprocess.run([cc, *flags, f"-I{repo / 'fw/include'}", f"-I{repo / 'fw/src'}", f"-I{repo / 'fw/generated'}",
-                    str(main), *srcs, str(gen), "-lm", "-o", str(exe)], check=True)
-    return exe
+    incs = [f"-I{repo / 'fw/include'}", f"-I{repo / 'fw/src'}", *(f"-I{d}" for d in include_dirs)]
+    subprocess.run([cc, *flags, *incs, str(main), str(table), *srcs, *map(str, sources), "-lm", "-o", str(exe)],
+                   check=True)
+    return Harness(exe, tuple(signals), tuple(sens_counts) if sens_counts is not None else (0,) * len(descriptors))
 
 
-def run_harness(exe: Path, signals: dict[str, np.ndarray], kinds: list[int], d_x: float,
-                d_y: float) -> np.ndarray:
-    data = np.column_stack([signals[s] for s in SIGNALS]).astype(np.float32)
+@dataclass(frozen=True)
+class HarnessRun:
+    residuals: np.ndarray  # [sample, generator]
+    sensitivities: list[np.ndarray]  # per generator [sample, sensitivity]
+
+
+def run_harness(h: Harness, signals: Mapping[str, np.ndarray], params: Sequence[float] = (0.0, 0.0, 0.0, 0.0),
+                sens: bool = False) -> HarnessRun:
+    """Every generator of the harness over the samples of `signals` (frame signals by name; missing ones 0)."""
+    n = len(next(iter(signals.values())))
+    data = np.column_stack([np.asarray(signals[s], dtype=float) if s in signals else np.zeros(n)
+                            for s in h.signals]).astype(np.float32)
     text = "\n".join(" ".join(f"{x:.9g}" for x in row) for row in data.tolist()) + "\n"
-    res = subprocess.run([str(exe), repr(d_x), repr(d_y), *map(str, kinds)], input=text, capture_output=True,
-                         text=True, check=True)
-    return np.loadtxt(res.stdout.splitlines(), ndmin=2)
+    args = [str(len(h.signals)), "1" if sens else "0", *(repr(float(p)) for p in (list(params) + [0.0] * 4)[:4])]
+    res = subprocess.run([str(h.exe), *args], input=text, capture_output=True, text=True, check=True)
+    out = np.loadtxt(res.stdout.splitlines(), ndmin=2)
+    widths = [1 + (c if sens else 0) for c in h.sens_counts]
+    starts = np.cumsum([0, *widths])
+    sens = [out[:, a + 1:b] for a, b in itertools.pairwise(starts)]
+    return HarnessRun(out[:, starts[:-1]], sens)
+
+
+def romo_table_c(repo: Path) -> Path:
+    return repo / ROMO / "generated" / "fdi_romo_table.c"
 
 
 def committed_generators(repo: Path, model: Model) -> list[Generator]:
     """The generators of the committed table, re-synthesised from its equation sets (slot order)."""
-    src = (repo / "fw/generated/fdi_romo_table.c").read_text()
+    src = romo_table_c(repo).read_text()
     block = src.split("fdi_romo_table_equations")[1].split("};")[0]
     sets = re.findall(r'"([^"]*)"', block)
-    labels = re.findall(r"^/\* (MSO\d+): ", (repo / "fw/generated/fdi_romo_generators.c").read_text(), flags=re.M)
+    gens_c = (repo / ROMO / "generated" / "fdi_romo_generators.c").read_text()
+    labels = re.findall(r'^    \{"(\w+)", \w+_gen_\d+,', gens_c, flags=re.M)
     reference = Thresholds.load(repo / "analysis/models/romo_thresholds.toml").observer_reference()
     return [synthesize(model, s.split(), labels[k] if k < len(labels) else f"T{k + 1}", reference=reference)
             for k, s in enumerate(sets)]

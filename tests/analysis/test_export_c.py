@@ -1,4 +1,5 @@
-"""The exported C diagnosis table: deterministic, up to date in fw/generated, accepted by fdi_table_check."""
+"""The exported C of the ROMO vehicle target (table, generators, signals): deterministic, up to date in
+fw/vehicles/romo/generated, accepted by fdi_table_check on the generic core; rendered from named templates."""
 
 from __future__ import annotations
 
@@ -11,16 +12,22 @@ from pathlib import Path
 
 import pytest
 
+from fdi_analysis.export import generators as emit_generators
+from fdi_analysis.export import signals as emit_signals
+from fdi_analysis.export import table as emit_table
+from fdi_analysis.export.c_names import VehicleNames
 from fdi_analysis.export.table import render, write
 from fdi_analysis.export.thresholds import Thresholds
 from fdi_analysis.fault_matrix import Candidate
 from fdi_analysis.model_loader import load_model
+from fdi_analysis.residuals.causality import synthesize
 
 MODEL = Path("analysis/models/romo_grouped.toml")
 THRESHOLDS = Path("analysis/models/romo_thresholds.toml")
 SIZES = Path("host_tools/scenarios/fault_sizes.toml")
-OUT = Path("fw/generated")
+OUT = Path("fw/vehicles/romo/generated")
 NAME = "fdi_romo_table"
+SIGNALS = "fdi_romo_signals"
 
 CHECK_MAIN = """
 #include <stdio.h>
@@ -47,7 +54,7 @@ def generated_files(repo: Path, tmp_path_factory: pytest.TempPathFactory,
                          str(THRESHOLDS), "--fault-sizes", str(SIZES), "--out", str(out), "--no-progress"])
     assert res.returncode == 0, res.stderr
     texts = {p.name: p.read_text(encoding="utf-8") for p in sorted(out.iterdir())}
-    # the banner names the command as generate.sh runs it (--out fw/generated)
+    # the banner names the command as generate.sh runs it (--out fw/vehicles/romo/generated)
     return {name: text.replace(f"--out {out.as_posix()}", f"--out {OUT.as_posix()}") for name, text in texts.items()}
 
 
@@ -57,14 +64,16 @@ def generated(generated_files: dict[str, str]) -> tuple[str, str]:
 
 
 def test_committed_table_is_up_to_date(repo: Path, generated_files: dict[str, str]) -> None:
-    assert set(generated_files) == {f"{NAME}.h", f"{NAME}.c", f"{GENERATORS}.h", f"{GENERATORS}.c"}
+    assert set(generated_files) == {f"{n}.{x}" for n in (NAME, GENERATORS, SIGNALS) for x in "hc"}
     for fname, text in generated_files.items():
         path = repo / OUT / fname
-        assert path.is_file(), f"fw/generated/{fname} is missing: run scripts/generate.sh"
-        assert path.read_text() == text, f"fw/generated/{fname} is stale: run scripts/generate.sh"
+        assert path.is_file(), f"{OUT / fname} is missing: run scripts/generate.sh"
+        assert path.read_text() == text, f"{OUT / fname} is stale: run scripts/generate.sh"
 
 
 def compile_and_check(repo: Path, folder: Path) -> str:
+    """Build the table of `folder` (with its generators and signals, else the committed ones) and the ROMO target's
+    hand-written sources on the generic core, and run fdi_table_check."""
     cc = shutil.which("gcc") or shutil.which("cc")
     if cc is None:
         pytest.skip("no C compiler")
@@ -72,13 +81,13 @@ def compile_and_check(repo: Path, folder: Path) -> str:
     main.write_text(CHECK_MAIN)
     exe = folder / "check"
     flags = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wdouble-promotion", "-Werror"]
-    gens = folder / f"{GENERATORS}.c"
-    if not gens.is_file():
-        gens = repo / OUT / f"{GENERATORS}.c"  # the table alone links against the committed generators
-    includes = [f"-I{repo / 'fw/include'}", f"-I{repo / 'fw/src'}", f"-I{folder}", f"-I{gens.parent}",
-                f"-I{repo / OUT}"]  # the kinematic table's calibration header (fdi_kin_calibration.h)
-    subprocess.run([cc, *flags, *includes, str(main),
-                    str(folder / f"{NAME}.c"), str(gens), *sorted(str(p) for p in (repo / "fw/src").glob("*.c")),
+    romo = repo / "fw/vehicles/romo"
+    sources = [folder / f"{n}.c" if (folder / f"{n}.c").is_file() else repo / OUT / f"{n}.c"
+               for n in (NAME, GENERATORS, SIGNALS)]
+    includes = [f"-I{repo / 'fw/include'}", f"-I{folder}", f"-I{repo / OUT}", f"-I{romo / 'include'}"]
+    subprocess.run([cc, *flags, *includes, str(main), *map(str, sources),
+                    *sorted(str(p) for p in (repo / "fw/src").glob("*.c")),
+                    *sorted(str(p) for p in (romo / "src").glob("fdi_romo_kin.c")),
                     "-lm", "-o", str(exe)], check=True)
     res = subprocess.run([str(exe)], capture_output=True, text=True)
     assert res.returncode == 0, f"fdi_table_check rejected the table: {res.stdout}"
@@ -92,14 +101,16 @@ def test_generated_table_compiles_and_passes_the_firmware_check(
         (tmp_path / fname).write_text(text)
     status, n_tests, n_faults = compile_and_check(repo, tmp_path).split()
     assert status == "0" and int(n_faults) == 25 and 1 <= int(n_tests) <= 32
-    # every selected test runs its generated generator, slots in test order (fw/generated/fdi_romo_generators.c)
-    kinds = re.findall(r"^    \{\d+U, (FDI_GEN_\w+),", generated[1], flags=re.M)
-    assert kinds == [f"FDI_GEN_GENERATED_{k + 1}" for k in range(int(n_tests))]
+    # every selected test runs its generated generator, descriptors in test order (fdi_romo_generators[k])
+    kinds = re.findall(r"^    \{\d+U, (&?\w+(?:\[\d+\])?),", generated[1], flags=re.M)
+    assert kinds == [f"&fdi_romo_generators[{k}]" for k in range(int(n_tests))]
     gens_c = generated_files[f"{GENERATORS}.c"]
-    assert len(re.findall(r"^static fdi_status_t gen_\d+\(", gens_c, flags=re.M)) == int(n_tests)
+    assert len(re.findall(r"^static fdi_status_t romo_gen_\d+\(", gens_c, flags=re.M)) == int(n_tests)
 
 
 def test_render_is_deterministic_and_rejects_bad_selections(repo: Path, tmp_path: Path) -> None:
+    """The kinematic MSO1 as a one-test table of a vehicle target of its own ("kin1"): table, generators and
+    signals rendered twice alike, and accepted by fdi_table_check; no test or too many are refused."""
     model = load_model(repo / "analysis/models/romo_quasistatic.toml")
     st = model.structure()
     eqs = ["K1", "D1", "S1", "S3", "S4", "S5"]
@@ -107,10 +118,44 @@ def test_render_is_deterministic_and_rejects_bad_selections(repo: Path, tmp_path
     faults = sum(1 << st.faults.index(f) for f in ("f1", "f3", "f4", "f5"))
     tests = [Candidate(mask, faults, 5, "MSO1")]
     th = Thresholds.load(repo / THRESHOLDS)
-    a = render(model, tests, th, NAME, "cmd")
-    assert a == render(model, tests, th, NAME, "cmd")
-    assert "FDI_GEN_KIN_X_DERIV" in a[1] and "FDI_SIGM_VY_M" in a[1]
-    write(tmp_path, NAME, *a)
-    assert compile_and_check(repo, tmp_path).split()[0] == "0"
+    names = VehicleNames.of_table("fdi_kin1_table")
+    a = render(model, tests, th, names.table, "cmd")
+    assert a == render(model, tests, th, names.table, "cmd")
+    assert "&fdi_kin1_generators[0]" in a[1] and "KIN1_SIGM_VY_M" in a[1]
+    g = synthesize(model, eqs, "MSO1")
+    gens = emit_generators.render(emit_generators.generators_file([g], names, [f.name for f in model.faults],
+                                                                  "/* cmd */"))
+    sigs = emit_signals.render(emit_signals.signals_file(model, names, "/* cmd */"))
+    write(tmp_path, names.table, *a)
+    write(tmp_path, names.generators, *gens)
+    write(tmp_path, names.signals, *sigs)
+    cc = shutil.which("gcc") or shutil.which("cc")
+    if cc is None:
+        pytest.skip("no C compiler")
+    main = tmp_path / "main.c"
+    main.write_text(CHECK_MAIN.replace("fdi_romo_table", names.table))
+    exe = tmp_path / "check"
+    subprocess.run([cc, "-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wdouble-promotion", "-Werror",
+                    f"-I{repo / 'fw/include'}", f"-I{tmp_path}", str(main),
+                    *(str(tmp_path / f"{n}.c") for n in (names.table, names.generators, names.signals)),
+                    *sorted(str(p) for p in (repo / "fw/src").glob("*.c")), "-lm", "-o", str(exe)], check=True)
+    res = subprocess.run([str(exe)], capture_output=True, text=True)
+    assert res.returncode == 0 and res.stdout.split()[0] == "0", res.stdout
     with pytest.raises(ValueError, match=r"1\.\.32"):
         render(model, [], th, NAME, "cmd")
+
+
+def test_c_text_comes_from_named_templates() -> None:
+    """Computed first, rendered last: each emitter keeps its C text in module-level templates and its rendering
+    functions stay short (no long f-string function)."""
+    import ast
+    import inspect
+
+    for mod in (emit_table, emit_generators, emit_signals):
+        templates = [n for n, v in vars(mod).items() if n.endswith("_FMT")]
+        assert len(templates) >= 3, mod.__name__
+        tree = ast.parse(inspect.getsource(mod))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.FunctionDef):
+                assert node.end_lineno is not None and node.end_lineno - node.lineno < 60, \
+                    f"{mod.__name__}.{node.name} has {node.end_lineno - node.lineno} lines"

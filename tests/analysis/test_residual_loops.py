@@ -19,7 +19,10 @@ import pytest
 import sympy
 from residual_harness import SIGNALS, build_harness, run_harness
 
-from fdi_analysis.export.generators import render
+from fdi_analysis.export.c_names import VehicleNames
+from fdi_analysis.export.generators import generators_file, render
+from fdi_analysis.export.signals import render as render_signals
+from fdi_analysis.export.signals import signals_file
 from fdi_analysis.model import Model
 from fdi_analysis.model_loader import load_model
 from fdi_analysis.residuals.causality import closure, plan, synthesize
@@ -142,11 +145,18 @@ def test_rotation_loop_residual_on_signals_and_in_c(rotated: Model, repo: Path, 
     rf = residual(g, rotated_drive(n, f1=0.2, t_fault=10.0))
     assert np.max(np.abs(r0)) < 0.02
     assert float(np.mean(rf[1300:])) == pytest.approx(0.2, rel=0.05)
-    header, source = render([g], "fdi_romo_generators", "test")
-    (tmp_path / "fdi_romo_generators.h").write_text(header)
-    (tmp_path / "fdi_romo_generators.c").write_text(source)
+    names = VehicleNames("rot")
+    faults = [f.name for f in rotated.faults]
+    for base, (header, source) in ((names.generators, render(generators_file([g], names, faults, "/* test */"))),
+                                   (names.signals, render_signals(signals_file(rotated, names, "/* test */")))):
+        (tmp_path / f"{base}.h").write_text(header)
+        (tmp_path / f"{base}.c").write_text(source)
     sig = rotated_drive(n, f4=0.5, t_fault=8.0)
-    c = run_harness(build_harness(repo, tmp_path, tmp_path / "fdi_romo_generators.c"), sig, [7], 0.0, 0.0)[:, 0]
+    h = build_harness(repo, tmp_path, [f"&{names.generators}[0]"],
+                      sources=[tmp_path / f"{names.generators}.c", tmp_path / f"{names.signals}.c"],
+                      include_dirs=[tmp_path], headers=[f"{names.generators}.h"],
+                      signals=[k.name for k in rotated.knowns])
+    c = run_harness(h, sig).residuals[:, 0]
     py = residual(g, sig)
     scale = float(np.max(np.abs(py)))
     assert scale > 0.01 and float(np.max(np.abs(c - py))) < 1e-3 * scale

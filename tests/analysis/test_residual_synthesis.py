@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from residual_harness import build_harness, run_harness
+from residual_harness import ROMO_KIN, build_harness, run_harness
 
 from fdi_analysis.candidates import mso_candidates
 from fdi_analysis.fault_matrix import Candidate, fault_matrix
@@ -24,7 +24,6 @@ from fdi_host.tuning.drives import drive
 
 ARR3 = ["K1", "K2", "D1", "D2", "S1", "S2", "S3", "S4"]
 ARR4 = ["K1", "K2", "D1", "D2", "S1", "S2", "S3", "S5"]
-FDI_GEN_KIN_ARR3, FDI_GEN_KIN_ARR4 = 3, 4
 
 
 @pytest.fixture(scope="module")
@@ -112,11 +111,12 @@ def test_realizable_candidates_still_detect_every_fault(model: Model) -> None:
 
 
 def test_generator_reproduces_handwritten_arr3_arr4(repo: Path, model: Model, tmp_path: Path) -> None:
-    """Same signals through fw's FDI_GEN_KIN_ARR3/ARR4 (C) and the generated MSO3/MSO4 (Python): the
+    """Same signals through the ROMO target's hand-written ARR3/ARR4 (C) and the generated MSO3/MSO4 (Python): the
     generated residual is -r3 (resp. r4): the same relation multiplied by w^2, the same filters."""
     _, sig = drive("cornering", duration=12.0, faults=[("f4", 6.0, 0.5)])
     p = model.parameter_values()
-    c = run_harness(build_harness(repo, tmp_path), sig, [FDI_GEN_KIN_ARR3, FDI_GEN_KIN_ARR4], p["d_x"], p["d_y"])
+    c = run_harness(build_harness(repo, tmp_path, [ROMO_KIN["arr3"], ROMO_KIN["arr4"]]), sig,
+                    (p["d_x"], p["d_y"])).residuals
     g3 = residual(synthesize(model, ARR3, "MSO3"), sig)
     g4 = residual(synthesize(model, ARR4, "MSO4"), sig)
     for gen, hand, sign in ((g3, c[:, 0], -1.0), (g4, c[:, 1], 1.0)):

@@ -1,8 +1,9 @@
 /*
  * fuzz_diag.c - libFuzzer harness of the diagnoser step path (fdi_diag_init / fdi_diag_step / fdi_diag_result).
  *
- * From the input: a table (the kinematic table, the generated ROMO table, or a random table of generator
- * kinds that passes fdi_table_check()), a configuration (any float bits for the CUSUM, counts, warm-up,
+ * From the input: a table (the kinematic table, the generated ROMO table, or a random table of the ROMO
+ * target's generator descriptors, hand-written and generated, that passes fdi_table_check()), a configuration
+ * (sensitivities on or off) (any float bits for the CUSUM, counts, warm-up,
  * mode; init may reject it, then the default configuration, for the kin and ROMO tables from an instance
  * warmed up once by 10 s of clean driving), then up to 1,200 steps. Each step starts
  * from the fault-free reference vehicle at that instant and applies input-chosen edits: a signal set to
@@ -25,8 +26,10 @@
 #include "fdi_diag.h"
 #include "fdi_gen.h"
 #include "fdi_kin_table.h"
+#include "fdi_romo_generators.h"
+#include "fdi_romo_kin.h"
 #include "fdi_romo_table.h"
-#include "fdi_test_util.h"
+#include "fdi_test_vehicle.h"
 #include "fuzz_input.h"
 
 #define DT 0.01
@@ -46,6 +49,21 @@ static uint32_t low_bits(uint32_t n)
     return (n >= 32U) ? 0xFFFFFFFFU : (((uint32_t)1U << n) - 1U);
 }
 
+/* Generator k of the ROMO target (NULL, the hand-written kinematic ones, the generated ones), any k. */
+static const fdi_gen_desc_t *pick_gen(uint8_t k)
+{
+    static const fdi_gen_desc_t *const kin[7] = {NULL,
+                                                 &fdi_romo_kin_x_deriv,
+                                                 &fdi_romo_kin_y_deriv,
+                                                 &fdi_romo_kin_arr3,
+                                                 &fdi_romo_kin_arr4,
+                                                 &fdi_romo_kin_x_obs,
+                                                 &fdi_romo_kin_y_obs};
+    const uint32_t n = 7U + FDI_ROMO_N_GENERATORS;
+    const uint32_t i = (uint32_t)k % n;
+    return (i < 7U) ? kin[i] : &fdi_romo_generators[i - 7U];
+}
+
 static void random_table(table_buf_t *b, const fdi_table_t *design_from, fuzz_in_t *in)
 {
     uint32_t i;
@@ -60,11 +78,15 @@ static void random_table(table_buf_t *b, const fdi_table_t *design_from, fuzz_in
     for (i = 0U; i < nt; ++i)
     {
         uint32_t m = fz_u32(in) & low_bits(nf);
-        const fdi_gen_kind_t kind = (fdi_gen_kind_t)(fz_u8(in) % FDI_GEN_KIND_COUNT);
+        const fdi_gen_desc_t *gen = pick_gen(fz_u8(in));
         b->tests[i].mso_id = (uint16_t)(i + 1U);
-        b->tests[i].kind = kind;
+        b->tests[i].gen = gen;
         b->tests[i].fault_mask = (m != 0U) ? m : 1U;
-        b->tests[i].input_mask = fdi_gen_inputs(kind) | (fz_u32(in) & FDI_SIGM_ALL);
+        if ((gen != NULL) && ((gen->sens_mask & ~b->tests[i].fault_mask) != 0U))
+        {
+            b->tests[i].fault_mask |= gen->sens_mask & low_bits(nf); /* else fdi_table_check refuses it */
+        }
+        b->tests[i].input_mask = ((gen != NULL) ? gen->input_mask : 0U) | (fz_u32(in) & ROMO_SIGM_ALL);
         b->tests[i].gate = 1.0f + (float)(fz_u8(in) % 10U);
         b->tests[i].variance = design_from->tests[i % design_from->n_tests].variance;
         b->tests[i].interpretation = "fuzz";
@@ -105,8 +127,11 @@ static fdi_diag_config_t good_config(const fdi_table_t *t)
 {
     fdi_diag_config_t c;
     c.table = t;
-    c.d_x = (float)VEH_DX;
-    c.d_y = (float)VEH_DY;
+    c.gen_param[FDI_ROMO_KIN_PARAM_D_X] = (float)VEH_DX;
+    c.gen_param[FDI_ROMO_KIN_PARAM_D_Y] = (float)VEH_DY;
+    c.gen_param[2] = 0.0f;
+    c.gen_param[3] = 0.0f;
+    c.sensitivities = false;
     c.cusum_k = 1.5f;
     c.cusum_h = 150.0f;
     c.set_count = 10U;
@@ -118,13 +143,13 @@ static fdi_diag_config_t good_config(const fdi_table_t *t)
     return c;
 }
 
-static float *field(fdi_inputs_t *x, uint32_t k)
+static float *field(fdi_frame_t *x, uint32_t k)
 {
-    float *const f[FDI_SIG_COUNT] = {&x->ax_m,     &x->ay_m,     &x->psidot_m, &x->vx_m,     &x->vy_m,
-                                     &x->delta1_m, &x->delta2_m, &x->delta3_m, &x->delta4_m, &x->iTM1_m,
-                                     &x->iTM2_m,   &x->iTM3_m,   &x->iTM4_m,   &x->P_f_m,    &x->P_r_m,
-                                     &x->omega1_m, &x->omega2_m, &x->omega3_m, &x->omega4_m};
-    return f[k % FDI_SIG_COUNT];
+    float *const f[ROMO_SIG_COUNT] = {&x->value[ROMO_SIG_AX_M],     &x->value[ROMO_SIG_AY_M],     &x->value[ROMO_SIG_PSIDOT_M], &x->value[ROMO_SIG_VX_M],     &x->value[ROMO_SIG_VY_M],
+                                     &x->value[ROMO_SIG_DELTA1_M], &x->value[ROMO_SIG_DELTA2_M], &x->value[ROMO_SIG_DELTA3_M], &x->value[ROMO_SIG_DELTA4_M], &x->value[ROMO_SIG_ITM1_M],
+                                     &x->value[ROMO_SIG_ITM2_M],   &x->value[ROMO_SIG_ITM3_M],   &x->value[ROMO_SIG_ITM4_M],   &x->value[ROMO_SIG_P_F_M],    &x->value[ROMO_SIG_P_R_M],
+                                     &x->value[ROMO_SIG_OMEGA1_M], &x->value[ROMO_SIG_OMEGA2_M], &x->value[ROMO_SIG_OMEGA3_M], &x->value[ROMO_SIG_OMEGA4_M]};
+    return f[k % ROMO_SIG_COUNT];
 }
 
 #define WARM_STEPS 1000L /* > the default warm-up (400 steps) + CLEAN_MARGIN */
@@ -142,14 +167,14 @@ static const fdi_diag_t *warmed(uint32_t which)
         const fdi_diag_config_t c = good_config(t);
         veh_meas_cfg_t mc;
         test_rng_t rng = {7U};
-        fdi_inputs_t x;
+        fdi_frame_t x;
         long k;
         memset(&mc, 0, sizeof mc);
         FUZZ_CHECK(fdi_diag_init(&w[which], &c) == FDI_OK, "init of the warm instance");
         for (k = 1L; k <= WARM_STEPS; ++k)
         {
             veh_measure((double)k * DT, &mc, &rng, &x);
-            FUZZ_CHECK(fdi_diag_step(&w[which], &x, FDI_SIGM_ALL) == FDI_OK, "warm step");
+            FUZZ_CHECK(fdi_diag_step(&w[which], &x, ROMO_SIGM_ALL) == FDI_OK, "warm step");
         }
         have[which] = true;
     }
@@ -202,6 +227,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     c.mode = (fdi_iso_mode_t)(fz_u8(&in) % 3U);
     c.iso_settle_steps = (uint16_t)(fz_u32(&in) & 0x03FFU);
     c.episode_clear_steps = (uint16_t)fz_u8(&in);
+    c.sensitivities = (fz_u8(&in) & 1U) != 0U;
     bool good_cfg = false;
     if (fdi_diag_init(&d, &c) != FDI_OK)
     {
@@ -221,7 +247,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     for (i = 0U; i < table->n_tests; ++i)
     {
-        with_gen |= (table->tests[i].kind != FDI_GEN_NONE) ? ((uint32_t)1U << i) : 0U;
+        with_gen |= (table->tests[i].gen != NULL) ? ((uint32_t)1U << i) : 0U;
     }
     for (i = 0U; i < 5U; ++i)
     {
@@ -233,8 +259,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     FUZZ_CHECK((k0 == 0L) || (table != &fdi_kin_table) || (res.evaluable_mask == 0x0FU), "warm kin not evaluable");
     for (k = k0 + 1L; (k <= k0 + 1200L) && (in.n > 0U); ++k)
     {
-        fdi_inputs_t x;
-        uint32_t validity = FDI_SIGM_ALL;
+        fdi_frame_t x;
+        uint32_t validity = ROMO_SIGM_ALL;
         const uint8_t op = fz_u8(&in);
         veh_measure((double)k * DT, &mc, &rng, &x);
         if ((op & 0x03U) == 0x01U) /* arbitrary bits in one signal */
@@ -263,7 +289,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         FUZZ_CHECK(fdi_diag_step(&d, &x, validity) == FDI_OK, "step failed at %ld", k);
         FUZZ_CHECK(fdi_diag_result(&d, &res) == FDI_OK, "result failed");
         {
-            const uint32_t usable = validity & fdi_signals_finite_mask(&x) & FDI_SIGM_ALL;
+            const uint32_t usable = validity & fdi_frame_finite_mask(&x, ROMO_SIGM_ALL);
             FUZZ_CHECK(res.n_tests == table->n_tests, "n_tests");
             FUZZ_CHECK((res.alarm_mask & ~res.evaluable_mask) == 0U, "alarm outside evaluable");
             FUZZ_CHECK((res.evaluable_mask & ~with_gen) == 0U, "a test without generator is evaluable");

@@ -18,7 +18,7 @@
  *  - the step's validity only holds signals of messages that were accepted;
  *  - kinematic table: fault-free values never isolate a fault (FDI_Status never FAULT_ISOLATED, no
  *    candidate);
- *  - at most one diagnosis frame per poll, ID 512, DLC 8, with a valid E2E CRC.
+ *  - at most one diagnosis frame per poll, the bus's diagnosis ID, DLC 8, with a valid E2E CRC.
  */
 #include <math.h>
 #include <stdbool.h>
@@ -26,28 +26,21 @@
 #include "fdi_ecu.h"
 #include "fdi_kin_table.h"
 #include "fdi_romo_table.h"
-#include "fdi_test_util.h"
+#include "fdi_test_vehicle.h"
 #include "fuzz_input.h"
-#include "romo_can_e2e.h"
+#include "fdi_romo_bus.h"
+#include "fdi_romo_ecu.h"
+#include "fdi_romo_kin.h"
 
-#define N_MSG 8U
+#define N_MSG 8U /* the ROMO bus (generated from dbc/romo.dbc): IDs, cycle times, data IDs and signals from it */
 
-static const uint32_t msg_id[N_MSG] = {80U, 128U, 136U, 256U, 257U, 258U, 259U, 272U};
-static const uint32_t msg_cycle_us[N_MSG] = {20000U, 5000U, 10000U, 5000U, 5000U, 5000U, 5000U, 20000U};
-static const uint16_t msg_data_id[N_MSG] = {
-    ROMO_CAN_E2E_MOTION_DEMAND_DATA_ID, ROMO_CAN_E2E_IMU_MOTION_DATA_ID,   ROMO_CAN_E2E_VELOCITY_SENSOR_DATA_ID,
-    ROMO_CAN_E2E_WHEEL_ROBOT1_DATA_ID,  ROMO_CAN_E2E_WHEEL_ROBOT2_DATA_ID, ROMO_CAN_E2E_WHEEL_ROBOT3_DATA_ID,
-    ROMO_CAN_E2E_WHEEL_ROBOT4_DATA_ID,  ROMO_CAN_E2E_BRAKE_BY_WIRE_DATA_ID};
-/* FDI_SIGM_* signals carried by each message */
-static const uint32_t msg_sig[N_MSG] = {
-    0U,
-    FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M,
-    FDI_SIGM_VX_M | FDI_SIGM_VY_M,
-    FDI_SIGM_DELTA1_M | FDI_SIGM_ITM1_M | FDI_SIGM_OMEGA1_M,
-    FDI_SIGM_DELTA2_M | FDI_SIGM_ITM2_M | FDI_SIGM_OMEGA2_M,
-    FDI_SIGM_DELTA3_M | FDI_SIGM_ITM3_M | FDI_SIGM_OMEGA3_M,
-    FDI_SIGM_DELTA4_M | FDI_SIGM_ITM4_M | FDI_SIGM_OMEGA4_M,
-    FDI_SIGM_P_F_M | FDI_SIGM_P_R_M};
+/* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion */
+FDI_STATIC_ASSERT(FDI_ROMO_BUS_N_MSGS == N_MSG, fuzz_sa_romo_msgs);
+
+#define msg_id(m) (fdi_romo_bus.msgs[(m)].can_id)
+#define msg_cycle_us(m) ((uint32_t)fdi_romo_bus.msgs[(m)].cycle_ms * 1000U)
+#define msg_data_id(m) (fdi_romo_bus.msgs[(m)].data_id)
+#define msg_sig(m) (fdi_romo_bus.msgs[(m)].signals)
 
 typedef struct
 {
@@ -80,7 +73,7 @@ static void put16(uint8_t *d, uint32_t at, int16_t v)
 /* The fault-free frame of message m at the current vehicle time, with the given alive counter. */
 static void make_frame(const bus_t *b, uint32_t m, uint8_t counter, uint8_t *d)
 {
-    fdi_inputs_t x;
+    fdi_frame_t x;
     veh_meas_cfg_t mc;
     test_rng_t rng = {1U};
     uint32_t i;
@@ -91,9 +84,9 @@ static void make_frame(const bus_t *b, uint32_t m, uint8_t counter, uint8_t *d)
     }
     else
     {
-        x.delta1_m = 0.05f; /* wheel, brake, demand values: the constants of veh_measure() */
-        x.iTM1_m = 20.0f;
-        x.omega1_m = 50.0f;
+        x.value[ROMO_SIG_DELTA1_M] = 0.05f; /* wheel, brake, demand values: the constants of veh_measure() */
+        x.value[ROMO_SIG_ITM1_M] = 20.0f;
+        x.value[ROMO_SIG_OMEGA1_M] = 50.0f;
     }
     memset(d, 0, 8U);
     d[1] = (uint8_t)((counter & 0x0FU) | (uint8_t)(b->status[m] << 4));
@@ -105,13 +98,13 @@ static void make_frame(const bus_t *b, uint32_t m, uint8_t counter, uint8_t *d)
         put16(d, 6U, q16(VEH_W0, 0.0001));
         break;
     case 1U:
-        put16(d, 2U, q16((double)x.ax_m, 0.001));
-        put16(d, 4U, q16((double)x.ay_m, 0.001));
-        put16(d, 6U, q16((double)x.psidot_m, 0.0001));
+        put16(d, 2U, q16((double)x.value[ROMO_SIG_AX_M], 0.001));
+        put16(d, 4U, q16((double)x.value[ROMO_SIG_AY_M], 0.001));
+        put16(d, 6U, q16((double)x.value[ROMO_SIG_PSIDOT_M], 0.0001));
         break;
     case 2U:
-        put16(d, 2U, q16((double)x.vx_m, 0.001));
-        put16(d, 4U, q16((double)x.vy_m, 0.001));
+        put16(d, 2U, q16((double)x.value[ROMO_SIG_VX_M], 0.001));
+        put16(d, 4U, q16((double)x.value[ROMO_SIG_VY_M], 0.001));
         break;
     case 7U:
         for (i = 2U; i < 6U; ++i)
@@ -120,12 +113,12 @@ static void make_frame(const bus_t *b, uint32_t m, uint8_t counter, uint8_t *d)
         }
         break;
     default: /* wheel robots: steering angle, motor current, wheel speed */
-        put16(d, 2U, q16((double)x.delta1_m, 0.0001));
-        put16(d, 4U, q16((double)x.iTM1_m, 0.01));
-        put16(d, 6U, q16((double)x.omega1_m, 0.005));
+        put16(d, 2U, q16((double)x.value[ROMO_SIG_DELTA1_M], 0.0001));
+        put16(d, 4U, q16((double)x.value[ROMO_SIG_ITM1_M], 0.01));
+        put16(d, 6U, q16((double)x.value[ROMO_SIG_OMEGA1_M], 0.005));
         break;
     }
-    d[0] = fdi_ecu_e2e_crc(msg_data_id[m], d, 8U);
+    d[0] = fdi_ecu_e2e_crc(msg_data_id(m), d, 8U);
 }
 
 static void check(bus_t *b, const fdi_ecu_tx_t *tx)
@@ -149,7 +142,7 @@ static void check(bus_t *b, const fdi_ecu_tx_t *tx)
         sum_rx += c.msg[m].received;
         if (c.msg[m].accepted > 0U)
         {
-            b->accepted_sig |= msg_sig[m];
+            b->accepted_sig |= msg_sig(m);
         }
     }
     FUZZ_CHECK(c.frames == sum_rx + c.rejected[FDI_ECU_REJ_UNKNOWN_ID] + c.rejected[FDI_ECU_REJ_OWN_FRAME],
@@ -168,9 +161,9 @@ static void check(bus_t *b, const fdi_ecu_tx_t *tx)
         FUZZ_CHECK(tx->n_frames <= 1U, "n_frames %u", tx->n_frames);
         if (tx->n_frames == 1U)
         {
-            FUZZ_CHECK(tx->frame[0].can_id == FDI_ECU_DIAG_ID && tx->frame[0].dlc == 8U, "diagnosis frame id/dlc");
+            FUZZ_CHECK(tx->frame[0].can_id == fdi_romo_bus.diag_id && tx->frame[0].dlc == 8U, "diagnosis frame id/dlc");
             FUZZ_CHECK(tx->frame[0].data[0] ==
-                           fdi_ecu_e2e_crc(ROMO_CAN_E2E_FDI_DIAGNOSIS_DATA_ID, tx->frame[0].data, 8U),
+                           fdi_ecu_e2e_crc(fdi_romo_bus.diag_data_id, tx->frame[0].data, 8U),
                        "diagnosis frame CRC");
         }
     }
@@ -205,7 +198,7 @@ static void send_valid(bus_t *b, uint32_t m, uint32_t t_us)
     uint8_t d[8];
     b->counter[m] = (uint8_t)((b->counter[m] + 1U) % 15U);
     make_frame(b, m, b->counter[m], d);
-    rx_checked(b, msg_id[m], d, 8U, t_us, false); /* checked when a step ran (a diagnosis frame) */
+    rx_checked(b, msg_id(m), d, 8U, t_us, false); /* checked when a step ran (a diagnosis frame) */
 }
 
 /* Advance the clock by dt_us, sending the nominal frames that fall due (unless the sender is silent). */
@@ -230,7 +223,7 @@ static void advance(bus_t *b, uint32_t dt_us)
         b->t_us += b->next_us[best] - b->elapsed_us;
         b->tv += (double)(b->next_us[best] - b->elapsed_us) * 1e-6;
         b->elapsed_us = b->next_us[best];
-        b->next_us[best] += msg_cycle_us[best];
+        b->next_us[best] += msg_cycle_us(best);
         if (b->elapsed_us >= b->silent_until[best])
         {
             send_valid(b, best, b->t_us);
@@ -262,9 +255,9 @@ static const bus_t *warm_start(uint32_t tab, uint32_t delta)
         uint32_t m;
         memset(w, 0, sizeof *w);
         w->table = (tab != 0U) ? &fdi_romo_table : &fdi_kin_table;
-        FUZZ_CHECK(fdi_ecu_config_default(&cfg, w->table) == FDI_OK, "config_default");
-        cfg.diag.d_x = (float)VEH_DX;
-        cfg.diag.d_y = (float)VEH_DY;
+        FUZZ_CHECK(fdi_romo_ecu_config_default(&cfg, w->table) == FDI_OK, "config_default");
+        cfg.diag.gen_param[FDI_ROMO_KIN_PARAM_D_X] = (float)VEH_DX;
+        cfg.diag.gen_param[FDI_ROMO_KIN_PARAM_D_Y] = (float)VEH_DY;
         cfg.max_delta_counter = (uint8_t)(1U + delta);
         FUZZ_CHECK(fdi_ecu_init(&w->ecu, &cfg) == FDI_OK, "init");
         w->t_us = 0xFFFFFFFFU - 4000000U;
@@ -313,15 +306,15 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         case 4U: /* arbitrary frame; never a valid-CRC frame of an input message */
         {
             const uint8_t sel = fz_u8(&in);
-            const uint32_t id = ((sel & 1U) != 0U) ? msg_id[mm] : ((sel & 2U) != 0U ? 512U : fz_u32(&in));
+            const uint32_t id = ((sel & 1U) != 0U) ? msg_id(mm) : ((sel & 2U) != 0U ? fdi_romo_bus.diag_id : fz_u32(&in));
             const uint8_t dlc = (uint8_t)(fz_u8(&in) % 16U);
             uint32_t i;
             for (i = 0U; i < 16U; ++i)
             {
                 d[i] = fz_u8(&in);
             }
-            if ((fdi_ecu_msg_index(id) >= 0) && (dlc == 8U) &&
-                (d[0] == fdi_ecu_e2e_crc(msg_data_id[(uint32_t)fdi_ecu_msg_index(id)], d, 8U)))
+            if ((fdi_ecu_msg_index(&fdi_romo_bus, id) >= 0) && (dlc == 8U) &&
+                (d[0] == fdi_ecu_e2e_crc(msg_data_id((uint32_t)fdi_ecu_msg_index(&fdi_romo_bus, id)), d, 8U)))
             {
                 d[0] ^= 0x01U;
             }
@@ -330,7 +323,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
         case 5U: /* repeated alive counter (same counter, current values) */
             make_frame(&b, mm, b.counter[mm], d);
-            rx(&b, msg_id[mm], d, 8U, b.t_us);
+            rx(&b, msg_id(mm), d, 8U, b.t_us);
             break;
         case 6U: /* alive counter jump */
             b.counter[mm] = (uint8_t)((b.counter[mm] + 1U + (uint32_t)fz_u8(&in) % 14U) % 15U);
@@ -354,7 +347,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             if ((op & 0x10U) != 0U)
             {
                 make_frame(&b, mm, (uint8_t)((b.counter[mm] + 1U) % 15U), d);
-                rx(&b, msg_id[mm], d, 8U, b.t_us - (j & 0xFFFFFU));
+                rx(&b, msg_id(mm), d, 8U, b.t_us - (j & 0xFFFFFU));
             }
             else
             {
@@ -364,7 +357,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 b.elapsed_us += j;
                 for (k = 0U; k < N_MSG; ++k)
                 {
-                    b.next_us[k] = b.elapsed_us + msg_cycle_us[k];
+                    b.next_us[k] = b.elapsed_us + msg_cycle_us(k);
                 }
                 advance(&b, 0U);
             }
@@ -372,7 +365,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
         case 10U: /* raw alive counter 15 (out of range) with a valid CRC */
             make_frame(&b, mm, 15U, d);
-            rx(&b, msg_id[mm], d, 8U, b.t_us);
+            rx(&b, msg_id(mm), d, 8U, b.t_us);
             break;
         default: /* reordered: the next two frames of a message arrive swapped */
         {
@@ -381,8 +374,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             const uint8_t c2 = (uint8_t)((b.counter[mm] + 2U) % 15U);
             make_frame(&b, mm, c1, d);
             make_frame(&b, mm, c2, d2);
-            rx(&b, msg_id[mm], d2, 8U, b.t_us);
-            rx(&b, msg_id[mm], d, 8U, b.t_us);
+            rx(&b, msg_id(mm), d2, 8U, b.t_us);
+            rx(&b, msg_id(mm), d, 8U, b.t_us);
             b.counter[mm] = c2;
             break;
         }

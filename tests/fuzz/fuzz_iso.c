@@ -73,6 +73,8 @@ static void derive(table_buf_t *b)
     }
 }
 
+static const char *const signal_names[1] = {"s"};
+
 static void build(table_buf_t *b, fuzz_in_t *in)
 {
     uint32_t i;
@@ -85,6 +87,8 @@ static void build(table_buf_t *b, fuzz_in_t *in)
     b->t.design.cutoff_hz = 1.0f;
     b->t.design.zeta = 0.7071f;
     b->t.design.obs_gain = 2.0f;
+    b->t.n_signals = 1U;
+    b->t.signal_names = signal_names;
     b->t.n_faults = nf;
     b->t.n_tests = nt;
     for (i = 0U; i < nt; ++i)
@@ -95,7 +99,7 @@ static void build(table_buf_t *b, fuzz_in_t *in)
             m = (uint32_t)1U << (i % nf);
         }
         b->tests[i].mso_id = (uint16_t)(i + 1U);
-        b->tests[i].kind = FDI_GEN_NONE;
+        b->tests[i].gen = NULL; /* the isolation needs no generator */
         b->tests[i].fault_mask = m;
         b->tests[i].input_mask = 0U;
         b->tests[i].gate = 5.0f;
@@ -133,10 +137,12 @@ static bool consistent(const table_buf_t *b)
     table_buf_t c = *b;
     uint32_t j;
     uint32_t i;
-    bool ok = (b->t.n_faults >= 1U) && (b->t.n_faults <= 32U) && (b->t.n_tests >= 1U) && (b->t.n_tests <= 32U);
+    bool ok = (b->t.n_faults >= 1U) && (b->t.n_faults <= 32U) && (b->t.n_tests >= 1U) && (b->t.n_tests <= 32U) &&
+              (b->t.n_signals >= 1U) && (b->t.n_signals <= 32U) && (b->t.signal_names != NULL);
     for (i = 0U; ok && (i < b->t.n_tests); ++i)
     {
         ok = (b->tests[i].fault_mask != 0U) && ((b->tests[i].fault_mask & ~low_bits(b->t.n_faults)) == 0U) &&
+             ((b->tests[i].input_mask & ~low_bits(b->t.n_signals)) == 0U) &&
              (b->tests[i].gate > 0.0f) && (b->tests[i].variance > 0.0f);
     }
     if (ok)
@@ -170,7 +176,7 @@ static void corrupt(table_buf_t *b, fuzz_in_t *in)
     case 3U: b->sig[j] = v; break;
     case 4U: b->cls[j] = v; break;
     case 5U: memcpy(&b->tests[i].gate, &v, sizeof v); break;
-    case 6U: b->tests[i].kind = (fdi_gen_kind_t)(v % 16U); break;
+    case 6U: b->tests[i].input_mask = v; break; /* signals beyond the frame's */
     case 8U: memcpy(&b->size[(j * b->t.n_tests) + i], &v, sizeof v); break;
     case 9U: memcpy(&b->t.exoneration_margin, &v, sizeof v); break;
     default: b->tests[i].input_mask = v; break;

@@ -12,7 +12,8 @@
 
 #include "fdi_diag.h"
 #include "fdi_kin_table.h"
-#include "fdi_test_util.h"
+#include "fdi_romo_kin.h"
+#include "fdi_test_vehicle.h"
 
 #define DT 0.01
 #define WARMUP 320U /* >= 300 steps: max(2 stages * 6 / (zeta * 2 pi 1 Hz), 6 / L = 3 s) at 100 Hz */
@@ -23,8 +24,11 @@ static fdi_diag_config_t config(fdi_iso_mode_t mode)
 {
     fdi_diag_config_t c;
     c.table = &fdi_kin_table;
-    c.d_x = (float)VEH_DX;
-    c.d_y = (float)VEH_DY;
+    c.gen_param[FDI_ROMO_KIN_PARAM_D_X] = (float)VEH_DX;
+    c.gen_param[FDI_ROMO_KIN_PARAM_D_Y] = (float)VEH_DY;
+    c.gen_param[2] = 0.0f;
+    c.gen_param[3] = 0.0f;
+    c.sensitivities = false;
     /* The residuals are low-pass noise (correlation ~0.2 s), so the CUSUM needs a larger drift and
        threshold than for white noise: with k = 1.5 sigma the largest fault-free excursion in 1e6 steps
        was 71 (ARR3); h = 150 leaves a factor 2. */
@@ -53,7 +57,7 @@ static void test_bad_args(void **state)
 {
     fdi_diag_t d;
     fdi_diag_result_t res;
-    fdi_inputs_t in;
+    fdi_frame_t in;
     fdi_diag_config_t c = config(FDI_ISO_EXONERATION);
     fdi_table_t bad_table = fdi_kin_table;
     (void)state;
@@ -62,7 +66,7 @@ static void test_bad_args(void **state)
     assert_int_equal(fdi_diag_init(&d, NULL), FDI_BAD_ARG);
     c.warmup_steps = 299U; /* shorter than the settling time */
     assert_int_equal(fdi_diag_init(&d, &c), FDI_BAD_ARG);
-    assert_int_equal(fdi_diag_step(&d, &in, FDI_SIGM_ALL), FDI_BAD_ARG); /* failed init: refused */
+    assert_int_equal(fdi_diag_step(&d, &in, ROMO_SIGM_ALL), FDI_BAD_ARG); /* failed init: refused */
     assert_int_equal(fdi_diag_result(&d, &res), FDI_BAD_ARG);
     c = config((fdi_iso_mode_t)3);
     assert_int_equal(fdi_diag_init(&d, &c), FDI_BAD_ARG);
@@ -93,7 +97,7 @@ static void test_bad_args(void **state)
 }
 
 static uint32_t step_eval_mask(fdi_diag_t *d, double t, veh_meas_cfg_t *mc, test_rng_t *rng, uint32_t validity,
-                               fdi_inputs_t *in)
+                               fdi_frame_t *in)
 {
     fdi_diag_result_t res;
     veh_measure(t, mc, rng, in);
@@ -111,7 +115,7 @@ static uint32_t step_eval_mask(fdi_diag_t *d, double t, veh_meas_cfg_t *mc, test
 static void test_warmup_and_validity(void **state)
 {
     fdi_diag_t d;
-    fdi_inputs_t in;
+    fdi_frame_t in;
     const fdi_diag_config_t c = config(FDI_ISO_EXONERATION);
     veh_meas_cfg_t mc;
     test_rng_t rng = {11ULL};
@@ -122,23 +126,23 @@ static void test_warmup_and_validity(void **state)
     assert_int_equal(fdi_diag_init(&d, &c), FDI_OK);
     for (k = 1U; k <= WARMUP; ++k)
     {
-        assert_int_equal(step_eval_mask(&d, (++n) * DT, &mc, &rng, FDI_SIGM_ALL, &in), 0U);
+        assert_int_equal(step_eval_mask(&d, (++n) * DT, &mc, &rng, ROMO_SIGM_ALL, &in), 0U);
     }
-    assert_int_equal(step_eval_mask(&d, (++n) * DT, &mc, &rng, FDI_SIGM_ALL, &in), 0xFU);
+    assert_int_equal(step_eval_mask(&d, (++n) * DT, &mc, &rng, ROMO_SIGM_ALL, &in), 0xFU);
     for (k = 1U; k <= 20U; ++k)
     {
-        assert_int_equal(step_eval_mask(&d, (++n) * DT, &mc, &rng, FDI_SIGM_ALL & ~FDI_SIGM_VX_M, &in), 0x8U);
+        assert_int_equal(step_eval_mask(&d, (++n) * DT, &mc, &rng, ROMO_SIGM_ALL & ~ROMO_SIGM_VX_M, &in), 0x8U);
     }
     for (k = 1U; k <= WARMUP; ++k)
     {
-        assert_int_equal(step_eval_mask(&d, (++n) * DT, &mc, &rng, FDI_SIGM_ALL, &in), 0x8U);
+        assert_int_equal(step_eval_mask(&d, (++n) * DT, &mc, &rng, ROMO_SIGM_ALL, &in), 0x8U);
     }
-    assert_int_equal(step_eval_mask(&d, (++n) * DT, &mc, &rng, FDI_SIGM_ALL, &in), 0xFU);
+    assert_int_equal(step_eval_mask(&d, (++n) * DT, &mc, &rng, ROMO_SIGM_ALL, &in), 0xFU);
     /* NaN in vy_m (flagged valid): MSO1, MSO2, MSO4 drop out; stale omega signals do not matter */
     veh_measure((++n) * DT, &mc, &rng, &in);
-    in.vy_m = NAN;
-    in.omega3_m = INFINITY;
-    assert_int_equal(fdi_diag_step(&d, &in, FDI_SIGM_ALL & ~FDI_SIGM_OMEGA1_M), FDI_OK);
+    in.value[ROMO_SIG_VY_M] = NAN;
+    in.value[ROMO_SIG_OMEGA3_M] = INFINITY;
+    assert_int_equal(fdi_diag_step(&d, &in, ROMO_SIGM_ALL & ~ROMO_SIGM_OMEGA1_M), FDI_OK);
     {
         fdi_diag_result_t res;
         assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
@@ -162,7 +166,7 @@ static run_t run(int j, double rate, double t_fault, double t_end, uint64_t seed
 {
     fdi_diag_t dx;
     fdi_diag_t dn;
-    fdi_inputs_t in;
+    fdi_frame_t in;
     const fdi_diag_config_t cx = config(FDI_ISO_EXONERATION);
     const fdi_diag_config_t cn = config(FDI_ISO_NO_EXONERATION);
     veh_meas_cfg_t mc;
@@ -183,8 +187,8 @@ static run_t run(int j, double rate, double t_fault, double t_end, uint64_t seed
             mc.f[j] = rate * (t - t_fault);
         }
         veh_measure(t, &mc, &rng, &in);
-        assert_int_equal(fdi_diag_step(&dx, &in, FDI_SIGM_ALL), FDI_OK);
-        assert_int_equal(fdi_diag_step(&dn, &in, FDI_SIGM_ALL), FDI_OK);
+        assert_int_equal(fdi_diag_step(&dx, &in, ROMO_SIGM_ALL), FDI_OK);
+        assert_int_equal(fdi_diag_step(&dn, &in, ROMO_SIGM_ALL), FDI_OK);
         assert_int_equal(fdi_diag_result(&dx, &out.end_ex), FDI_OK);
         if ((j < 0) || (t <= t_fault))
         {
@@ -263,7 +267,7 @@ static void test_isolation_episodes(void **state)
     {
         fdi_diag_t d;
         fdi_diag_result_t res;
-        fdi_inputs_t in;
+        fdi_frame_t in;
         fdi_diag_config_t c = config(FDI_ISO_EXONERATION);
         veh_meas_cfg_t mc;
         test_rng_t rng = {11ULL};
@@ -283,7 +287,7 @@ static void test_isolation_episodes(void **state)
             fdi_iso_result_t ne;
             mc.f[j] = ((t > 20.0) && (t <= 20.5)) ? size[j] : 0.0;
             veh_measure(t, &mc, &rng, &in);
-            assert_int_equal(fdi_diag_step(&d, &in, FDI_SIGM_ALL), FDI_OK);
+            assert_int_equal(fdi_diag_step(&d, &in, ROMO_SIGM_ALL), FDI_OK);
             assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
             assert_int_equal(res.alarm_mask & ~res.accused_mask, 0U);
             assert_true(res.iso.detected == (res.accused_mask != 0U));
@@ -339,22 +343,22 @@ static void test_kind_none(void **state)
     fdi_table_t t = fdi_kin_table;
     fdi_diag_t d;
     fdi_diag_config_t c = config(FDI_ISO_EXONERATION);
-    fdi_inputs_t in;
+    fdi_frame_t in;
     veh_meas_cfg_t mc;
     test_rng_t rng = {3ULL};
     uint32_t k;
     (void)state;
     memcpy(tests, fdi_kin_table.tests, sizeof tests);
-    tests[3].kind = FDI_GEN_NONE;
+    tests[3].gen = NULL;
     t.tests = tests;
     c.table = &t;
     noisy(&mc);
     assert_int_equal(fdi_diag_init(&d, &c), FDI_OK);
     for (k = 1U; k <= WARMUP + 5U; ++k)
     {
-        (void)step_eval_mask(&d, k * DT, &mc, &rng, FDI_SIGM_ALL, &in);
+        (void)step_eval_mask(&d, k * DT, &mc, &rng, ROMO_SIGM_ALL, &in);
     }
-    assert_int_equal(step_eval_mask(&d, k * DT, &mc, &rng, FDI_SIGM_ALL, &in), 0x7U);
+    assert_int_equal(step_eval_mask(&d, k * DT, &mc, &rng, ROMO_SIGM_ALL, &in), 0x7U);
 }
 
 /* 1e6 steps (2.8 h) of fault-free, noisy driving: no alarm, results stay finite. */

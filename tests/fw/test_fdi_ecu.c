@@ -3,7 +3,8 @@
  * arguments, the E2E CRC against the CRC8 SAE-J1850 check value, every reject reason (counted, ignored),
  * the alive counter wrap, timeouts -> "not evaluable", step scheduling (strict boundaries, catch-up limit,
  * time wrap-around, independence of the poll pattern) and the diagnosis frame (E2E, counter, fields) for
- * a fault-free drive and a drifting vx sensor (f4).
+ * a fault-free drive and a drifting vx sensor (f4), on the ROMO bus generated from dbc/romo.dbc; the bus
+ * description checks (fdi_ecu_bus_check).
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -13,7 +14,10 @@
 
 #include "fdi_ecu.h"
 #include "fdi_kin_table.h"
-#include "fdi_test_util.h"
+#include "fdi_romo_bus.h"
+#include "fdi_romo_ecu.h"
+#include "fdi_romo_kin.h"
+#include "fdi_test_vehicle.h"
 
 #define ID_MD 80U
 #define ID_IMU 128U
@@ -23,6 +27,8 @@
 #define DID_IMU 4224U
 #define DID_VEL 4232U
 #define DID_DIAG 4608U
+#define MSG_IMU 1 /* index of IMU_Motion in fdi_romo_bus.msgs (messages in ID order) */
+#define MSG_VEL 2
 
 /* ------------------------------------------------------------------------------------------ frames */
 
@@ -49,20 +55,20 @@ static void protect(uint8_t *d, uint16_t data_id, uint8_t counter, uint8_t statu
     d[0] = fdi_ecu_e2e_crc(data_id, d, 8U);
 }
 
-static void imu_frame(uint8_t *d, const fdi_inputs_t *in, uint8_t counter, uint8_t status)
+static void imu_frame(uint8_t *d, const fdi_frame_t *in, uint8_t counter, uint8_t status)
 {
     memset(d, 0, 8);
-    put_i16(&d[2], (double)in->ax_m, 0.001);
-    put_i16(&d[4], (double)in->ay_m, 0.001);
-    put_i16(&d[6], (double)in->psidot_m, 0.0001);
+    put_i16(&d[2], (double)in->value[ROMO_SIG_AX_M], 0.001);
+    put_i16(&d[4], (double)in->value[ROMO_SIG_AY_M], 0.001);
+    put_i16(&d[6], (double)in->value[ROMO_SIG_PSIDOT_M], 0.0001);
     protect(d, DID_IMU, counter, status);
 }
 
-static void vel_frame(uint8_t *d, const fdi_inputs_t *in, uint8_t counter)
+static void vel_frame(uint8_t *d, const fdi_frame_t *in, uint8_t counter)
 {
     memset(d, 0, 8);
-    put_i16(&d[2], (double)in->vx_m, 0.001);
-    put_i16(&d[4], (double)in->vy_m, 0.001);
+    put_i16(&d[2], (double)in->value[ROMO_SIG_VX_M], 0.001);
+    put_i16(&d[4], (double)in->value[ROMO_SIG_VY_M], 0.001);
     protect(d, DID_VEL, counter, 0U);
 }
 
@@ -126,7 +132,7 @@ static void bus_run(fdi_ecu_t *e, bus_t *b, uint32_t k0, uint32_t k1)
     {
         const uint32_t t = b->t0_us + k * 1000U;
         const double ts = (double)k * 1e-3;
-        fdi_inputs_t in;
+        fdi_frame_t in;
         uint8_t d[8];
         b->mc.f[3] = (ts > b->f4_t) ? b->f4_rate * (ts - b->f4_t) : 0.0;
         veh_measure(ts, &b->mc, &b->rng, &in);
@@ -156,9 +162,9 @@ static void bus_run(fdi_ecu_t *e, bus_t *b, uint32_t k0, uint32_t k1)
 static fdi_ecu_config_t kin_config(void)
 {
     fdi_ecu_config_t c;
-    assert_int_equal(fdi_ecu_config_default(&c, &fdi_kin_table), FDI_OK);
-    c.diag.d_x = (float)VEH_DX;
-    c.diag.d_y = (float)VEH_DY;
+    assert_int_equal(fdi_romo_ecu_config_default(&c, &fdi_kin_table), FDI_OK);
+    c.diag.gen_param[FDI_ROMO_KIN_PARAM_D_X] = (float)VEH_DX;
+    c.diag.gen_param[FDI_ROMO_KIN_PARAM_D_Y] = (float)VEH_DY;
     return c;
 }
 
@@ -198,8 +204,48 @@ static void test_bad_args(void **state)
     fdi_ecu_result_t res;
     uint8_t d[8] = {0};
     (void)state;
-    assert_int_equal(fdi_ecu_config_default(NULL, &fdi_kin_table), FDI_BAD_ARG);
-    assert_int_equal(fdi_ecu_config_default(&c, NULL), FDI_BAD_ARG);
+    fdi_ecu_bus_t bus = fdi_romo_bus;
+    fdi_ecu_msg_desc_t msgs[FDI_ECU_MAX_MSGS];
+    uint32_t i;
+    assert_int_equal(fdi_ecu_config_default(NULL, &fdi_kin_table, &fdi_romo_bus), FDI_BAD_ARG);
+    assert_int_equal(fdi_ecu_config_default(&c, NULL, &fdi_romo_bus), FDI_BAD_ARG);
+    assert_int_equal(fdi_ecu_config_default(&c, &fdi_kin_table, NULL), FDI_BAD_ARG);
+    assert_int_equal(fdi_romo_ecu_config_default(NULL, &fdi_kin_table), FDI_BAD_ARG);
+    /* bus descriptions the core refuses */
+    assert_int_equal(fdi_ecu_bus_check(&fdi_romo_bus, &fdi_kin_table), FDI_OK);
+    assert_int_equal(fdi_ecu_bus_check(NULL, &fdi_kin_table), FDI_BAD_ARG);
+    assert_int_equal(fdi_ecu_bus_check(&fdi_romo_bus, NULL), FDI_BAD_ARG);
+    for (i = 0U; i < (uint32_t)fdi_romo_bus.n_msgs; ++i)
+    {
+        msgs[i] = fdi_romo_bus.msgs[i];
+    }
+    bus.msgs = msgs;
+    assert_int_equal(fdi_ecu_bus_check(&bus, &fdi_kin_table), FDI_OK);
+    msgs[2].can_id = msgs[1].can_id; /* an ID twice */
+    assert_int_equal(fdi_ecu_bus_check(&bus, &fdi_kin_table), FDI_BAD_ARG);
+    msgs[2] = fdi_romo_bus.msgs[2];
+    msgs[2].signals |= ROMO_SIGM_OMEGA1_M; /* mask != indices */
+    assert_int_equal(fdi_ecu_bus_check(&bus, &fdi_kin_table), FDI_BAD_ARG);
+    msgs[2] = fdi_romo_bus.msgs[2];
+    msgs[2].decode = NULL;
+    assert_int_equal(fdi_ecu_bus_check(&bus, &fdi_kin_table), FDI_BAD_ARG);
+    msgs[2] = fdi_romo_bus.msgs[2];
+    msgs[2].dlc = 9U;
+    assert_int_equal(fdi_ecu_bus_check(&bus, &fdi_kin_table), FDI_BAD_ARG);
+    msgs[2] = fdi_romo_bus.msgs[2];
+    msgs[2].can_id = fdi_romo_bus.diag_id; /* the diagnosis frame as an input */
+    assert_int_equal(fdi_ecu_bus_check(&bus, &fdi_kin_table), FDI_BAD_ARG);
+    msgs[2] = fdi_romo_bus.msgs[2];
+    bus.encode_diag = NULL;
+    assert_int_equal(fdi_ecu_bus_check(&bus, &fdi_kin_table), FDI_BAD_ARG);
+    bus.encode_diag = fdi_romo_bus.encode_diag;
+    bus.n_msgs = (uint8_t)(FDI_ECU_MAX_MSGS + 1U);
+    assert_int_equal(fdi_ecu_bus_check(&bus, &fdi_kin_table), FDI_BAD_ARG);
+    assert_int_equal(fdi_ecu_config_default(&c, &fdi_kin_table, &bus), FDI_BAD_ARG);
+    bus.n_msgs = fdi_romo_bus.n_msgs;
+    c = kin_config();
+    c.bus = NULL;
+    assert_int_equal(fdi_ecu_init(&e, &c), FDI_BAD_ARG);
     c = kin_config();
     assert_int_equal(fdi_ecu_init(NULL, &c), FDI_BAD_ARG);
     assert_int_equal(fdi_ecu_init(&e, NULL), FDI_BAD_ARG);
@@ -245,10 +291,11 @@ static void test_e2e_crc_check_value(void **state)
     const uint8_t d[8] = {0x00U, '3', '4', '5', '6', '7', '8', '9'};
     (void)state;
     assert_int_equal(fdi_ecu_e2e_crc((uint16_t)('1' | ('2' << 8)), d, 8U), 0x4BU);
-    assert_int_equal(fdi_ecu_msg_index(ID_IMU), FDI_ECU_MSG_IMU);
-    assert_int_equal(fdi_ecu_msg_index(ID_BBW), FDI_ECU_MSG_BBW);
-    assert_int_equal(fdi_ecu_msg_index(512U), -1);
-    assert_int_equal(fdi_ecu_msg_index(0x80000080U), -1); /* extended-frame flag */
+    assert_int_equal(fdi_ecu_msg_index(&fdi_romo_bus, ID_IMU), 1);
+    assert_int_equal(fdi_ecu_msg_index(&fdi_romo_bus, ID_BBW), 7);
+    assert_int_equal(fdi_ecu_msg_index(&fdi_romo_bus, 512U), -1);
+    assert_int_equal(fdi_ecu_msg_index(&fdi_romo_bus, 0x80000080U), -1); /* extended-frame flag */
+    assert_int_equal(fdi_ecu_msg_index(NULL, ID_IMU), -1);
 }
 
 static void expect_rejects(const fdi_ecu_t *e, const uint32_t *want)
@@ -271,7 +318,7 @@ static void test_reject_reasons(void **state)
 {
     fdi_ecu_t e;
     const fdi_ecu_config_t c = kin_config();
-    fdi_inputs_t in;
+    fdi_frame_t in;
     uint8_t d[8];
     uint32_t want[FDI_ECU_N_REASONS] = {0U};
     fdi_ecu_counters_t cnt;
@@ -322,12 +369,12 @@ static void test_reject_reasons(void **state)
 
     assert_int_equal(fdi_ecu_counters(&e, &cnt), FDI_OK);
     assert_int_equal(cnt.frames, 14U);
-    assert_int_equal(cnt.msg[FDI_ECU_MSG_IMU].can_id, ID_IMU);
-    assert_int_equal(cnt.msg[FDI_ECU_MSG_IMU].received, 10U);
-    assert_int_equal(cnt.msg[FDI_ECU_MSG_IMU].accepted, 3U);
-    assert_int_equal(cnt.msg[FDI_ECU_MSG_IMU].rejected[FDI_ECU_REJ_BAD_CRC], 1U);
-    assert_int_equal(cnt.msg[FDI_ECU_MSG_VEL].rejected[FDI_ECU_REJ_BAD_CRC], 1U);
-    assert_int_equal(cnt.msg[FDI_ECU_MSG_IMU].rejected[FDI_ECU_REJ_UNKNOWN_ID], 0U);
+    assert_int_equal(cnt.msg[MSG_IMU].can_id, ID_IMU);
+    assert_int_equal(cnt.msg[MSG_IMU].received, 10U);
+    assert_int_equal(cnt.msg[MSG_IMU].accepted, 3U);
+    assert_int_equal(cnt.msg[MSG_IMU].rejected[FDI_ECU_REJ_BAD_CRC], 1U);
+    assert_int_equal(cnt.msg[MSG_VEL].rejected[FDI_ECU_REJ_BAD_CRC], 1U);
+    assert_int_equal(cnt.msg[MSG_IMU].rejected[FDI_ECU_REJ_UNKNOWN_ID], 0U);
 
     /* the IMU's LOCAL_FAULT status makes its signals invalid at the next step, before any timeout */
     {
@@ -335,7 +382,7 @@ static void test_reject_reasons(void **state)
         assert_int_equal(fdi_ecu_poll(&e, 100U + 10001U, &tx), FDI_OK);
         assert_int_equal(fdi_ecu_result(&e, &res), FDI_OK);
         assert_int_equal(res.step, 1U);
-        assert_int_equal(res.validity & (FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M), 0U);
+        assert_int_equal(res.validity & (ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M), 0U);
         assert_int_equal(res.status, FDI_ECU_STATUS_INPUT_INVALID);
     }
 }
@@ -346,7 +393,7 @@ static void test_counter_wrap_and_delta(void **state)
 {
     fdi_ecu_t e;
     fdi_ecu_config_t c = kin_config();
-    fdi_inputs_t in;
+    fdi_frame_t in;
     uint8_t d[8];
     uint32_t k;
     fdi_ecu_counters_t cnt;
@@ -368,7 +415,7 @@ static void test_counter_wrap_and_delta(void **state)
     imu_frame(d, &in, (uint8_t)((40U + 10U + 2U) % 15U), 0U); /* 3 ahead: a jump even with delta 2 */
     assert_int_equal(fdi_ecu_rx(&e, ID_IMU, 8U, d, 40U * 5000U), FDI_OK);
     assert_int_equal(fdi_ecu_counters(&e, &cnt), FDI_OK);
-    assert_int_equal(cnt.msg[FDI_ECU_MSG_IMU].accepted, 39U);
+    assert_int_equal(cnt.msg[MSG_IMU].accepted, 39U);
     assert_int_equal(cnt.rejected[FDI_ECU_REJ_COUNTER_JUMP], 1U);
     assert_int_equal(cnt.rejected[FDI_ECU_REJ_REPEATED_COUNTER], 0U);
     /* the sender restarts: silent for longer than the IMU timeout (15 ms), then its counter starts anywhere:
@@ -378,7 +425,7 @@ static void test_counter_wrap_and_delta(void **state)
     imu_frame(d, &in, 4U, 0U);
     assert_int_equal(fdi_ecu_rx(&e, ID_IMU, 8U, d, 40U * 5000U + 20001U), FDI_OK);
     assert_int_equal(fdi_ecu_counters(&e, &cnt), FDI_OK);
-    assert_int_equal(cnt.msg[FDI_ECU_MSG_IMU].accepted, 40U);
+    assert_int_equal(cnt.msg[MSG_IMU].accepted, 40U);
     assert_int_equal(cnt.rejected[FDI_ECU_REJ_COUNTER_JUMP], 2U);
 }
 
@@ -473,9 +520,9 @@ static void test_fault_free_drive(void **state)
     assert_int_equal(cnt.steps, 5999U); /* the last boundary (60 s) is not crossed yet */
     assert_int_equal(cnt.tx_frames, cnt.steps);
     assert_int_equal(b.n_tx, cnt.steps);
-    assert_int_equal(cnt.msg[FDI_ECU_MSG_IMU].accepted, 12000U);
-    assert_int_equal(cnt.msg[FDI_ECU_MSG_VEL].accepted, 6000U);
-    assert_int_equal(cnt.msg[FDI_ECU_MSG_VEL].timeouts, 0U);
+    assert_int_equal(cnt.msg[MSG_IMU].accepted, 12000U);
+    assert_int_equal(cnt.msg[MSG_VEL].accepted, 6000U);
+    assert_int_equal(cnt.msg[MSG_VEL].timeouts, 0U);
 }
 
 /* VelocitySensor silent for 1 s: after its 30 ms timeout every kinematic test is not evaluable. */
@@ -501,7 +548,7 @@ static void test_timeout_not_evaluable(void **state)
     assert_int_equal(fdi_ecu_result(&e, &res), FDI_OK);
     assert_int_equal(res.t_us, 5000U + 5030000U); /* 39 ms old: timed out */
     assert_int_equal(res.diag.evaluable_mask, 0U);
-    assert_int_equal(res.validity & (FDI_SIGM_VX_M | FDI_SIGM_VY_M), 0U);
+    assert_int_equal(res.validity & (ROMO_SIGM_VX_M | ROMO_SIGM_VY_M), 0U);
     assert_int_equal(res.status, FDI_ECU_STATUS_INPUT_INVALID);
     assert_int_equal(parse_diag(b.last_tx).status, FDI_ECU_STATUS_INPUT_INVALID);
     bus_run(&e, &b, 5036U, 6000U);
@@ -515,8 +562,8 @@ static void test_timeout_not_evaluable(void **state)
     assert_int_equal(res.diag.evaluable_mask, 0xFU);
     assert_false(res.diag.iso.detected);
     assert_int_equal(fdi_ecu_counters(&e, &cnt), FDI_OK);
-    assert_int_equal(cnt.msg[FDI_ECU_MSG_VEL].timeouts, 1U);
-    assert_int_equal(cnt.msg[FDI_ECU_MSG_IMU].timeouts, 0U);
+    assert_int_equal(cnt.msg[MSG_VEL].timeouts, 1U);
+    assert_int_equal(cnt.msg[MSG_IMU].timeouts, 0U);
 }
 
 /* f4 drifting 0.05 m/s per s from 30 s: isolated as f4 by 60 s; the frame carries class 4. Polling only on a

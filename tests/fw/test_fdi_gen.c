@@ -1,6 +1,7 @@
 /*
- * test_fdi_gen.c - residual generators (kinematic MSO1..MSO4, derivative and observer forms) on the
- * analytic reference vehicle of fdi_test_util.h: arguments, input masks, non-finite inputs, residual ~ 0
+ * test_fdi_gen.c - residual generators through their descriptors (fdi_gen.h), with the hand-written kinematic
+ * MSO1..MSO4 of the ROMO target (derivative and observer forms, fdi_romo_kin.h) on the analytic reference
+ * vehicle of fdi_test_util.h: arguments, descriptors, input masks, non-finite inputs, residual ~ 0
  * on consistent signals (stated bounds), each additive fault moves exactly the residuals whose MSO
  * contains it (others stay bit-identical), 1e6-step run.
  */
@@ -11,13 +12,15 @@
 #include <cmocka.h>
 
 #include "fdi_gen.h"
-#include "fdi_test_util.h"
+#include "fdi_gen_impl.h"
+#include "fdi_romo_kin.h"
+#include "fdi_test_vehicle.h"
 
 #define DT 0.01
 #define N_KINDS 6
 
-static const fdi_gen_kind_t kinds[N_KINDS] = {FDI_GEN_KIN_X_DERIV, FDI_GEN_KIN_Y_DERIV, FDI_GEN_KIN_ARR3,
-                                              FDI_GEN_KIN_ARR4,    FDI_GEN_KIN_X_OBS,   FDI_GEN_KIN_Y_OBS};
+static const fdi_gen_desc_t *const kinds[N_KINDS] = {&fdi_romo_kin_x_deriv, &fdi_romo_kin_y_deriv, &fdi_romo_kin_arr3,
+                                                    &fdi_romo_kin_arr4,    &fdi_romo_kin_x_obs,   &fdi_romo_kin_y_obs};
 /* faults (bit j = f(j+1)) of the MSO each kind implements */
 static const uint32_t kind_faults[N_KINDS] = {0x1DU, 0x1EU, 0x0FU, 0x17U, 0x1DU, 0x1EU};
 /*
@@ -32,7 +35,7 @@ static const double consistent_bound[N_KINDS] = {7e-4, 1.2e-3, 2.7e-3, 2.4e-3, 3
 
 static void params(fdi_gen_param_t *p)
 {
-    const fdi_gen_config_t cfg = {(float)DT, 1.0f, 0.7071f, 2.0f, (float)VEH_DX, (float)VEH_DY};
+    const fdi_gen_config_t cfg = {(float)DT, 1.0f, 0.7071f, 2.0f, {(float)VEH_DX, (float)VEH_DY, 0.0f, 0.0f}};
     assert_int_equal(fdi_gen_param_init(p, &cfg), FDI_OK);
 }
 
@@ -40,13 +43,14 @@ static void test_bad_args(void **state)
 {
     fdi_gen_param_t p;
     fdi_gen_t g;
-    fdi_inputs_t in;
+    fdi_frame_t in;
     float r = 0.0f;
     veh_meas_cfg_t mc = {{0.0, 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0, 0.0}};
     test_rng_t rng = {1ULL};
-    const fdi_gen_config_t bad_fc = {0.01f, 80.0f, 0.7071f, 2.0f, 1.0f, 0.0f};
-    const fdi_gen_config_t bad_gain = {0.01f, 0.5f, 0.7071f, -1.0f, 1.0f, 0.0f};
-    const fdi_gen_config_t nan_dx = {0.01f, 0.5f, 0.7071f, 2.0f, NAN, 0.0f};
+    const fdi_gen_config_t bad_fc = {0.01f, 80.0f, 0.7071f, 2.0f, {1.0f, 0.0f, 0.0f, 0.0f}};
+    const fdi_gen_config_t bad_gain = {0.01f, 0.5f, 0.7071f, -1.0f, {1.0f, 0.0f, 0.0f, 0.0f}};
+    const fdi_gen_config_t nan_dx = {0.01f, 0.5f, 0.7071f, 2.0f, {NAN, 0.0f, 0.0f, 0.0f}};
+    fdi_gen_desc_t bad = fdi_romo_kin_arr3;
     (void)state;
     assert_int_equal(fdi_gen_param_init(NULL, &bad_fc), FDI_BAD_ARG);
     assert_int_equal(fdi_gen_param_init(&p, NULL), FDI_BAD_ARG);
@@ -55,27 +59,51 @@ static void test_bad_args(void **state)
     assert_int_equal(fdi_gen_param_init(&p, &nan_dx), FDI_NOT_FINITE);
     params(&p);
     veh_measure(0.0, &mc, &rng, &in);
-    assert_int_equal(fdi_gen_init(NULL, FDI_GEN_KIN_ARR3), FDI_BAD_ARG);
-    assert_int_equal(fdi_gen_init(&g, FDI_GEN_NONE), FDI_BAD_ARG);
-    assert_int_equal(fdi_gen_init(&g, (fdi_gen_kind_t)99), FDI_BAD_ARG);
-    assert_int_equal(fdi_gen_init(&g, FDI_GEN_KIN_ARR3), FDI_OK);
+    assert_int_equal(fdi_gen_init(NULL, &fdi_romo_kin_arr3), FDI_BAD_ARG);
+    assert_int_equal(fdi_gen_init(&g, NULL), FDI_BAD_ARG);
+    bad.step = NULL; /* no step function */
+    assert_int_equal(fdi_gen_init(&g, &bad), FDI_BAD_ARG);
+    bad = fdi_romo_kin_arr3;
+    bad.name = NULL;
+    assert_int_equal(fdi_gen_init(&g, &bad), FDI_BAD_ARG);
+    bad = fdi_romo_kin_arr3;
+    bad.input_mask = 0U;
+    assert_int_equal(fdi_gen_init(&g, &bad), FDI_BAD_ARG);
+    bad = fdi_romo_kin_arr3;
+    bad.n_filters = (uint8_t)(FDI_GEN_MAX_FILTERS + 1U);
+    assert_int_equal(fdi_gen_init(&g, &bad), FDI_BAD_ARG);
+    bad = fdi_romo_kin_arr3;
+    bad.n_obs = 2U;
+    assert_int_equal(fdi_gen_init(&g, &bad), FDI_BAD_ARG);
+    assert_int_equal(fdi_gen_desc_check(NULL), FDI_BAD_ARG);
+    assert_int_equal(fdi_gen_init(&g, &fdi_romo_kin_arr3), FDI_OK);
     assert_int_equal(fdi_gen_reset(NULL, &p, &in), FDI_BAD_ARG);
     assert_int_equal(fdi_gen_reset(&g, NULL, &in), FDI_BAD_ARG);
     assert_int_equal(fdi_gen_reset(&g, &p, NULL), FDI_BAD_ARG);
     assert_int_equal(fdi_gen_reset(&g, &p, &in), FDI_OK);
-    assert_int_equal(fdi_gen_step(&g, &p, &in, NULL), FDI_BAD_ARG);
-    assert_int_equal(fdi_gen_step(NULL, &p, &in, &r), FDI_BAD_ARG);
+    assert_int_equal(fdi_gen_step(&g, &p, &in, NULL, NULL), FDI_BAD_ARG);
+    assert_int_equal(fdi_gen_step(NULL, &p, &in, &r, NULL), FDI_BAD_ARG);
+    assert_int_equal(fdi_gen_sens_count(NULL), 0U);
+    assert_int_equal(fdi_gen_sens_count(&fdi_romo_kin_arr3), 0U);
+    assert_false(fdi_gen_in_domain(NULL, &in));
+    assert_false(fdi_gen_in_domain(&fdi_romo_kin_arr3, NULL));
+    assert_true(fdi_gen_in_domain(&fdi_romo_kin_arr3, &in)); /* no domain function: always */
+    assert_int_equal(fdi_gen_sens_finish(FDI_OK, NULL, 1U), FDI_BAD_ARG);
 }
 
 static void test_input_masks(void **state)
 {
     (void)state;
-    assert_int_equal(fdi_gen_inputs(FDI_GEN_KIN_X_DERIV), FDI_SIGM_AX_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M);
-    assert_int_equal(fdi_gen_inputs(FDI_GEN_KIN_Y_OBS), FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M);
-    assert_int_equal(fdi_gen_inputs(FDI_GEN_KIN_ARR3), FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M);
-    assert_int_equal(fdi_gen_inputs(FDI_GEN_KIN_ARR4), FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VY_M);
-    assert_int_equal(fdi_gen_inputs(FDI_GEN_NONE), 0U);
-    assert_int_equal(fdi_gen_inputs((fdi_gen_kind_t)42), 0U);
+    uint32_t i;
+    assert_int_equal(fdi_romo_kin_x_deriv.input_mask,
+                     ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M);
+    assert_int_equal(fdi_romo_kin_y_obs.input_mask, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M);
+    assert_int_equal(fdi_romo_kin_arr3.input_mask, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M);
+    assert_int_equal(fdi_romo_kin_arr4.input_mask, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VY_M);
+    for (i = 0U; i < (uint32_t)N_KINDS; ++i)
+    {
+        assert_int_equal(fdi_gen_desc_check(kinds[i]), FDI_OK);
+    }
 }
 
 /* A NaN in a signal the kind reads is rejected; a NaN in a signal it does not read is ignored. */
@@ -83,21 +111,21 @@ static void test_non_finite(void **state)
 {
     fdi_gen_param_t p;
     fdi_gen_t g;
-    fdi_inputs_t in;
+    fdi_frame_t in;
     float r = 5.0f;
     veh_meas_cfg_t mc = {{0.0, 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0, 0.0}};
     test_rng_t rng = {1ULL};
     (void)state;
     params(&p);
     veh_measure(0.0, &mc, &rng, &in);
-    assert_int_equal(fdi_gen_init(&g, FDI_GEN_KIN_ARR3), FDI_OK);
+    assert_int_equal(fdi_gen_init(&g, &fdi_romo_kin_arr3), FDI_OK);
     assert_int_equal(fdi_gen_reset(&g, &p, &in), FDI_OK);
-    in.vy_m = NAN; /* ARR3 does not use vy_m */
-    in.omega2_m = INFINITY;
-    assert_int_equal(fdi_gen_step(&g, &p, &in, &r), FDI_OK);
-    in.ay_m = NAN;
+    in.value[ROMO_SIG_VY_M] = NAN; /* ARR3 does not use vy_m */
+    in.value[ROMO_SIG_OMEGA2_M] = INFINITY;
+    assert_int_equal(fdi_gen_step(&g, &p, &in, &r, NULL), FDI_OK);
+    in.value[ROMO_SIG_AY_M] = NAN;
     r = 5.0f;
-    assert_int_equal(fdi_gen_step(&g, &p, &in, &r), FDI_NOT_FINITE);
+    assert_int_equal(fdi_gen_step(&g, &p, &in, &r, NULL), FDI_NOT_FINITE);
     assert_int_equal(fdi_gen_reset(&g, &p, &in), FDI_NOT_FINITE);
     assert_near(r, 5.0, 0.0);
 }
@@ -108,12 +136,12 @@ static void test_non_finite(void **state)
  */
 #define T_END 40.0
 #define N_OUT 3001
-static void run(fdi_gen_kind_t kind, int j, double size, double noise_scale, float *out)
+static void run(const fdi_gen_desc_t *kind, int j, double size, double noise_scale, float *out)
 {
     static const double sigma[5] = {0.02, 0.02, 0.001, 0.01, 0.01};
     fdi_gen_param_t p;
     fdi_gen_t g;
-    fdi_inputs_t in;
+    fdi_frame_t in;
     veh_meas_cfg_t mc = {{0.0, 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0, 0.0}};
     test_rng_t rng = {42ULL};
     int k;
@@ -135,7 +163,7 @@ static void run(fdi_gen_kind_t kind, int j, double size, double noise_scale, flo
             mc.f[j] = size * (1.0 + 0.1 * (t - 20.0));
         }
         veh_measure(t, &mc, &rng, &in);
-        assert_int_equal(fdi_gen_step(&g, &p, &in, &r), FDI_OK);
+        assert_int_equal(fdi_gen_step(&g, &p, &in, &r, NULL), FDI_OK);
         if (k >= 1000)
         {
             out[k - 1000] = r;
@@ -157,10 +185,10 @@ static void test_consistent_signals(void **state)
         {
             max_r = fmax(max_r, fabs((double)r[k]));
         }
-        print_message("kind %d: max |r| = %g (bound %g)\n", (int)kinds[n], max_r, consistent_bound[n]);
+        print_message("%s %u: max |r| = %g (bound %g)\n", kinds[n]->name, (unsigned)n, max_r, consistent_bound[n]);
         if (!(max_r <= consistent_bound[n]))
         {
-            print_error("kind %d: max |r| = %g > %g\n", (int)kinds[n], max_r, consistent_bound[n]);
+            print_error("%s %u: max |r| = %g > %g\n", kinds[n]->name, (unsigned)n, max_r, consistent_bound[n]);
         }
         assert_true(max_r <= consistent_bound[n]);
     }
@@ -190,12 +218,12 @@ static void test_fault_sensitivity(void **state)
             {
                 dev = fmax(dev, fabs((double)rf[k] - (double)r0[k]));
             }
-            print_message("kind %d fault f%d: deviation %g\n", (int)kinds[n], j + 1, dev);
+            print_message("%s %u fault f%d: deviation %g\n", kinds[n]->name, (unsigned)n, j + 1, dev);
             if ((kind_faults[n] & (1U << j)) != 0U)
             {
                 if (!(dev > 5.0 * consistent_bound[n]))
                 {
-                    print_error("kind %d fault f%d: deviation %g too small\n", (int)kinds[n], j + 1, dev);
+                    print_error("%s %u fault f%d: deviation %g too small\n", kinds[n]->name, (unsigned)n, j + 1, dev);
                 }
                 assert_true(dev > 5.0 * consistent_bound[n]);
             }
@@ -212,21 +240,21 @@ static void test_long_run(void **state)
 {
     fdi_gen_param_t p;
     fdi_gen_t g;
-    fdi_inputs_t in;
+    fdi_frame_t in;
     veh_meas_cfg_t mc = {{0.0, 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0, 0.0}};
     test_rng_t rng = {7ULL};
     double max_r = 0.0;
     long k;
     (void)state;
     params(&p);
-    assert_int_equal(fdi_gen_init(&g, FDI_GEN_KIN_ARR3), FDI_OK);
+    assert_int_equal(fdi_gen_init(&g, &fdi_romo_kin_arr3), FDI_OK);
     veh_measure(0.0, &mc, &rng, &in);
     assert_int_equal(fdi_gen_reset(&g, &p, &in), FDI_OK);
     for (k = 1; k <= 1000000L; ++k)
     {
         float r = 0.0f;
         veh_measure((double)k * DT, &mc, &rng, &in);
-        assert_int_equal(fdi_gen_step(&g, &p, &in, &r), FDI_OK);
+        assert_int_equal(fdi_gen_step(&g, &p, &in, &r, NULL), FDI_OK);
         if (k > 1000L)
         {
             max_r = fmax(max_r, fabs((double)r));

@@ -68,14 +68,15 @@ static void test_kinematic_table(void **state)
  */
 static const char *const names4[4] = {"a", "b", "c", "d"};
 static const fdi_test_desc_t tests2[2] = {
-    {10U, FDI_GEN_KIN_X_DERIV, 0x7U, FDI_SIGM_ALL, 5.0f, 1.0f, "t0"},
-    {11U, FDI_GEN_KIN_Y_DERIV, 0xBU, FDI_SIGM_ALL, 5.0f, 1.0f, "t1"},
+    {10U, NULL, 0x7U, 0x1U, 5.0f, 1.0f, "t0"},
+    {11U, NULL, 0xBU, 0x1U, 5.0f, 1.0f, "t1"},
 };
 static const uint32_t sig4[4] = {0x3U, 0x3U, 0x1U, 0x2U};
 static const uint32_t class4[4] = {0x3U, 0x3U, 0x4U, 0x8U};
 static const float size4[4 * 2] = {1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 0.0f, 0.0f, 1.0f}; /* classic */
-static const fdi_table_t table4 = {FDI_TABLE_FORMAT_VERSION, {0.01f, 0.5f, 0.7071f, 2.0f}, 4U, 2U, names4,
-                                   tests2, sig4, class4, size4, 1.0f};
+static const char *const signal_names[1] = {"s"};
+static const fdi_table_t table4 = {FDI_TABLE_FORMAT_VERSION, {0.01f, 0.5f, 0.7071f, 2.0f}, 1U, 4U, 2U, signal_names,
+                                   names4, tests2, sig4, class4, size4, 1.0f};
 
 /*
  * Reaction sizes: 3 faults, 3 tests, all faults in every test (one class), but
@@ -86,15 +87,15 @@ static const fdi_table_t table4 = {FDI_TABLE_FORMAT_VERSION, {0.01f, 0.5f, 0.707
  */
 static const char *const names3[3] = {"a", "b", "c"};
 static const fdi_test_desc_t tests3[3] = {
-    {20U, FDI_GEN_KIN_X_DERIV, 0x7U, FDI_SIGM_ALL, 5.0f, 1.0f, "t0"},
-    {21U, FDI_GEN_KIN_Y_DERIV, 0x7U, FDI_SIGM_ALL, 5.0f, 1.0f, "t1"},
-    {22U, FDI_GEN_KIN_ARR3, 0x7U, FDI_SIGM_ALL, 5.0f, 1.0f, "t2"},
+    {20U, NULL, 0x7U, 0x1U, 5.0f, 1.0f, "t0"},
+    {21U, NULL, 0x7U, 0x1U, 5.0f, 1.0f, "t1"},
+    {22U, NULL, 0x7U, 0x1U, 5.0f, 1.0f, "t2"},
 };
 static const uint32_t sig3[3] = {0x7U, 0x7U, 0x7U};
 static const uint32_t class3[3] = {0x7U, 0x7U, 0x7U};
 static const float size3[3 * 3] = {1.0f, 10.0f, 0.0f, 5.0f, 1.0f, 1.0f, 2.0f, 2.0f, 2.0f};
-static const fdi_table_t table3 = {FDI_TABLE_FORMAT_VERSION, {0.01f, 0.5f, 0.7071f, 2.0f}, 3U, 3U, names3,
-                                   tests3, sig3, class3, size3, 2.0f};
+static const fdi_table_t table3 = {FDI_TABLE_FORMAT_VERSION, {0.01f, 0.5f, 0.7071f, 2.0f}, 1U, 3U, 3U, signal_names,
+                                   names3, tests3, sig3, class3, size3, 2.0f};
 
 static void test_reaction_sizes(void **state)
 {

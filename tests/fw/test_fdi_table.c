@@ -9,6 +9,7 @@
 #include <cmocka.h>
 
 #include "fdi_kin_table.h"
+#include "fdi_romo_signals.h"
 #include "fdi_test_util.h"
 
 static fdi_test_desc_t tests_copy[4];
@@ -16,6 +17,8 @@ static uint32_t sig_copy[5];
 static uint32_t class_copy[5];
 static const char *names_copy[5];
 static float size_copy[5 * 4];
+static const char *signal_names_copy[ROMO_SIG_COUNT];
+static fdi_gen_desc_t bad_gen;
 static fdi_table_t t;
 
 /* A writable copy of the kinematic table. */
@@ -43,6 +46,13 @@ static int setup(void **state)
     t.iso_class = class_copy;
     t.fault_names = names_copy;
     t.test_size = size_copy;
+    for (i = 0; i < (int)ROMO_SIG_COUNT; ++i)
+    {
+        signal_names_copy[i] = fdi_kin_table.signal_names[i];
+    }
+    t.signal_names = signal_names_copy;
+    bad_gen = *fdi_kin_table.tests[0].gen; /* test 0 runs a copy of its generator that a case may corrupt */
+    tests_copy[0].gen = &bad_gen;
     return 0;
 }
 
@@ -74,8 +84,14 @@ static void test_corruptions(void **state)
     EXPECT_BAD(t.design.dt = 0.0f);
     EXPECT_BAD(t.design.cutoff_hz = NAN);
     EXPECT_BAD(tests_copy[1].interpretation = NULL);
-    EXPECT_BAD(tests_copy[1].kind = (fdi_gen_kind_t)FDI_GEN_KIND_COUNT);
-    EXPECT_BAD(tests_copy[2].input_mask = FDI_SIGM_AX_M); /* misses signals ARR3 reads */
+    EXPECT_BAD(bad_gen.step = NULL);                     /* an unusable generator descriptor */
+    EXPECT_BAD(bad_gen.sens_mask = 0x20U);               /* sensitivity to a fault outside the test's set */
+    EXPECT_BAD(t.n_signals = 0U);
+    EXPECT_BAD(t.n_signals = 33U);
+    EXPECT_BAD(t.n_signals = 3U);                        /* the tests read signals beyond the first three */
+    EXPECT_BAD(t.signal_names = NULL);
+    EXPECT_BAD(signal_names_copy[18] = NULL);
+    EXPECT_BAD(tests_copy[2].input_mask = ROMO_SIGM_AX_M); /* misses signals ARR3 reads */
     EXPECT_BAD(tests_copy[2].input_mask |= 0x00100000U);  /* no such signal */
     EXPECT_BAD(tests_copy[0].variance = 0.0f);
     EXPECT_BAD(tests_copy[0].gate = INFINITY);
@@ -93,12 +109,12 @@ static void test_corruptions(void **state)
     EXPECT_BAD(t.exoneration_margin = INFINITY);
 }
 
-/* A test without a generator yet (kind NONE) is valid data. */
+/* A test without a generator yet (gen NULL) is valid data. */
 static void test_kind_none_allowed(void **state)
 {
     (void)state;
     (void)setup(NULL);
-    tests_copy[3].kind = FDI_GEN_NONE;
+    tests_copy[3].gen = NULL;
     tests_copy[3].input_mask = 0U;
     assert_int_equal(fdi_table_check(&t), FDI_OK);
 }

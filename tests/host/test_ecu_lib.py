@@ -227,3 +227,41 @@ def test_process_in_c_equals_rx_poll_loop(f4_frames: list[Frame]) -> None:
     assert a.counters() == b.counters()
     assert a.counters().rejected["bad_dlc"] == 1 and a.counters().rejected["unknown_id"] == 1
     assert a.result() == b.result()
+
+
+def test_bus_is_the_dbc() -> None:
+    """The ECU's message table (generated from dbc/romo.dbc into the ROMO target) is the DBC's: the messages node
+    FDI receives in ID order with their cycle times and E2E data IDs, each carrying the frame signals the simulator
+    maps to it, and the diagnosis frame's ID (the one DIAG_ID of the host tools, also from the DBC)."""
+    from fdi_host.can.dbc import DIAG_ID as DBC_DIAG_ID
+    from fdi_host.can.dbc import SIGNAL_MAP
+    from fdi_host.ecu.bindings import bus_info
+
+    db = RomoDatabase()
+    bus = bus_info("romo")
+    received = sorted((m for m in db.db.messages if "FDI" not in m.senders), key=lambda m: m.frame_id)
+    assert bus.messages == tuple((m.name, m.frame_id) for m in received)
+    assert bus.cycle_ms == tuple(db.cycle_time_ms(m.name) for m in received)
+    assert bus.data_ids == tuple(db.data_id(m.name) for m in received)
+    assert bus.diag_id == DIAG_ID == DBC_DIAG_ID == db.message("FDI_Diagnosis").frame_id
+    assert bus.diag_data_id == db.data_id("FDI_Diagnosis")
+    signals = table_info("romo").signal_names
+    for (name, _), mask in zip(bus.messages, bus.signals, strict=True):
+        want = sum(1 << signals.index(s.sim) for s in SIGNAL_MAP if s.message == name and s.sim in signals)
+        assert mask == want, name
+
+
+def test_sensitivities_on_request_change_nothing_else(f4_frames: list[Frame]) -> None:
+    """With sensitivities requested the ECU's results (residuals, alarms, candidates) are the same as without, and
+    each test lists one sensitivity per fault of its generator's sens_mask; without, none are listed."""
+    info = table_info("romo")
+    plain, with_sens = Ecu("romo"), Ecu("romo", sensitivities=True)
+    a, b = _run(plain, f4_frames), _run(with_sens, f4_frames)
+    assert len(a) == len(b) > 0
+    for (_, ra, da), (_, rb, db_) in zip(a, b, strict=True):
+        assert da == db_
+        assert ra.residuals == rb.residuals and ra.candidates == rb.candidates  # type: ignore[attr-defined]
+        assert all(s == () for s in ra.sensitivities)  # type: ignore[attr-defined]
+    last = b[-1][1]
+    assert [len(s) for s in last.sensitivities] == [len(info.sens_faults(i)) for i in range(info.n_tests)]  # type: ignore[attr-defined]
+    assert any(len(s) > 0 for s in last.sensitivities)  # type: ignore[attr-defined]

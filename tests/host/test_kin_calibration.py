@@ -1,5 +1,5 @@
-"""The kinematic table's calibration header (fw/generated/fdi_kin_calibration.h) is reproducible and up to date:
-the committed copy equals what `fdi-tune kin-calibration` computes now (variances from fault-free
+"""The kinematic table's calibration header (fw/vehicles/romo/generated/fdi_kin_calibration.h) is reproducible and
+up to date: the committed copy equals what `fdi-tune kin-calibration` computes now (variances from fault-free
 simulated drives, reaction sizes from step faults, both through the C ECU core). ~4 min."""
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import pytest
 
 from fdi_host.tuning.cli import main
 
-HEADER = Path(__file__).resolve().parents[2] / "fw" / "generated" / "fdi_kin_calibration.h"
+HEADER = Path(__file__).resolve().parents[2] / "fw" / "vehicles" / "romo" / "generated" / "fdi_kin_calibration.h"
 
 
 def test_committed_header_is_up_to_date(

@@ -1,9 +1,10 @@
-"""Export a test selection as the firmware's diagnosis table (fw/include/fdi_table.h types).
+"""Export a test selection as a vehicle's diagnosis table (fw/include/fdi_table.h types).
 
-Writes ``<name>.h`` and ``<name>.c``: one ``const fdi_table_t`` with the selected MSO sets (fault bitmask,
-signals used, generator kind, gate and variance, interpretation), the fault names, the fault signature
-matrix as bitmask rows, the isolability classes, the reaction size of each (fault, test) that decides
-exoneration (fdi_analysis.export.fault_sizes), and per test the equations and unknowns of its MSO set.
+Writes ``fdi_<vehicle>_table.h`` and ``.c``: one ``const fdi_table_t`` with the selected MSO sets (fault bitmask,
+signals used, the descriptor of its generated generator, gate and variance, interpretation), the signal and fault
+names, the fault signature matrix as bitmask rows, the isolability classes, the reaction size of each (fault,
+test) that decides exoneration (fdi_analysis.export.fault_sizes), and per test the equations and unknowns of its
+MSO set. What goes into the file is computed first (`table_file`), then rendered from the named templates below.
 Output is deterministic: the same model and selection give byte-identical files.
 """
 
@@ -11,156 +12,223 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
+from string import Template
 
 from fdi_analysis.export.c_expr import c_float
+from fdi_analysis.export.c_names import VehicleNames
+from fdi_analysis.export.c_text import banner, c_string, comment_text
 from fdi_analysis.export.fault_sizes import FaultSizes, test_size_rows
+from fdi_analysis.export.generators import kind_name
 from fdi_analysis.export.thresholds import Thresholds
 from fdi_analysis.fault_matrix import Candidate
 from fdi_analysis.interpretation import interpret
 from fdi_analysis.model import Model
 from fdi_analysis.mso.results import bits
 
-# Hand-written generators of fw/ (fdi_gen_kind_t), by the equation set of the MSO they implement.
-KNOWN_GENERATORS: dict[frozenset[str], str] = {
-    frozenset({"K1", "D1", "S1", "S3", "S4", "S5"}): "FDI_GEN_KIN_X_DERIV",
-    frozenset({"K2", "D2", "S2", "S3", "S4", "S5"}): "FDI_GEN_KIN_Y_DERIV",
-    frozenset({"K1", "K2", "D1", "D2", "S1", "S2", "S3", "S4"}): "FDI_GEN_KIN_ARR3",
-    frozenset({"K1", "K2", "D1", "D2", "S1", "S2", "S3", "S5"}): "FDI_GEN_KIN_ARR4",
-}
-NO_GENERATOR = "FDI_GEN_NONE"
 MAX_TESTS = 32
 MAX_FAULTS = 32
+NO_GENERATOR = "NULL"
 
 
 class ExportError(ValueError):
     """The selection cannot be expressed in the firmware's table format."""
 
 
-def _c_string(s: str) -> str:
-    return '"' + s.replace("\\", "\\\\").replace('"', '\\"') + '"'
+# ------------------------------------------------------------------------------------------ templates
+HEADER_FMT = Template("""\
+${banner}
+/*
+ * ${table}: diagnosis table of model ${model} (${n_tests} tests, ${n_faults} faults), vehicle ${vehicle}.
+ * Thresholds: ${thresholds}.
+ */
+#ifndef ${guard}
+#define ${guard}
+
+#include "fdi_table.h"
+
+extern const fdi_table_t ${table};
+/* Per test: the equations and the unknowns of its MSO set (space separated). */
+extern const char *const ${table}_equations[${n_tests}];
+extern const char *const ${table}_unknowns[${n_tests}];
+
+#endif /* ${guard} */
+""")
+
+SOURCE_FMT = Template("""\
+${banner}
+#include "${table}.h"
+
+#include <stddef.h>
+
+#include "${generators}.h"
+#include "${signals}.h"
+
+static const char *const ${vehicle}_fault_names[${n_faults}] = {
+${fault_names}
+};
+
+static const fdi_test_desc_t ${vehicle}_tests[${n_tests}] = {
+${tests}
+};
+
+/* Row j: bit i set when test i is sensitive to fault j. */
+static const uint32_t ${vehicle}_fault_signature[${n_faults}] = {
+${signatures}
+};
+
+/* Row j: the faults whose signature equals fault j's (not isolable from it by these tests). */
+static const uint32_t ${vehicle}_iso_class[${n_faults}] = {
+${classes}
+};
+
+/* Row j, column i: size of fault j at which test i reacts (${size_note}). */
+static const float ${vehicle}_test_size[${n_faults} * ${n_tests}] = {
+${sizes}
+};
+
+const char *const ${table}_equations[${n_tests}] = {
+${equations}
+};
+
+const char *const ${table}_unknowns[${n_tests}] = {
+${unknowns}
+};
+
+const fdi_table_t ${table} = {
+    FDI_TABLE_FORMAT_VERSION,
+    {${design}},
+    ${sig_count},
+    ${n_faults}U,
+    ${n_tests}U,
+    ${signal_names},
+    ${vehicle}_fault_names,
+    ${vehicle}_tests,
+    ${vehicle}_fault_signature,
+    ${vehicle}_iso_class,
+    ${vehicle}_test_size,
+    ${margin},
+};
+""")
+
+TEST_FMT = Template("""\
+    {${mso_id}U, ${generator}, 0x${fault_mask}U, ${inputs},
+     ${gate}, ${variance}, ${interpretation}},""")
+MASK_ROW_FMT = Template("    0x${mask}U, /* ${fault} */")
+SIZE_ROW_FMT = Template("    ${sizes}, /* ${fault} */")
+STRING_ROW_FMT = Template("    ${text},")
 
 
-def _signal_macro(known: str) -> str:
-    return "FDI_SIGM_" + known.upper()
+# ------------------------------------------------------------------------------------------ data model
+@dataclass(frozen=True)
+class TestRow:
+    mso_id: int
+    generator: str  # C expression of the descriptor pointer, or NULL
+    fault_mask: int
+    inputs: str  # C mask expression
+    gate: float
+    variance: float
+    interpretation: str
+    equations: str
+    unknowns: str
 
 
-def render(model: Model, tests: Sequence[Candidate], thresholds: Thresholds, name: str,
-           command: str, generated: Sequence[bool] | None = None,
-           sizes: FaultSizes | None = None) -> tuple[str, str]:
-    """The header and source text of the table `name` (e.g. "fdi_romo_table").
+@dataclass(frozen=True)
+class TableFile:
+    banner: str
+    names: VehicleNames
+    model: str
+    thresholds: str
+    design: tuple[float, float, float, float]
+    faults: tuple[str, ...]  # short names (f4)
+    fault_names: tuple[str, ...]  # name and description
+    tests: tuple[TestRow, ...]
+    signatures: tuple[int, ...]
+    classes: tuple[int, ...]
+    sizes: tuple[tuple[float, ...], ...]
+    size_note: str
+    margin: float
 
-    `generated[k]` true: test k runs generated generator slot (number of generated tests before it), kind
-    FDI_GEN_GENERATED_<slot+1>, with the variance of its equation set from thresholds.generated."""
+
+# ------------------------------------------------------------------------------------------ computing
+def table_file(model: Model, tests: Sequence[Candidate], thresholds: Thresholds, names: VehicleNames, banner: str,
+               generated: Sequence[bool] | None = None, sizes: FaultSizes | None = None) -> TableFile:
+    """What goes into the table files. `generated[k]` true (the default for every test): test k runs the
+    generated generator of slot (number of generated tests before it), with the variance of its equation set
+    from thresholds.generated; false: no on-board generator (NULL, always "not evaluable")."""
     st = model.structure()
     if not 0 < len(tests) <= MAX_TESTS:
         raise ExportError(f"{len(tests)} tests selected; the firmware table holds 1..{MAX_TESTS}")
     if st.nf > MAX_FAULTS:
         raise ExportError(f"{st.nf} faults; the firmware table holds at most {MAX_FAULTS}")
-    guard = name.upper() + "_H"
-    banner = f"/* Generated by `{command}`. Do not edit: regenerate instead. */"
+    gen = list(generated) if generated is not None else [True] * len(tests)
+    known_order = [v.name for v in model.knowns]
+    unknown_order = [v.name for v in model.unknowns]
     rows = []
-    eq_lists, var_lists = [], []
     for k, t in enumerate(tests):
         eqs = [st.equations[e] for e in bits(t.equations)]
-        knowns = sorted({z for e in bits(t.equations) for z in model.equations[e].knowns},
-                        key=[v.name for v in model.knowns].index)
+        knowns = sorted({z for e in bits(t.equations) for z in model.equations[e].knowns}, key=known_order.index)
         unknowns = sorted({x for e in bits(t.equations) for x in model.equations[e].unknowns},
-                          key=[v.name for v in model.unknowns].index)
-        if generated is not None and generated[k]:
-            kind = f"FDI_GEN_GENERATED_{sum(generated[:k]) + 1}"
+                          key=unknown_order.index)
+        if gen[k]:
+            generator = kind_name(sum(gen[:k]), names)
             variance = thresholds.generated.get(" ".join(eqs), 1.0)
         else:
-            kind = KNOWN_GENERATORS.get(frozenset(eqs), NO_GENERATOR)
-            variance = thresholds.variance.get(kind, 1.0)
-        mask = " | ".join(_signal_macro(z) for z in knowns) or "0U"
+            generator, variance = NO_GENERATOR, 1.0
         number = re.fullmatch(r"MSO(\d+)", t.label)
-        rows.append(
-            f"    {{{int(number.group(1)) if number else k + 1}U, {kind}, 0x{t.faults:08X}U, {mask},\n"
-            f"     {c_float(thresholds.gate)}, {c_float(variance)}, {_c_string(interpret(model, eqs))}}},"
-        )
-        eq_lists.append(" ".join(eqs))
-        var_lists.append(" ".join(unknowns))
-    signatures = []
-    for j in range(st.nf):
-        sig = sum(1 << i for i, t in enumerate(tests) if t.faults >> j & 1)
-        signatures.append(sig)
+        rows.append(TestRow(int(number.group(1)) if number else k + 1, generator, t.faults, names.mask_expr(knowns),
+                            thresholds.gate, variance, interpret(model, eqs), " ".join(eqs), " ".join(unknowns)))
+    signatures = [sum(1 << i for i, t in enumerate(tests) if t.faults >> j & 1) for j in range(st.nf)]
     classes = [sum(1 << k for k in range(st.nf) if signatures[k] == signatures[j]) for j in range(st.nf)]
-    labels = [t.label for t in tests]
-    size_rows, margin = test_size_rows(list(st.faults), labels, signatures, sizes)
+    size_rows, margin = test_size_rows(list(st.faults), [t.label for t in tests], signatures, sizes)
     size_note = (f"reaction sizes from {sizes.source}, 0 = no reaction within the fault's limits" if sizes is not None
                  else "1 on the signature (no fault sizes given: classic exoneration)")
-    size_lines = [f"    {', '.join(c_float(x) for x in row)}, /* {st.faults[j]} */" for j, row in enumerate(size_rows)]
-    fault_names = [f"{f.name} {f.desc}".strip() for f in model.faults]
+    return TableFile(
+        banner=banner, names=names, model=model.name, thresholds=thresholds.source, design=thresholds.design,
+        faults=tuple(st.faults), fault_names=tuple(f"{f.name} {f.desc}".strip() for f in model.faults),
+        tests=tuple(rows), signatures=tuple(signatures), classes=tuple(classes),
+        sizes=tuple(tuple(r) for r in size_rows), size_note=size_note, margin=margin)
 
-    header = f"""{banner}
-/*
- * {name}: diagnosis table of model {model.name} ({len(tests)} tests, {st.nf} faults).
- * Thresholds: {thresholds.source}.
- */
-#ifndef {guard}
-#define {guard}
 
-#include "fdi_table.h"
+# ------------------------------------------------------------------------------------------ rendering
+def _strings(items: Sequence[str]) -> str:
+    return "\n".join(STRING_ROW_FMT.substitute(text=c_string(s)) for s in items)
 
-extern const fdi_table_t {name};
-/* Per test: the equations and the unknowns of its MSO set (space separated). */
-extern const char *const {name}_equations[{len(tests)}];
-extern const char *const {name}_unknowns[{len(tests)}];
 
-#endif /* {guard} */
-"""
-    d = thresholds.design
-    source = f"""{banner}
-#include "{name}.h"
-
-#include "fdi_signals.h"
-
-static const char *const fault_names[{st.nf}] = {{
-{chr(10).join("    " + _c_string(n) + "," for n in fault_names)}
-}};
-
-static const fdi_test_desc_t tests[{len(tests)}] = {{
-{chr(10).join(rows)}
-}};
-
-/* Row j: bit i set when test i is sensitive to fault j. */
-static const uint32_t fault_signature[{st.nf}] = {{
-{chr(10).join(f"    0x{s:08X}U, /* {st.faults[j]} */" for j, s in enumerate(signatures))}
-}};
-
-/* Row j: the faults whose signature equals fault j's (not isolable from it by these tests). */
-static const uint32_t iso_class[{st.nf}] = {{
-{chr(10).join(f"    0x{c:08X}U, /* {st.faults[j]} */" for j, c in enumerate(classes))}
-}};
-
-/* Row j, column i: size of fault j at which test i reacts ({size_note}). */
-static const float test_size[{st.nf} * {len(tests)}] = {{
-{chr(10).join(size_lines)}
-}};
-
-const char *const {name}_equations[{len(tests)}] = {{
-{chr(10).join("    " + _c_string(s) + "," for s in eq_lists)}
-}};
-
-const char *const {name}_unknowns[{len(tests)}] = {{
-{chr(10).join("    " + _c_string(s) + "," for s in var_lists)}
-}};
-
-const fdi_table_t {name} = {{
-    FDI_TABLE_FORMAT_VERSION,
-    {{{c_float(d[0])}, {c_float(d[1])}, {c_float(d[2])}, {c_float(d[3])}}},
-    {st.nf}U,
-    {len(tests)}U,
-    fault_names,
-    tests,
-    fault_signature,
-    iso_class,
-    test_size,
-    {c_float(margin)},
-}};
-"""
+def render_file(f: TableFile) -> tuple[str, str]:
+    """Header and source text of the table files."""
+    n = f.names
+    table = n.table
+    header = HEADER_FMT.substitute(banner=f.banner, table=table, model=f.model, n_tests=len(f.tests),
+                                   n_faults=len(f.faults), vehicle=n.vehicle, thresholds=comment_text(f.thresholds),
+                                   guard=table.upper() + "_H")
+    tests = "\n".join(TEST_FMT.substitute(
+        mso_id=t.mso_id, generator=t.generator, fault_mask=f"{t.fault_mask:08X}", inputs=t.inputs,
+        gate=c_float(t.gate), variance=c_float(t.variance), interpretation=c_string(t.interpretation))
+        for t in f.tests)
+    source = SOURCE_FMT.substitute(
+        banner=f.banner, table=table, vehicle=n.vehicle, generators=n.generators, signals=n.signals,
+        n_faults=len(f.faults),
+        n_tests=len(f.tests), fault_names=_strings(f.fault_names), tests=tests,
+        signatures="\n".join(MASK_ROW_FMT.substitute(mask=f"{s:08X}", fault=x)
+                             for s, x in zip(f.signatures, f.faults, strict=True)),
+        classes="\n".join(MASK_ROW_FMT.substitute(mask=f"{c:08X}", fault=x)
+                          for c, x in zip(f.classes, f.faults, strict=True)),
+        size_note=comment_text(f.size_note),
+        sizes="\n".join(SIZE_ROW_FMT.substitute(sizes=", ".join(c_float(x) for x in row), fault=x)
+                        for row, x in zip(f.sizes, f.faults, strict=True)),
+        equations=_strings([t.equations for t in f.tests]), unknowns=_strings([t.unknowns for t in f.tests]),
+        design=", ".join(c_float(x) for x in f.design), sig_count=n.sig_count, signal_names=n.signal_names,
+        margin=c_float(f.margin))
     return header, source
+
+
+def render(model: Model, tests: Sequence[Candidate], thresholds: Thresholds, name: str, command: str,
+           generated: Sequence[bool] | None = None, sizes: FaultSizes | None = None) -> tuple[str, str]:
+    """The header and source text of the table `name` (e.g. "fdi_romo_table"); see `table_file`."""
+    return render_file(table_file(model, tests, thresholds, VehicleNames.of_table(name), banner(command),
+                                  generated, sizes))
 
 
 def write(out_dir: Path, name: str, header: str, source: str) -> list[Path]:

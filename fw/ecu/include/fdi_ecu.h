@@ -1,53 +1,57 @@
 /*
  * fdi_ecu.h - the ECU process core: CAN frames in, fixed-step diagnosis, diagnosis frames out.
  *
- * Portable (no OS call, no heap, no clock): the front end (fw/ecu/linux/fdi_ecu_socketcan.c, the Python
- * bindings host_tools/fdi_host/ecu_lib.py, or an ECU's CAN driver) hands every received frame with its
- * receive time to fdi_ecu_rx() and calls fdi_ecu_poll() after every frame and on a timer.
+ * Portable (no OS call, no heap, no clock) and vehicle-independent: the bus it listens to is a const
+ * description (fdi_ecu_bus_t) that a vehicle target generates from its DBC (fw/ecu/tools/gen_can.py: message
+ * IDs, lengths, cycle times, E2E data IDs, which frame signals each message carries, and per message a decode
+ * function: unpack, range checks, scaling to SI; plus the packing of the diagnosis frame). The front end
+ * (fw/ecu/linux/fdi_ecu_socketcan.c, the Python bindings host_tools/fdi_host/ecu/bindings.py, or an ECU's CAN
+ * driver) hands every received frame with its receive time to fdi_ecu_rx() and calls fdi_ecu_poll() after
+ * every frame and on a timer.
  *
  * Reception (fdi_ecu_rx), per frame, in this order; the first failing check rejects the frame, which is
  * counted by reason (fdi_ecu_reason_t) and ignored (its values are not used, the message's timeout keeps
  * running, so a sender that only produces bad frames goes silent after its timeout):
- *   FDI_Diagnosis (ID 512, our own frame echoed by the bus) -> OWN_FRAME; any other ID that is not one of the
- *   8 input messages of dbc/romo.dbc (including extended/RTR/error flags in can_id) -> UNKNOWN_ID;
- *   dlc != 8 -> BAD_DLC; E2E profile 11 CRC (CRC8 SAE-J1850 over the data ID low, high byte and bytes 1..7)
- *   -> BAD_CRC; alive counter 15 or any raw signal outside its DBC range -> OUT_OF_RANGE; counter equal to
- *   the last accepted one -> REPEATED_COUNTER; counter advanced by more than max_delta_counter (mod 15) ->
- *   COUNTER_JUMP (the receiver re-synchronises on it: a restarted sender costs one frame per message, and a
- *   sender whose counter keeps jumping is never accepted); sender status nibble other than OK/DEGRADED ->
- *   SENSOR_STATUS (the message's signals go invalid at once). Accepted frames are decoded with the
- *   cantools-generated code (fw/generated/can/romo_can.c), converted to SI (bar -> Pa) and update
- *   fdi_inputs_t; the message is then fresh.
+ *   the bus's diagnosis frame ID (our own frame echoed by the bus) -> OWN_FRAME; any other ID that is not one
+ *   of the bus's input messages (including extended/RTR/error flags in can_id) -> UNKNOWN_ID;
+ *   dlc != the message's length -> BAD_DLC; E2E profile 11 CRC (CRC8 SAE-J1850 over the data ID low, high byte
+ *   and bytes 1..dlc-1) -> BAD_CRC; alive counter 15 or any raw signal outside its DBC range (the decode
+ *   function) -> OUT_OF_RANGE; counter equal to the last accepted one -> REPEATED_COUNTER; counter advanced by
+ *   more than max_delta_counter (mod 15) -> COUNTER_JUMP (the receiver re-synchronises on it: a restarted sender
+ *   costs one frame per message, and a sender whose counter keeps jumping is never accepted); sender status
+ *   nibble other than OK/DEGRADED -> SENSOR_STATUS (the message's signals go invalid at once). The decoded
+ *   values of an accepted frame (SI units) update the frame's signals of the message; the message is then fresh.
  *
- * Scheduling: fixed steps of dt = table design dt (10 ms for the ROMO tables), step k at time
- * T_k = t_first + k * dt where t_first is the time of the first rx/poll call. Step k runs at the first
- * rx or poll call with a time t > T_k (fdi_ecu_rx runs it before taking its frame), so it sees exactly the
- * frames received at t <= T_k, also when several frames carry the same time stamp: the result does not
- * depend on when or how often poll is called. A front end polls after every frame and on a timer just
- * after each step boundary (T_k + a few us) to bound the latency on a silent bus. At each step:
+ * Scheduling: fixed steps of dt = table design dt, step k at time T_k = t_first + k * dt where t_first is the
+ * time of the first rx/poll call. Step k runs at the first rx or poll call with a time t > T_k (fdi_ecu_rx runs
+ * it before taking its frame), so it sees exactly the frames received at t <= T_k, also when several frames
+ * carry the same time stamp: the result does not depend on when or how often poll is called. A front end polls
+ * after every frame and on a timer just after each step boundary (T_k + a few us) to bound the latency on a
+ * silent bus. At each step:
  *   validity = union of the signal masks of the fresh messages, where a message is fresh when it was accepted
  *   at least once, its last frame had sender status OK/DEGRADED and T_k - t_last <= its timeout (default 3x
- *   the DBC cycle time); then fdi_diag_step(inputs, validity), so tests reading a silent or invalid signal
+ *   the DBC cycle time); then fdi_diag_step(frame, validity), so tests reading a silent or invalid signal
  *   become "not evaluable" (and warm up again when it returns).
  * If more than max_catchup_steps steps are due in one call (the host stalled or the clock jumped), the
  * oldest are skipped (counted) and the schedule restarts at the current time.
  * Time is uint32_t microseconds and may wrap (every ~71.6 min): all comparisons use modular differences,
  * so calls must come at least every 35 minutes. A time going backwards is treated as "no time passed".
  *
- * Output (fdi_ecu_poll): the FDI_Diagnosis frame (ID 512, 8 bytes, E2E profile 11 with its own counter) of
- * the newest step run since the previous poll, n_frames 0 or 1:
- *   FDI_Status     FAULT_ISOLATED (3) detected and isolated to one class; FAULT_DETECTED (2) detected, not
+ * Output (fdi_ecu_poll): the diagnosis frame (the bus's diag ID, E2E profile 11 with its own counter, packed
+ * by the bus's encode function) of the newest step run since the previous poll, n_frames 0 or 1:
+ *   status         FAULT_ISOLATED (3) detected and isolated to one class; FAULT_DETECTED (2) detected, not
  *                  isolated (several classes or no single fault explains the alarms); else INPUT_INVALID (4)
  *                  when a test with a generator lacks valid inputs; else INIT (0) when a test with a
  *                  generator is still warming up or the table has no test with a generator; else NO_FAULT (1)
- *   FDI_AlarmMask  alarm mask of tests 0..11;  FDI_CandidateFaults  candidate faults f1..f25 (bits 0..24)
- *   FDI_IsolationClass  0 = nothing detected; 1..25 = isolated: the lowest fault number of the class
- *                  (4 for {f4}, 10 for {f10, f14}); 255 = detected but not isolated.
+ *   alarm_mask     alarm mask of the tests;  candidates  candidate faults (bit j = fault j)
+ *   iso_class      0 = nothing detected; 1..254 = isolated: the lowest fault number (j + 1) of the class;
+ *                  255 = detected but not isolated.
+ * (the encode function keeps the bits its DBC signals hold).
  *
- * Cost: rx ~ 100 operations (CRC 8 table look-ups, unpack, range checks); a step = fdi_diag_step + 8
- * timeout compares + frame packing. Memory: sizeof(fdi_ecu_t) = sizeof(fdi_diag_t) + ~900 bytes (counters
- * 432, last result 232, inputs and message state); 4,976 bytes on x86-64 with FDI_DIAG_MAX_TESTS 16;
- * caller-owned. Flash: 256 bytes of CRC table; libfdi_ecu.a ~9 kB text on Cortex-M4F with the frame code.
+ * Cost: rx ~ 100 operations (CRC 8 table look-ups, unpack, range checks); a step = fdi_diag_step + one
+ * timeout compare per message + frame packing. Memory: sizeof(fdi_ecu_t) = sizeof(fdi_diag_t) +
+ * sizeof(fdi_diag_result_t) + 128 (frame) + ~80 per message slot + ~70 (scripts/bench_fw.sh prints it);
+ * caller-owned. Flash: 256 bytes of CRC table.
  */
 #ifndef FDI_ECU_H
 #define FDI_ECU_H
@@ -56,28 +60,70 @@
 #include <stdint.h>
 
 #include "fdi_diag.h"
-#include "fdi_signals.h"
+#include "fdi_frame.h"
+#include "fdi_static_assert.h"
 #include "fdi_status.h"
 #include "fdi_table.h"
 
-#define FDI_ECU_N_MSGS 8U          /* input messages of dbc/romo.dbc, in fdi_ecu_msg_t order */
-#define FDI_ECU_DIAG_ID 512U       /* FDI_Diagnosis */
-#define FDI_ECU_FRAME_LEN 8U       /* every ROMO frame is a classic CAN frame of 8 bytes */
-#define FDI_ECU_DEFAULT_D_X 1.0f   /* velocity sensor position of the ROMO model (romo_quasistatic.toml) */
-#define FDI_ECU_DEFAULT_D_Y 0.3f
+#ifndef FDI_ECU_MAX_MSGS
+#define FDI_ECU_MAX_MSGS 8U /* input messages of a bus; override with -DFDI_ECU_MAX_MSGS=n (1..255) */
+#endif
+#if (FDI_ECU_MAX_MSGS < 1) || (FDI_ECU_MAX_MSGS > 255)
+#error "FDI_ECU_MAX_MSGS must be in 1..255"
+#endif
+#define FDI_ECU_FRAME_LEN 8U      /* classic CAN: at most 8 data bytes */
+#define FDI_ECU_MAX_MSG_VALUES 8U /* frame signals one message can carry */
 
-/* Input messages (index into per-message arrays). */
-typedef enum
+/* What a message's decode function reports about one frame (its CRC already checked). */
+typedef struct
 {
-    FDI_ECU_MSG_MOTION_DEMAND = 0, /* ID 80, no diagnosis signal (checked and counted only) */
-    FDI_ECU_MSG_IMU = 1,           /* ID 128: ax_m, ay_m, psidot_m */
-    FDI_ECU_MSG_VEL = 2,           /* ID 136: vx_m, vy_m */
-    FDI_ECU_MSG_WR1 = 3,           /* ID 256..259: delta_i, iTM_i, omega_i */
-    FDI_ECU_MSG_WR2 = 4,
-    FDI_ECU_MSG_WR3 = 5,
-    FDI_ECU_MSG_WR4 = 6,
-    FDI_ECU_MSG_BBW = 7            /* ID 272: P_f_m, P_r_m */
-} fdi_ecu_msg_t;
+    uint8_t counter;  /* E2E alive counter */
+    uint8_t status;   /* sender status nibble (0 OK, 1 DEGRADED, other: values not usable) */
+    bool in_range;    /* counter and every raw signal within its DBC range */
+    float value[FDI_ECU_MAX_MSG_VALUES]; /* the message's frame signals in SI units, in signal_index order */
+} fdi_ecu_rx_info_t;
+
+/* Unpack one frame of the message (dlc bytes, checked by the caller) into *info. Cannot fail. */
+typedef void (*fdi_ecu_decode_fn_t)(const uint8_t *data, fdi_ecu_rx_info_t *info);
+
+/* One input message of the bus (generated from the DBC). */
+typedef struct
+{
+    const char *name;             /* DBC message name */
+    uint32_t can_id;              /* 11-bit ID (no flags) */
+    uint8_t dlc;                  /* 1..FDI_ECU_FRAME_LEN */
+    uint16_t data_id;             /* E2E profile 11 data ID */
+    uint16_t cycle_ms;            /* DBC cycle time, > 0 */
+    uint8_t n_values;             /* frame signals it carries, 0..FDI_ECU_MAX_MSG_VALUES */
+    const uint8_t *signal_index;  /* n_values frame indices (fdi_frame.h), NULL when n_values is 0 */
+    uint32_t signals;             /* the same as a mask */
+    fdi_ecu_decode_fn_t decode;   /* non-NULL */
+} fdi_ecu_msg_desc_t;
+
+/* The contents of one diagnosis frame, packed by the bus's encode function. */
+typedef struct
+{
+    uint8_t counter;      /* E2E alive counter 0..14 */
+    uint8_t status;       /* fdi_ecu_status_t */
+    uint32_t alarm_mask;  /* tests in alarm */
+    uint32_t candidates;  /* candidate faults */
+    uint8_t iso_class;    /* see the header comment */
+} fdi_ecu_diag_msg_t;
+
+/* Pack the diagnosis frame into data[0..dlc-1] (byte 0, the CRC, left 0: the core fills it). Cannot fail. */
+typedef void (*fdi_ecu_encode_fn_t)(const fdi_ecu_diag_msg_t *msg, uint8_t *data);
+
+/* A vehicle's bus (generated from its DBC: fdi_<vehicle>_bus.h). */
+typedef struct
+{
+    const char *name;
+    uint8_t n_msgs;                  /* 1..FDI_ECU_MAX_MSGS */
+    const fdi_ecu_msg_desc_t *msgs;  /* n_msgs input messages */
+    uint32_t diag_id;                /* the diagnosis frame's ID */
+    uint8_t diag_dlc;                /* 2..FDI_ECU_FRAME_LEN */
+    uint16_t diag_data_id;           /* its E2E profile 11 data ID */
+    fdi_ecu_encode_fn_t encode_diag; /* non-NULL */
+} fdi_ecu_bus_t;
 
 /* Reasons a received frame is rejected (index into the reject counters). */
 typedef enum
@@ -108,8 +154,9 @@ typedef enum
 
 typedef struct
 {
-    fdi_diag_config_t diag;               /* table (its design dt is the step), vehicle, CUSUM, hysteresis */
-    uint32_t timeout_us[FDI_ECU_N_MSGS];  /* silence after which a message's signals go invalid, > 0 */
+    const fdi_ecu_bus_t *bus;             /* the vehicle's bus; must outlive the instance */
+    fdi_diag_config_t diag;               /* table (its design dt is the step), generator parameters, CUSUM, ... */
+    uint32_t timeout_us[FDI_ECU_MAX_MSGS]; /* per message of the bus: silence after which its signals go invalid, > 0 */
     uint8_t max_delta_counter;            /* 1..14: largest accepted alive-counter advance (1 = no loss) */
     uint16_t max_catchup_steps;           /* >= 1: steps run at most per call before resynchronising */
 } fdi_ecu_config_t;
@@ -130,14 +177,14 @@ typedef struct
     uint32_t steps;                        /* diagnosis steps run */
     uint32_t steps_skipped;                /* steps dropped by the catch-up limit */
     uint32_t tx_frames;                    /* diagnosis frames handed out by fdi_ecu_poll */
-    fdi_ecu_msg_counters_t msg[FDI_ECU_N_MSGS];
+    fdi_ecu_msg_counters_t msg[FDI_ECU_MAX_MSGS]; /* per message of the bus (n_msgs used) */
 } fdi_ecu_counters_t;
 
 typedef struct
 {
     uint32_t step;            /* number of steps run (0: none yet) */
     uint32_t t_us;            /* time T_k of the last step */
-    uint32_t validity;        /* FDI_SIGM_* mask used by the last step */
+    uint32_t validity;        /* frame signal mask used by the last step */
     uint8_t status;           /* fdi_ecu_status_t */
     uint8_t iso_class;        /* FDI_IsolationClass as sent */
     fdi_diag_result_t diag;   /* alarm / evaluable masks, residuals, ratios, candidates, classes */
@@ -170,9 +217,10 @@ typedef struct
 {
     fdi_diag_t diag;
     const fdi_table_t *table;
-    fdi_inputs_t in;
-    fdi_ecu_msg_state_t msg[FDI_ECU_N_MSGS];
-    uint32_t timeout_us[FDI_ECU_N_MSGS];
+    const fdi_ecu_bus_t *bus;
+    fdi_frame_t in;
+    fdi_ecu_msg_state_t msg[FDI_ECU_MAX_MSGS];
+    uint32_t timeout_us[FDI_ECU_MAX_MSGS];
     uint32_t gen_mask;  /* tests with a generator */
     uint32_t step_us;
     uint32_t next_us;   /* time of the next step */
@@ -186,16 +234,21 @@ typedef struct
     fdi_ecu_result_t res;
 } fdi_ecu_t; /* opaque by convention */
 
-/* Defaults for `table`: diagnoser settings as validated in tests/fw/test_fdi_diag.c (CUSUM k 1.5, h 150,
-   set 10, clear 100, warm-up = settling time + 20 steps, exoneration after a 3 s settle window, episodes
-   ending after 3 s without alarm), ROMO sensor position, timeouts 3x the
-   DBC cycle times, max_delta_counter 1, max_catchup_steps 100. BAD_ARG on NULL; BAD_TABLE when the
-   table's design point has no finite settling time. */
-fdi_status_t fdi_ecu_config_default(fdi_ecu_config_t *cfg, const fdi_table_t *table);
+/* Defaults for `table` on `bus`: the diagnoser's defaults (fdi_diag_config_default: CUSUM k 1.5, h 150, set 10,
+   clear 100, warm-up = settling time + 20 steps, exoneration after a 3 s settle window, episodes ending after 3 s
+   without alarm, generator parameters 0, no sensitivities), timeouts 3x the DBC cycle times, max_delta_counter 1,
+   max_catchup_steps 100. BAD_ARG on NULL or a bus with more than
+   FDI_ECU_MAX_MSGS messages; BAD_TABLE when the table's design point has no finite settling time. */
+fdi_status_t fdi_ecu_config_default(fdi_ecu_config_t *cfg, const fdi_table_t *table, const fdi_ecu_bus_t *bus);
 
-/* BAD_ARG: NULL, zero timeout, max_delta_counter outside 1..14, max_catchup_steps 0, table dt not a whole
-   number of microseconds in 100 us..10 s; others from fdi_diag_init(). A failed init leaves an instance
-   that every other call refuses with BAD_ARG. */
+/* A usable bus: counts within capacity, lengths 1..8, decode/encode non-NULL, each message's signal indices
+   below the table's n_signals and equal to its mask, no ID twice, the diag ID not an input. FDI_OK or
+   FDI_BAD_ARG. */
+fdi_status_t fdi_ecu_bus_check(const fdi_ecu_bus_t *bus, const fdi_table_t *table);
+
+/* BAD_ARG: NULL, a bus failing fdi_ecu_bus_check, zero timeout, max_delta_counter outside 1..14,
+   max_catchup_steps 0, table dt not a whole number of microseconds in 100 us..10 s; others from
+   fdi_diag_init(). A failed init leaves an instance that every other call refuses with BAD_ARG. */
 fdi_status_t fdi_ecu_init(fdi_ecu_t *self, const fdi_ecu_config_t *cfg);
 
 /* One received frame at t_us. Rejections are counted, not errors (FDI_OK). BAD_ARG: self NULL or not
@@ -210,8 +263,8 @@ fdi_status_t fdi_ecu_poll(fdi_ecu_t *self, uint32_t t_us, fdi_ecu_tx_t *tx);
 fdi_status_t fdi_ecu_counters(const fdi_ecu_t *self, fdi_ecu_counters_t *out);
 fdi_status_t fdi_ecu_result(const fdi_ecu_t *self, fdi_ecu_result_t *out);
 
-/* Message index of an input CAN ID, or -1. Cannot fail. */
-int32_t fdi_ecu_msg_index(uint32_t can_id);
+/* Index in bus->msgs of an input CAN ID, or -1 (also for a NULL bus). Cannot fail. */
+int32_t fdi_ecu_msg_index(const fdi_ecu_bus_t *bus, uint32_t can_id);
 
 /* CRC8 SAE-J1850 (poly 0x1D, init 0xFF, xor-out 0xFF) of the profile 11 header: data ID low byte, high
    byte, then data[1..len-1]. len >= 2 and data non-NULL, else 0. Cannot fail. */

@@ -29,6 +29,7 @@
 
 #include "fdi_ecu.h"
 #include "fdi_kin_table.h"
+#include "fdi_romo_ecu.h"
 #include "fdi_romo_table.h"
 
 static volatile sig_atomic_t stop_requested = 0;
@@ -76,7 +77,7 @@ static void print_report(const fdi_ecu_t *ecu, uint64_t tx_errors)
     {
         printf("rejected.%s=%" PRIu32 "\n", reason_names[k], c.rejected[k]);
     }
-    for (i = 0U; i < FDI_ECU_N_MSGS; ++i)
+    for (i = 0U; i < (uint32_t)fdi_romo_bus.n_msgs; ++i)
     {
         printf("msg.0x%03" PRIX32 " received=%" PRIu32 " accepted=%" PRIu32 " timeouts=%" PRIu32 "\n",
                c.msg[i].can_id, c.msg[i].received, c.msg[i].accepted, c.msg[i].timeouts);
@@ -166,7 +167,7 @@ int main(int argc, char **argv)
     {
         return usage(argv[0]);
     }
-    if ((fdi_ecu_config_default(&cfg, table) != FDI_OK) || (fdi_ecu_init(&ecu, &cfg) != FDI_OK))
+    if ((fdi_romo_ecu_config_default(&cfg, table) != FDI_OK) || (fdi_ecu_init(&ecu, &cfg) != FDI_OK))
     {
         fprintf(stderr, "fdi-ecu-socketcan: the diagnosis table is not valid\n");
         return 1;

@@ -5,57 +5,12 @@
 #include <stddef.h>
 
 #include "fdi_float.h"
-#include "romo_can.h"
-#include "romo_can_e2e.h"
 
 #define E2E_COUNTER_MOD 15U /* profile 11 counter runs 0..14 */
 #define STATUS_OK 0U
 #define STATUS_DEGRADED 1U
-#define BAR_TO_PA 1.0e5f
-#define WARMUP_MARGIN_STEPS 20U
-/* Isolation episodes (fdi_diag.h): a quiet test exonerates only after 3 s, the response window in which the
-   analysis states the per-test fault sizes (fdi-tune fault-sizes: alarm within a 3 s step); an episode
-   ends after 3 s without any alarm. */
-#define ISO_SETTLE_STEPS 300U
-#define EPISODE_CLEAR_STEPS 300U
 #define TIMEOUT_CYCLES 3U
 #define US_PER_MS 1000U
-
-typedef struct
-{
-    fdi_ecu_msg_t msg;
-    uint32_t can_id;
-    uint16_t data_id;
-    uint16_t cycle_ms;
-    uint32_t signals; /* FDI_SIGM_* carried */
-} msg_desc_t;
-
-static const msg_desc_t msg_desc[FDI_ECU_N_MSGS] = {
-    {FDI_ECU_MSG_MOTION_DEMAND, ROMO_CAN_MOTION_DEMAND_FRAME_ID,
-     ROMO_CAN_E2E_MOTION_DEMAND_DATA_ID, ROMO_CAN_E2E_MOTION_DEMAND_CYCLE_MS, 0U},
-    {FDI_ECU_MSG_IMU, ROMO_CAN_IMU_MOTION_FRAME_ID,
-     ROMO_CAN_E2E_IMU_MOTION_DATA_ID, ROMO_CAN_E2E_IMU_MOTION_CYCLE_MS,
-     FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M},
-    {FDI_ECU_MSG_VEL, ROMO_CAN_VELOCITY_SENSOR_FRAME_ID,
-     ROMO_CAN_E2E_VELOCITY_SENSOR_DATA_ID, ROMO_CAN_E2E_VELOCITY_SENSOR_CYCLE_MS,
-     FDI_SIGM_VX_M | FDI_SIGM_VY_M},
-    {FDI_ECU_MSG_WR1, ROMO_CAN_WHEEL_ROBOT1_FRAME_ID,
-     ROMO_CAN_E2E_WHEEL_ROBOT1_DATA_ID, ROMO_CAN_E2E_WHEEL_ROBOT1_CYCLE_MS,
-     FDI_SIGM_DELTA1_M | FDI_SIGM_ITM1_M | FDI_SIGM_OMEGA1_M},
-    {FDI_ECU_MSG_WR2, ROMO_CAN_WHEEL_ROBOT2_FRAME_ID,
-     ROMO_CAN_E2E_WHEEL_ROBOT2_DATA_ID, ROMO_CAN_E2E_WHEEL_ROBOT2_CYCLE_MS,
-     FDI_SIGM_DELTA2_M | FDI_SIGM_ITM2_M | FDI_SIGM_OMEGA2_M},
-    {FDI_ECU_MSG_WR3, ROMO_CAN_WHEEL_ROBOT3_FRAME_ID,
-     ROMO_CAN_E2E_WHEEL_ROBOT3_DATA_ID, ROMO_CAN_E2E_WHEEL_ROBOT3_CYCLE_MS,
-     FDI_SIGM_DELTA3_M | FDI_SIGM_ITM3_M | FDI_SIGM_OMEGA3_M},
-    {FDI_ECU_MSG_WR4, ROMO_CAN_WHEEL_ROBOT4_FRAME_ID,
-     ROMO_CAN_E2E_WHEEL_ROBOT4_DATA_ID, ROMO_CAN_E2E_WHEEL_ROBOT4_CYCLE_MS,
-     FDI_SIGM_DELTA4_M | FDI_SIGM_ITM4_M | FDI_SIGM_OMEGA4_M},
-    {FDI_ECU_MSG_BBW, ROMO_CAN_BRAKE_BY_WIRE_FRAME_ID,
-     ROMO_CAN_E2E_BRAKE_BY_WIRE_DATA_ID, ROMO_CAN_E2E_BRAKE_BY_WIRE_CYCLE_MS,
-     FDI_SIGM_P_F_M | FDI_SIGM_P_R_M},
-};
-
 
 uint8_t fdi_ecu_e2e_crc(uint16_t data_id, const uint8_t *data, uint8_t len)
 {
@@ -94,13 +49,13 @@ uint8_t fdi_ecu_e2e_crc(uint16_t data_id, const uint8_t *data, uint8_t len)
     return crc;
 }
 
-static int32_t msg_index(uint32_t can_id)
+static int32_t msg_index(const fdi_ecu_bus_t *bus, uint32_t can_id)
 {
     int32_t idx = -1;
     uint32_t i;
-    for (i = 0U; i < FDI_ECU_N_MSGS; ++i)
+    for (i = 0U; i < (uint32_t)bus->n_msgs; ++i)
     {
-        if (msg_desc[i].can_id == can_id)
+        if (bus->msgs[i].can_id == can_id)
         {
             idx = (int32_t)i;
         }
@@ -108,9 +63,9 @@ static int32_t msg_index(uint32_t can_id)
     return idx;
 }
 
-int32_t fdi_ecu_msg_index(uint32_t can_id)
+int32_t fdi_ecu_msg_index(const fdi_ecu_bus_t *bus, uint32_t can_id)
 {
-    return msg_index(can_id);
+    return ((bus != NULL) && (bus->msgs != NULL)) ? msg_index(bus, can_id) : -1;
 }
 
 /* Signed difference a - b of two wrapping microsecond times. */
@@ -133,128 +88,6 @@ static int32_t time_diff(uint32_t a, uint32_t b)
 static bool ready(const fdi_ecu_t *self)
 {
     return (self != NULL) && (self->table != NULL);
-}
-
-/* ------------------------------------------------------------------------------------------ decoding */
-
-typedef struct
-{
-    uint8_t counter;
-    uint8_t status;
-    bool in_range;
-} frame_info_t;
-
-/* Unpack message idx (dlc checked by the caller) into *in (only the message's signals) and *fi. */
-static void decode(uint32_t idx, const uint8_t *data, fdi_inputs_t *in, frame_info_t *fi)
-{
-    switch (msg_desc[idx].msg)
-    {
-    case FDI_ECU_MSG_MOTION_DEMAND: {
-        struct romo_can_motion_demand_t m;
-        (void)romo_can_motion_demand_unpack(&m, data, FDI_ECU_FRAME_LEN);
-        fi->counter = m.md_counter;
-        fi->status = m.md_status;
-        fi->in_range = romo_can_motion_demand_md_counter_is_in_range(m.md_counter) &&
-                       romo_can_motion_demand_md_speed_is_in_range(m.md_speed) &&
-                       romo_can_motion_demand_md_side_slip_is_in_range(m.md_side_slip) &&
-                       romo_can_motion_demand_md_yaw_rate_is_in_range(m.md_yaw_rate);
-        break;
-    }
-    case FDI_ECU_MSG_IMU: {
-        struct romo_can_imu_motion_t m;
-        (void)romo_can_imu_motion_unpack(&m, data, FDI_ECU_FRAME_LEN);
-        fi->counter = m.imu_counter;
-        fi->status = m.imu_status;
-        fi->in_range = romo_can_imu_motion_imu_counter_is_in_range(m.imu_counter) &&
-                       romo_can_imu_motion_imu_accel_x_is_in_range(m.imu_accel_x) &&
-                       romo_can_imu_motion_imu_accel_y_is_in_range(m.imu_accel_y) &&
-                       romo_can_imu_motion_imu_yaw_rate_is_in_range(m.imu_yaw_rate);
-        in->ax_m = romo_can_imu_motion_imu_accel_x_decode(m.imu_accel_x);
-        in->ay_m = romo_can_imu_motion_imu_accel_y_decode(m.imu_accel_y);
-        in->psidot_m = romo_can_imu_motion_imu_yaw_rate_decode(m.imu_yaw_rate);
-        break;
-    }
-    case FDI_ECU_MSG_VEL: {
-        struct romo_can_velocity_sensor_t m;
-        (void)romo_can_velocity_sensor_unpack(&m, data, FDI_ECU_FRAME_LEN);
-        fi->counter = m.vel_counter;
-        fi->status = m.vel_status;
-        fi->in_range = romo_can_velocity_sensor_vel_counter_is_in_range(m.vel_counter) &&
-                       romo_can_velocity_sensor_vel_vel_x_is_in_range(m.vel_vel_x) &&
-                       romo_can_velocity_sensor_vel_vel_y_is_in_range(m.vel_vel_y);
-        in->vx_m = romo_can_velocity_sensor_vel_vel_x_decode(m.vel_vel_x);
-        in->vy_m = romo_can_velocity_sensor_vel_vel_y_decode(m.vel_vel_y);
-        break;
-    }
-    case FDI_ECU_MSG_WR1: {
-        struct romo_can_wheel_robot1_t m;
-        (void)romo_can_wheel_robot1_unpack(&m, data, FDI_ECU_FRAME_LEN);
-        fi->counter = m.wr1_counter;
-        fi->status = m.wr1_status;
-        fi->in_range = romo_can_wheel_robot1_wr1_counter_is_in_range(m.wr1_counter) &&
-                       romo_can_wheel_robot1_wr1_steer_angle_is_in_range(m.wr1_steer_angle) &&
-                       romo_can_wheel_robot1_wr1_motor_current_is_in_range(m.wr1_motor_current) &&
-                       romo_can_wheel_robot1_wr1_wheel_speed_is_in_range(m.wr1_wheel_speed);
-        in->delta1_m = romo_can_wheel_robot1_wr1_steer_angle_decode(m.wr1_steer_angle);
-        in->iTM1_m = romo_can_wheel_robot1_wr1_motor_current_decode(m.wr1_motor_current);
-        in->omega1_m = romo_can_wheel_robot1_wr1_wheel_speed_decode(m.wr1_wheel_speed);
-        break;
-    }
-    case FDI_ECU_MSG_WR2: {
-        struct romo_can_wheel_robot2_t m;
-        (void)romo_can_wheel_robot2_unpack(&m, data, FDI_ECU_FRAME_LEN);
-        fi->counter = m.wr2_counter;
-        fi->status = m.wr2_status;
-        fi->in_range = romo_can_wheel_robot2_wr2_counter_is_in_range(m.wr2_counter) &&
-                       romo_can_wheel_robot2_wr2_steer_angle_is_in_range(m.wr2_steer_angle) &&
-                       romo_can_wheel_robot2_wr2_motor_current_is_in_range(m.wr2_motor_current) &&
-                       romo_can_wheel_robot2_wr2_wheel_speed_is_in_range(m.wr2_wheel_speed);
-        in->delta2_m = romo_can_wheel_robot2_wr2_steer_angle_decode(m.wr2_steer_angle);
-        in->iTM2_m = romo_can_wheel_robot2_wr2_motor_current_decode(m.wr2_motor_current);
-        in->omega2_m = romo_can_wheel_robot2_wr2_wheel_speed_decode(m.wr2_wheel_speed);
-        break;
-    }
-    case FDI_ECU_MSG_WR3: {
-        struct romo_can_wheel_robot3_t m;
-        (void)romo_can_wheel_robot3_unpack(&m, data, FDI_ECU_FRAME_LEN);
-        fi->counter = m.wr3_counter;
-        fi->status = m.wr3_status;
-        fi->in_range = romo_can_wheel_robot3_wr3_counter_is_in_range(m.wr3_counter) &&
-                       romo_can_wheel_robot3_wr3_steer_angle_is_in_range(m.wr3_steer_angle) &&
-                       romo_can_wheel_robot3_wr3_motor_current_is_in_range(m.wr3_motor_current) &&
-                       romo_can_wheel_robot3_wr3_wheel_speed_is_in_range(m.wr3_wheel_speed);
-        in->delta3_m = romo_can_wheel_robot3_wr3_steer_angle_decode(m.wr3_steer_angle);
-        in->iTM3_m = romo_can_wheel_robot3_wr3_motor_current_decode(m.wr3_motor_current);
-        in->omega3_m = romo_can_wheel_robot3_wr3_wheel_speed_decode(m.wr3_wheel_speed);
-        break;
-    }
-    case FDI_ECU_MSG_WR4: {
-        struct romo_can_wheel_robot4_t m;
-        (void)romo_can_wheel_robot4_unpack(&m, data, FDI_ECU_FRAME_LEN);
-        fi->counter = m.wr4_counter;
-        fi->status = m.wr4_status;
-        fi->in_range = romo_can_wheel_robot4_wr4_counter_is_in_range(m.wr4_counter) &&
-                       romo_can_wheel_robot4_wr4_steer_angle_is_in_range(m.wr4_steer_angle) &&
-                       romo_can_wheel_robot4_wr4_motor_current_is_in_range(m.wr4_motor_current) &&
-                       romo_can_wheel_robot4_wr4_wheel_speed_is_in_range(m.wr4_wheel_speed);
-        in->delta4_m = romo_can_wheel_robot4_wr4_steer_angle_decode(m.wr4_steer_angle);
-        in->iTM4_m = romo_can_wheel_robot4_wr4_motor_current_decode(m.wr4_motor_current);
-        in->omega4_m = romo_can_wheel_robot4_wr4_wheel_speed_decode(m.wr4_wheel_speed);
-        break;
-    }
-    default: { /* FDI_ECU_MSG_BBW, the last message */
-        struct romo_can_brake_by_wire_t m;
-        (void)romo_can_brake_by_wire_unpack(&m, data, FDI_ECU_FRAME_LEN);
-        fi->counter = m.bbw_counter;
-        fi->status = m.bbw_status;
-        fi->in_range = romo_can_brake_by_wire_bbw_counter_is_in_range(m.bbw_counter) &&
-                       romo_can_brake_by_wire_bbw_pressure_front_is_in_range(m.bbw_pressure_front) &&
-                       romo_can_brake_by_wire_bbw_pressure_rear_is_in_range(m.bbw_pressure_rear);
-        in->P_f_m = romo_can_brake_by_wire_bbw_pressure_front_decode(m.bbw_pressure_front) * BAR_TO_PA;
-        in->P_r_m = romo_can_brake_by_wire_bbw_pressure_rear_decode(m.bbw_pressure_rear) * BAR_TO_PA;
-        break;
-    }
-    }
 }
 
 /* ------------------------------------------------------------------------------------------ stepping */
@@ -319,7 +152,7 @@ static void run_step(fdi_ecu_t *self, uint32_t t)
 {
     uint32_t validity = 0U;
     uint32_t i;
-    for (i = 0U; i < FDI_ECU_N_MSGS; ++i)
+    for (i = 0U; i < (uint32_t)self->bus->n_msgs; ++i)
     {
         fdi_ecu_msg_state_t *m = &self->msg[i];
         bool fresh = false;
@@ -335,7 +168,7 @@ static void run_step(fdi_ecu_t *self, uint32_t t)
         m->fresh = fresh;
         if (fresh)
         {
-            validity |= msg_desc[i].signals;
+            validity |= self->bus->msgs[i].signals;
         }
     }
     (void)fdi_diag_step(&self->diag, &self->in, validity); /* cannot fail: initialised instance, non-NULL */
@@ -390,44 +223,76 @@ static void run_due(fdi_ecu_t *self, uint32_t t)
 
 /* ------------------------------------------------------------------------------------------ API */
 
-fdi_status_t fdi_ecu_config_default(fdi_ecu_config_t *cfg, const fdi_table_t *table)
+fdi_status_t fdi_ecu_config_default(fdi_ecu_config_t *cfg, const fdi_table_t *table, const fdi_ecu_bus_t *bus)
 {
     fdi_status_t st = FDI_BAD_ARG;
-    if ((cfg != NULL) && (table != NULL))
+    if ((cfg != NULL) && (table != NULL) && (bus != NULL) && (bus->msgs != NULL) &&
+        ((uint32_t)bus->n_msgs <= FDI_ECU_MAX_MSGS))
     {
-        const fdi_table_design_t *d = &table->design;
-        const float rate = d->zeta * 6.28318530717959f * d->cutoff_hz;
-        st = FDI_BAD_TABLE;
-        if ((rate > 0.0f) && (d->obs_gain > 0.0f) && (d->dt > 0.0f))
+        st = fdi_diag_config_default(&cfg->diag, table);
+        if (st == FDI_OK)
         {
-            const float t_svf = (2.0f * FDI_DIAG_SETTLE_TAUS) / rate;
-            const float t_obs = FDI_DIAG_SETTLE_TAUS / d->obs_gain;
-            const float n = ceilf(((t_svf > t_obs) ? t_svf : t_obs) / d->dt);
-            if (fdi_float_is_finite(n) && (n < 60000.0f))
+            uint32_t i;
+            cfg->bus = bus;
+            for (i = 0U; i < FDI_ECU_MAX_MSGS; ++i)
             {
-                uint32_t i;
-                cfg->diag.table = table;
-                cfg->diag.d_x = FDI_ECU_DEFAULT_D_X;
-                cfg->diag.d_y = FDI_ECU_DEFAULT_D_Y;
-                cfg->diag.cusum_k = 1.5f;
-                cfg->diag.cusum_h = 150.0f;
-                cfg->diag.set_count = 10U;
-                cfg->diag.clear_count = 100U;
-                cfg->diag.warmup_steps = (uint16_t)((uint32_t)n + WARMUP_MARGIN_STEPS);
-                cfg->diag.mode = FDI_ISO_EXONERATION;
-                cfg->diag.iso_settle_steps = ISO_SETTLE_STEPS;
-                cfg->diag.episode_clear_steps = EPISODE_CLEAR_STEPS;
-                for (i = 0U; i < FDI_ECU_N_MSGS; ++i)
-                {
-                    cfg->timeout_us[i] = TIMEOUT_CYCLES * (uint32_t)msg_desc[i].cycle_ms * US_PER_MS;
-                }
-                cfg->max_delta_counter = 1U;
-                cfg->max_catchup_steps = 100U;
-                st = FDI_OK;
+                cfg->timeout_us[i] = (i < (uint32_t)bus->n_msgs)
+                                         ? (TIMEOUT_CYCLES * (uint32_t)bus->msgs[i].cycle_ms * US_PER_MS)
+                                         : 0U;
+            }
+            cfg->max_delta_counter = 1U;
+            cfg->max_catchup_steps = 100U;
+        }
+    }
+    return st;
+}
+
+static bool msg_ok(const fdi_ecu_msg_desc_t *m, uint32_t signal_universe)
+{
+    bool ok = (m->name != NULL) && (m->decode != NULL) && (m->dlc >= 2U) && (m->dlc <= FDI_ECU_FRAME_LEN) &&
+              (m->cycle_ms > 0U) && (m->can_id <= 0x7FFU) && (m->n_values <= FDI_ECU_MAX_MSG_VALUES) &&
+              ((m->n_values == 0U) || (m->signal_index != NULL));
+    if (ok)
+    {
+        uint32_t mask = 0U;
+        uint32_t k;
+        for (k = 0U; ok && (k < (uint32_t)m->n_values); ++k)
+        {
+            const uint32_t idx = (uint32_t)m->signal_index[k];
+            ok = (idx < FDI_FRAME_MAX_SIGNALS) && ((signal_universe & ((uint32_t)1U << idx)) != 0U);
+            mask |= ok ? ((uint32_t)1U << idx) : 0U;
+        }
+        ok = ok && (mask == m->signals);
+    }
+    return ok;
+}
+
+static fdi_status_t bus_check(const fdi_ecu_bus_t *bus, const fdi_table_t *table)
+{
+    fdi_status_t st = FDI_BAD_ARG;
+    if ((bus != NULL) && (table != NULL) && (bus->msgs != NULL) && (bus->name != NULL) &&
+        (bus->encode_diag != NULL) && (bus->n_msgs >= 1U) && ((uint32_t)bus->n_msgs <= FDI_ECU_MAX_MSGS) &&
+        (bus->diag_dlc >= 2U) && (bus->diag_dlc <= FDI_ECU_FRAME_LEN) &&
+        ((uint32_t)table->n_signals <= FDI_FRAME_MAX_SIGNALS))
+    {
+        const uint32_t universe = fdi_frame_low_mask((uint32_t)table->n_signals);
+        uint32_t i;
+        st = FDI_OK;
+        for (i = 0U; (st == FDI_OK) && (i < (uint32_t)bus->n_msgs); ++i)
+        {
+            const fdi_ecu_msg_desc_t *m = &bus->msgs[i];
+            if (!msg_ok(m, universe) || (msg_index(bus, m->can_id) != (int32_t)i) || (m->can_id == bus->diag_id))
+            {
+                st = FDI_BAD_ARG; /* bad message, or its ID twice (msg_index finds the last), or the diag ID */
             }
         }
     }
     return st;
+}
+
+fdi_status_t fdi_ecu_bus_check(const fdi_ecu_bus_t *bus, const fdi_table_t *table)
+{
+    return bus_check(bus, table);
 }
 
 fdi_status_t fdi_ecu_init(fdi_ecu_t *self, const fdi_ecu_config_t *cfg)
@@ -435,7 +300,8 @@ fdi_status_t fdi_ecu_init(fdi_ecu_t *self, const fdi_ecu_config_t *cfg)
     fdi_status_t st = FDI_BAD_ARG;
     uint32_t step_us = 0U;
     if ((self != NULL) && (cfg != NULL) && (cfg->diag.table != NULL) && (cfg->max_delta_counter >= 1U) &&
-        (cfg->max_delta_counter < E2E_COUNTER_MOD) && (cfg->max_catchup_steps >= 1U))
+        (cfg->max_delta_counter < E2E_COUNTER_MOD) && (cfg->max_catchup_steps >= 1U) &&
+        (bus_check(cfg->bus, cfg->diag.table) == FDI_OK))
     {
         const float dt = cfg->diag.table->design.dt;
         st = FDI_OK;
@@ -455,7 +321,7 @@ fdi_status_t fdi_ecu_init(fdi_ecu_t *self, const fdi_ecu_config_t *cfg)
         if (st == FDI_OK)
         {
             uint32_t i;
-            for (i = 0U; i < FDI_ECU_N_MSGS; ++i)
+            for (i = 0U; i < (uint32_t)cfg->bus->n_msgs; ++i)
             {
                 if (cfg->timeout_us[i] == 0U)
                 {
@@ -476,13 +342,15 @@ fdi_status_t fdi_ecu_init(fdi_ecu_t *self, const fdi_ecu_config_t *cfg)
         self->gen_mask = 0U;
         for (i = 0U; i < (uint32_t)t->n_tests; ++i)
         {
-            if (t->tests[i].kind != FDI_GEN_NONE)
+            if (t->tests[i].gen != NULL)
             {
                 self->gen_mask |= (uint32_t)1U << i;
             }
         }
-        self->in = (fdi_inputs_t){0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f,
-                                  0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+        for (i = 0U; i < FDI_FRAME_MAX_SIGNALS; ++i)
+        {
+            self->in.value[i] = 0.0f;
+        }
         self->cnt.frames = 0U;
         self->cnt.steps = 0U;
         self->cnt.steps_skipped = 0U;
@@ -491,16 +359,17 @@ fdi_status_t fdi_ecu_init(fdi_ecu_t *self, const fdi_ecu_config_t *cfg)
         {
             self->cnt.rejected[r] = 0U;
         }
-        for (i = 0U; i < FDI_ECU_N_MSGS; ++i)
+        for (i = 0U; i < FDI_ECU_MAX_MSGS; ++i)
         {
-            self->timeout_us[i] = cfg->timeout_us[i];
+            const bool used = i < (uint32_t)cfg->bus->n_msgs;
+            self->timeout_us[i] = used ? cfg->timeout_us[i] : 0U;
             self->msg[i].t_last_us = 0U;
             self->msg[i].last_counter = 0U;
             self->msg[i].seen = false;
             self->msg[i].have = false;
             self->msg[i].status_ok = false;
             self->msg[i].fresh = false;
-            self->cnt.msg[i].can_id = msg_desc[i].can_id;
+            self->cnt.msg[i].can_id = used ? cfg->bus->msgs[i].can_id : 0U;
             self->cnt.msg[i].received = 0U;
             self->cnt.msg[i].accepted = 0U;
             self->cnt.msg[i].timeouts = 0U;
@@ -523,6 +392,7 @@ fdi_status_t fdi_ecu_init(fdi_ecu_t *self, const fdi_ecu_config_t *cfg)
         self->tx_counter = 0U;
         self->started = false;
         self->tx_pending = false;
+        self->bus = cfg->bus;
         self->table = t;
     }
     else if (self != NULL)
@@ -548,16 +418,16 @@ static void reject(fdi_ecu_t *self, int32_t idx, fdi_ecu_reason_t why)
 /* E2E, range, sequence and status checks of an input frame of message idx, then its values. */
 static void accept_frame(fdi_ecu_t *self, uint32_t idx, const uint8_t *data, uint32_t t_us)
 {
+    const fdi_ecu_msg_desc_t *desc = &self->bus->msgs[idx];
     fdi_ecu_msg_state_t *m = &self->msg[idx];
-    fdi_inputs_t in = self->in;
-    frame_info_t fi = {0U, 0U, false};
-    if (fdi_ecu_e2e_crc(msg_desc[idx].data_id, data, (uint8_t)FDI_ECU_FRAME_LEN) != data[0])
+    fdi_ecu_rx_info_t fi = {0U, 0U, false, {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f}};
+    if (fdi_ecu_e2e_crc(desc->data_id, data, desc->dlc) != data[0])
     {
         reject(self, (int32_t)idx, FDI_ECU_REJ_BAD_CRC);
     }
     else
     {
-        decode(idx, data, &in, &fi);
+        desc->decode(data, &fi);
         if (!fi.in_range)
         {
             reject(self, (int32_t)idx, FDI_ECU_REJ_OUT_OF_RANGE);
@@ -584,7 +454,11 @@ static void accept_frame(fdi_ecu_t *self, uint32_t idx, const uint8_t *data, uin
             }
             else
             {
-                self->in = in;
+                uint32_t k;
+                for (k = 0U; k < (uint32_t)desc->n_values; ++k)
+                {
+                    self->in.value[desc->signal_index[k]] = fi.value[k];
+                }
                 m->status_ok = true;
                 m->have = true;
                 m->t_last_us = t_us;
@@ -599,18 +473,18 @@ fdi_status_t fdi_ecu_rx(fdi_ecu_t *self, uint32_t can_id, uint8_t dlc, const uin
     fdi_status_t st = FDI_BAD_ARG;
     if (ready(self) && ((data != NULL) || (dlc == 0U)))
     {
-        const int32_t idx = msg_index(can_id);
+        const int32_t idx = msg_index(self->bus, can_id);
         st = FDI_OK;
         run_due(self, t_us);
         self->cnt.frames++;
         if (idx < 0)
         {
-            reject(self, -1, (can_id == FDI_ECU_DIAG_ID) ? FDI_ECU_REJ_OWN_FRAME : FDI_ECU_REJ_UNKNOWN_ID);
+            reject(self, -1, (can_id == self->bus->diag_id) ? FDI_ECU_REJ_OWN_FRAME : FDI_ECU_REJ_UNKNOWN_ID);
         }
         else
         {
             self->cnt.msg[idx].received++;
-            if (dlc != FDI_ECU_FRAME_LEN)
+            if ((dlc != self->bus->msgs[idx].dlc) || (data == NULL))
             {
                 reject(self, idx, FDI_ECU_REJ_BAD_DLC);
             }
@@ -636,25 +510,18 @@ fdi_status_t fdi_ecu_poll(fdi_ecu_t *self, uint32_t t_us, fdi_ecu_tx_t *tx)
         run_due(self, t_us);
         if (self->tx_pending)
         {
-            struct romo_can_fdi_diagnosis_t msg;
+            const fdi_ecu_diag_msg_t msg = {self->tx_counter, self->res.status, self->res.diag.alarm_mask,
+                                            self->res.diag.iso.candidates, self->res.iso_class};
             fdi_ecu_frame_t *f = &tx->frame[0];
             uint32_t i;
             for (i = 0U; i < FDI_ECU_FRAME_LEN; ++i)
             {
                 f->data[i] = 0U;
             }
-            (void)romo_can_fdi_diagnosis_init(&msg);
-            msg.fdi_crc = 0U;
-            msg.fdi_counter = self->tx_counter;
-            msg.fdi_status = self->res.status;
-            msg.fdi_alarm_mask = (uint16_t)(self->res.diag.alarm_mask & 0x0FFFU);
-            msg.fdi_candidate_faults = self->res.diag.iso.candidates & 0x01FFFFFFU;
-            msg.fdi_isolation_class = self->res.iso_class;
-            (void)romo_can_fdi_diagnosis_pack(f->data, &msg, FDI_ECU_FRAME_LEN);
-            f->data[0] = fdi_ecu_e2e_crc((uint16_t)ROMO_CAN_E2E_FDI_DIAGNOSIS_DATA_ID, f->data,
-                                         (uint8_t)FDI_ECU_FRAME_LEN);
-            f->can_id = FDI_ECU_DIAG_ID;
-            f->dlc = (uint8_t)FDI_ECU_FRAME_LEN;
+            self->bus->encode_diag(&msg, f->data);
+            f->data[0] = fdi_ecu_e2e_crc(self->bus->diag_data_id, f->data, self->bus->diag_dlc);
+            f->can_id = self->bus->diag_id;
+            f->dlc = self->bus->diag_dlc;
             tx->n_frames = 1U;
             self->tx_counter = (uint8_t)(((uint32_t)self->tx_counter + 1U) % E2E_COUNTER_MOD);
             self->tx_pending = false;

@@ -60,6 +60,21 @@ SIGNAL_MAP: tuple[SignalMap, ...] = (
 # Messages the simulator transmits (the diagnosis message is produced by the FDI unit, not simulated).
 SIMULATED_MESSAGES: tuple[str, ...] = tuple(dict.fromkeys(m.message for m in SIGNAL_MAP))
 
+DIAG_NODE = "FDI"  # the diagnosis unit: the one message it sends is the diagnosis frame
+
+
+def _diag_id(path: Path) -> int:
+    db = cantools.database.load_file(str(path))
+    if not isinstance(db, cantools.database.can.Database):
+        raise ValueError(f"{path} is not a DBC CAN database")
+    sent = [m.frame_id for m in db.messages if DIAG_NODE in m.senders]
+    if len(sent) != 1:
+        raise ValueError(f"{path}: node {DIAG_NODE} sends {len(sent)} messages, expected the diagnosis frame only")
+    return int(sent[0])
+
+
+DIAG_ID: int = _diag_id(DEFAULT_DBC)  # ID of FDI_Diagnosis, from the DBC (the one definition on the host side)
+
 
 class E2EError(ValueError):
     """A received frame failed its E2E CRC check."""

@@ -1,7 +1,8 @@
 /*
- * _fdi_ecu.c - glue of the shared library fdi_host.ecu._fdi_ecu: the fw/ diagnoser and ECU core (compiled into the
- * same .so by setup.py) plus a few helpers that let host_tools/fdi_host/ecu_lib.py use them through ctypes
- * without mirroring structs that may change (tables) and check the layout of those it mirrors (sizes).
+ * _fdi_ecu.c - glue of the shared library fdi_host.ecu._fdi_ecu: the generic fw/ diagnoser and ECU core with the
+ * vehicle targets (ROMO: tables, generators, bus; three-tank: table, generators), compiled into the same .so by
+ * setup.py, plus a few helpers that let host_tools/fdi_host/ecu/bindings.py use them through ctypes without
+ * mirroring structs that may change (tables, buses) and check the layout of those it mirrors (sizes).
  * The Python module itself is empty; it exists so that setuptools builds and installs the library.
  */
 #define PY_SSIZE_T_CLEAN
@@ -10,11 +11,19 @@
 #include <stddef.h>
 #include <string.h>
 
+#include "fdi_diag.h"
 #include "fdi_ecu.h"
 #include "fdi_kin_table.h"
+#include "fdi_romo_bus.h"
+#include "fdi_romo_ecu.h"
+#include "fdi_romo_kin.h"
 #include "fdi_romo_table.h"
+#include "fdi_three_tank_table.h"
 
-/* sizeof of the structs ecu_lib.py handles: 0 fdi_ecu_t, 1 config, 2 counters, 3 result, 4 tx; else 0. */
+/* sizeof / offsetof / capacities the bindings check: 0 fdi_ecu_t, 1 config, 2 counters, 3 result, 4 tx,
+   5 offsetof(result, diag), 6 offsetof(diag result, iso), 7 FDI_DIAG_MAX_TESTS, 8 fdi_diag_t, 9 FDI_ECU_MAX_MSGS,
+   10 FDI_DIAG_MAX_SENS, 11 offsetof(diag result, sens_offset), 12 fdi_diag_result_t, 13 fdi_diag_config_t,
+   14 FDI_GEN_N_PARAMS, 15 FDI_FRAME_MAX_SIGNALS; else 0. */
 size_t fdi_py_sizeof(int what)
 {
     size_t n = 0U;
@@ -28,12 +37,20 @@ size_t fdi_py_sizeof(int what)
     case 5: n = offsetof(fdi_ecu_result_t, diag); break;
     case 6: n = offsetof(fdi_diag_result_t, iso); break;
     case 7: n = FDI_DIAG_MAX_TESTS; break;
+    case 8: n = sizeof(fdi_diag_t); break;
+    case 9: n = FDI_ECU_MAX_MSGS; break;
+    case 10: n = FDI_DIAG_MAX_SENS; break;
+    case 11: n = offsetof(fdi_diag_result_t, sens_offset); break;
+    case 12: n = sizeof(fdi_diag_result_t); break;
+    case 13: n = sizeof(fdi_diag_config_t); break;
+    case 14: n = FDI_GEN_N_PARAMS; break;
+    case 15: n = FDI_FRAME_MAX_SIGNALS; break;
     default: break;
     }
     return n;
 }
 
-/* The built-in tables by name ("kin", "romo"); NULL for others. */
+/* The built-in tables by name ("kin", "romo", "three_tank"); NULL for others. */
 const fdi_table_t *fdi_py_table(const char *name)
 {
     const fdi_table_t *t = NULL;
@@ -47,13 +64,49 @@ const fdi_table_t *fdi_py_table(const char *name)
         {
             t = &fdi_romo_table;
         }
+        else if (strcmp(name, "three_tank") == 0)
+        {
+            t = &fdi_three_tank_table;
+        }
     }
     return t;
 }
 
-/* Integers of a table: 0 n_faults, 1 n_tests, 2 mso_id of test i, 3 kind of test i, 4 fault_mask of test i,
-   5 input_mask of test i, 6 iso_class of fault i, 7 fault_signature of fault i,
-   8 design dt in microseconds; -1 on bad arguments. */
+/* The built-in buses by name ("romo"); NULL for others. */
+const fdi_ecu_bus_t *fdi_py_bus(const char *name)
+{
+    return ((name != NULL) && (strcmp(name, "romo") == 0)) ? &fdi_romo_bus : NULL;
+}
+
+/* The ECU defaults of a table on a bus: the vehicle's own defaults (ROMO: the kinematic parameters d_x, d_y). */
+int fdi_py_ecu_config_default(fdi_ecu_config_t *cfg, const fdi_table_t *table, const fdi_ecu_bus_t *bus)
+{
+    return (int)((bus == &fdi_romo_bus) ? fdi_romo_ecu_config_default(cfg, table)
+                                        : fdi_ecu_config_default(cfg, table, bus));
+}
+
+/* Index in fdi_diag_config_t.gen_param of a named run-time generator parameter ("d_x", "d_y" of the ROMO
+   kinematic generators); -1 for others. */
+int fdi_py_param_index(const char *name)
+{
+    int k = -1;
+    if (name != NULL)
+    {
+        if (strcmp(name, "d_x") == 0)
+        {
+            k = (int)FDI_ROMO_KIN_PARAM_D_X;
+        }
+        else if (strcmp(name, "d_y") == 0)
+        {
+            k = (int)FDI_ROMO_KIN_PARAM_D_Y;
+        }
+    }
+    return k;
+}
+
+/* Integers of a table: 0 n_faults, 1 n_tests, 2 mso_id of test i, 3 1 if test i has a generator, 4 fault_mask
+   of test i, 5 input_mask of test i, 6 iso_class of fault i, 7 fault_signature of fault i, 8 design dt in
+   microseconds, 9 n_signals, 10 sens_mask of test i's generator (0 without); -1 on bad arguments. */
 long long fdi_py_table_int(const fdi_table_t *t, int what, int i)
 {
     long long v = -1;
@@ -68,19 +121,22 @@ long long fdi_py_table_int(const fdi_table_t *t, int what, int i)
         case 0: v = nf; break;
         case 1: v = nt; break;
         case 2: v = test_ok ? (long long)t->tests[i].mso_id : -1; break;
-        case 3: v = test_ok ? (long long)t->tests[i].kind : -1; break;
+        case 3: v = test_ok ? (long long)(t->tests[i].gen != NULL) : -1; break;
         case 4: v = test_ok ? (long long)t->tests[i].fault_mask : -1; break;
         case 5: v = test_ok ? (long long)t->tests[i].input_mask : -1; break;
         case 6: v = fault_ok ? (long long)t->iso_class[i] : -1; break;
         case 7: v = fault_ok ? (long long)t->fault_signature[i] : -1; break;
         case 8: v = (long long)(t->design.dt * 1.0e6f + 0.5f); break;
+        case 9: v = (long long)t->n_signals; break;
+        case 10: v = test_ok ? ((t->tests[i].gen != NULL) ? (long long)t->tests[i].gen->sens_mask : 0) : -1; break;
         default: break;
         }
     }
     return v;
 }
 
-/* Strings of a table: 0 fault name i, 1 interpretation of test i; NULL on bad arguments. */
+/* Strings of a table: 0 fault name i, 1 interpretation of test i, 2 signal name i, 3 generator name of test i
+   ("" without); NULL on bad arguments. */
 const char *fdi_py_table_str(const fdi_table_t *t, int what, int i)
 {
     const char *s = NULL;
@@ -94,8 +150,46 @@ const char *fdi_py_table_str(const fdi_table_t *t, int what, int i)
         {
             s = t->tests[i].interpretation;
         }
+        else if ((what == 2) && (i < (int)t->n_signals))
+        {
+            s = t->signal_names[i];
+        }
+        else if ((what == 3) && (i < (int)t->n_tests))
+        {
+            s = (t->tests[i].gen != NULL) ? t->tests[i].gen->name : "";
+        }
     }
     return s;
+}
+
+/* Integers of a bus: 0 n_msgs, 1 can_id of message i, 2 diag_id, 3 cycle_ms of message i, 4 signal mask of
+   message i, 5 dlc of message i, 6 E2E data ID of message i, 7 diag data ID; -1 on bad arguments. */
+long long fdi_py_bus_int(const fdi_ecu_bus_t *b, int what, int i)
+{
+    long long v = -1;
+    if (b != NULL)
+    {
+        const int ok = (i >= 0) && (i < (int)b->n_msgs);
+        switch (what)
+        {
+        case 0: v = (long long)b->n_msgs; break;
+        case 1: v = ok ? (long long)b->msgs[i].can_id : -1; break;
+        case 2: v = (long long)b->diag_id; break;
+        case 3: v = ok ? (long long)b->msgs[i].cycle_ms : -1; break;
+        case 4: v = ok ? (long long)b->msgs[i].signals : -1; break;
+        case 5: v = ok ? (long long)b->msgs[i].dlc : -1; break;
+        case 6: v = ok ? (long long)b->msgs[i].data_id : -1; break;
+        case 7: v = (long long)b->diag_data_id; break;
+        default: break;
+        }
+    }
+    return v;
+}
+
+/* Name of message i of a bus; NULL on bad arguments. */
+const char *fdi_py_bus_str(const fdi_ecu_bus_t *b, int i)
+{
+    return ((b != NULL) && (i >= 0) && (i < (int)b->n_msgs)) ? b->msgs[i].name : NULL;
 }
 
 /*
@@ -132,6 +226,50 @@ long fdi_py_process(fdi_ecu_t *ecu, long n, const uint32_t *can_id, const uint8_
         }
     }
     return n_out;
+}
+
+/*
+ * The diagnoser alone over n frames (values[n * n_signals], signal k of frame s at s * n_signals + k, validity
+ * per frame): after each step its residuals (out_r[s * max_tests + i]) and, when out_sens is not NULL, its
+ * sensitivities (out_sens[s * max_sens + j], the result's sens[] as listed by sens_offset). Returns the number of
+ * steps run, or -1 on a bad argument or a failing call.
+ */
+long fdi_py_diag_run(fdi_diag_t *d, long n, int n_signals, const float *values, const uint32_t *validity,
+                     float *out_r, float *out_sens)
+{
+    long s;
+    if ((d == NULL) || (n < 0) || (n_signals < 0) || (n_signals > (int)FDI_FRAME_MAX_SIGNALS) ||
+        ((n > 0) && ((values == NULL) || (validity == NULL) || (out_r == NULL))))
+    {
+        return -1;
+    }
+    for (s = 0; s < n; ++s)
+    {
+        fdi_frame_t in;
+        fdi_diag_result_t res;
+        int k;
+        unsigned i;
+        for (k = 0; k < (int)FDI_FRAME_MAX_SIGNALS; ++k)
+        {
+            in.value[k] = (k < n_signals) ? values[(s * n_signals) + k] : 0.0f;
+        }
+        if ((fdi_diag_step(d, &in, validity[s]) != FDI_OK) || (fdi_diag_result(d, &res) != FDI_OK))
+        {
+            return -1;
+        }
+        for (i = 0U; i < FDI_DIAG_MAX_TESTS; ++i)
+        {
+            out_r[(s * (long)FDI_DIAG_MAX_TESTS) + (long)i] = res.residual[i];
+        }
+        if (out_sens != NULL)
+        {
+            for (i = 0U; i < (unsigned)res.sens_offset[FDI_DIAG_MAX_TESTS]; ++i)
+            {
+                out_sens[(s * (long)FDI_DIAG_MAX_SENS) + (long)i] = res.sens[i];
+            }
+        }
+    }
+    return n;
 }
 
 static struct PyModuleDef fdi_ecu_module = {PyModuleDef_HEAD_INIT, "_fdi_ecu",

@@ -1,45 +1,55 @@
-"""Python bindings (ctypes) of the C ECU core `fw/ecu` and the fw/ diagnoser: an ECU process on any CAN interface.
+"""Python bindings (ctypes) of the C ECU core `fw/ecu` and the fw/ diagnoser: an ECU process on any CAN interface,
+and the diagnoser alone on frames of signals.
 
-The shared library is the extension ``fdi_host.ecu._fdi_ecu`` that ``pip install -e .`` builds from fw/src,
-fw/generated, fw/generated/can and fw/ecu/src (see setup.py); this module loads it with `ctypes.CDLL` and wraps
-the C API of ``fw/ecu/include/fdi_ecu.h``::
+The shared library is the extension ``fdi_host.ecu._fdi_ecu`` that ``pip install -e .`` builds from the generic
+core (fw/src, fw/ecu/src) and the vehicle targets (fw/vehicles/romo: tables, generators, the bus generated from
+dbc/romo.dbc; fw/vehicles/three_tank) (see setup.py); this module loads it with `ctypes.CDLL` and wraps the C API
+of ``fw/ecu/include/fdi_ecu.h`` and ``fw/include/fdi_diag.h``::
 
     ecu = Ecu("kin")                       # or Ecu("romo", warmup_steps=400, timeout_s={"IMU_Motion": 0.02})
     for t, can_id, data in frames:         # t in seconds (monotonic)
         ecu.rx(can_id, data, t)
-        for fid, payload in ecu.poll(t):   # FDI_Diagnosis frames (ID 512) to send
+        for fid, payload in ecu.poll(t):   # FDI_Diagnosis frames (DIAG_ID, from the DBC) to send
             bus.send(...)
     ecu.result().candidates, ecu.counters().rejected
 
+    diag = Diagnoser("three_tank", sensitivities=True)   # no bus: frames of the table's signals
+    runs = diag.run({"u": u, "y1": y1, "y2": y2, "y3": y3})   # residuals, sensitivities, results per step
+
 Semantics (frame checks, timeouts, fixed steps at the table's dt, the diagnosis frame) are those of the C core:
 a step at T_k sees exactly the frames with t <= T_k, whatever the poll pattern. Times are converted to wrapping
-uint32 microseconds.
+uint32 microseconds. The message layout is the C bus description generated from the DBC (`bus_info`), read from
+the library, not kept here.
 """
 
 from __future__ import annotations
 
 import ctypes
 import importlib.util
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
 from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fdi_host.can.dbc import DIAG_ID
+
+__all__ = ["BUSES", "DIAG_ID", "REASONS", "TABLES", "BusInfo", "DiagRun", "Diagnoser", "Ecu", "EcuCounters",
+           "EcuError", "EcuResult", "MessageCounters", "TableInfo", "bus_info", "table_info"]
 
 REASONS: tuple[str, ...] = (
     "unknown_id", "own_frame", "bad_dlc", "bad_crc", "out_of_range", "repeated_counter", "counter_jump",
     "sensor_status",
 )
-MESSAGES: tuple[tuple[str, int], ...] = (
-    ("MotionDemand", 80), ("IMU_Motion", 128), ("VelocitySensor", 136), ("WheelRobot1", 256),
-    ("WheelRobot2", 257), ("WheelRobot3", 258), ("WheelRobot4", 259), ("BrakeByWire", 272),
-)
 STATUS_NAMES: dict[int, str] = {
     0: "INIT", 1: "NO_FAULT", 2: "FAULT_DETECTED", 3: "FAULT_ISOLATED", 4: "INPUT_INVALID", 15: "INVALID",
 }
 TEST_STATUS_NAMES: tuple[str, ...] = ("ok", "alarm", "not_evaluable")
-DIAG_ID = 512
-TABLES = ("kin", "romo")
-_N_MSGS = len(MESSAGES)
+TABLES = ("kin", "romo", "three_tank")
+BUSES = ("romo",)
+TABLE_BUS = {"kin": "romo", "romo": "romo"}  # the bus an ECU of a table listens to (three_tank: none)
 _N_REASONS = len(REASONS)
 _MODES = {"no_exoneration": 0, "exoneration": 1}
 
@@ -57,18 +67,28 @@ def _check(st: int, what: str) -> None:
 
 
 # ------------------------------------------------------------------------------------------ ctypes mirrors
-def _struct_types(max_tests: int) -> dict[str, type[ctypes.Structure]]:
+@dataclass(frozen=True)
+class _Caps:
+    max_tests: int
+    max_msgs: int
+    max_sens: int
+    n_params: int
+    max_signals: int
+
+
+def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
     class DiagConfig(ctypes.Structure):
         _fields_ = [
-            ("table", ctypes.c_void_p), ("d_x", ctypes.c_float), ("d_y", ctypes.c_float),
+            ("table", ctypes.c_void_p), ("gen_param", ctypes.c_float * c.n_params),
             ("cusum_k", ctypes.c_float), ("cusum_h", ctypes.c_float), ("set_count", ctypes.c_uint16),
             ("clear_count", ctypes.c_uint16), ("warmup_steps", ctypes.c_uint16), ("mode", ctypes.c_int),
             ("iso_settle_steps", ctypes.c_uint16), ("episode_clear_steps", ctypes.c_uint16),
+            ("sensitivities", ctypes.c_bool),
         ]
 
     class Config(ctypes.Structure):
         _fields_ = [
-            ("diag", DiagConfig), ("timeout_us", ctypes.c_uint32 * _N_MSGS),
+            ("bus", ctypes.c_void_p), ("diag", DiagConfig), ("timeout_us", ctypes.c_uint32 * c.max_msgs),
             ("max_delta_counter", ctypes.c_uint8), ("max_catchup_steps", ctypes.c_uint16),
         ]
 
@@ -81,7 +101,8 @@ def _struct_types(max_tests: int) -> dict[str, type[ctypes.Structure]]:
     class Counters(ctypes.Structure):
         _fields_ = [
             ("frames", ctypes.c_uint32), ("rejected", ctypes.c_uint32 * _N_REASONS), ("steps", ctypes.c_uint32),
-            ("steps_skipped", ctypes.c_uint32), ("tx_frames", ctypes.c_uint32), ("msg", MsgCounters * _N_MSGS),
+            ("steps_skipped", ctypes.c_uint32), ("tx_frames", ctypes.c_uint32),
+            ("msg", MsgCounters * c.max_msgs),
         ]
 
     class IsoResult(ctypes.Structure):
@@ -93,8 +114,9 @@ def _struct_types(max_tests: int) -> dict[str, type[ctypes.Structure]]:
     class DiagResult(ctypes.Structure):
         _fields_ = [
             ("n_tests", ctypes.c_uint8), ("alarm_mask", ctypes.c_uint32), ("evaluable_mask", ctypes.c_uint32),
-            ("status", ctypes.c_int * max_tests), ("residual", ctypes.c_float * max_tests),
-            ("ratio", ctypes.c_float * max_tests), ("accused_mask", ctypes.c_uint32), ("iso", IsoResult),
+            ("status", ctypes.c_int * c.max_tests), ("residual", ctypes.c_float * c.max_tests),
+            ("ratio", ctypes.c_float * c.max_tests), ("accused_mask", ctypes.c_uint32), ("iso", IsoResult),
+            ("sens_offset", ctypes.c_uint8 * (c.max_tests + 1)), ("sens", ctypes.c_float * c.max_sens),
         ]
 
     class Result(ctypes.Structure):
@@ -111,14 +133,20 @@ def _struct_types(max_tests: int) -> dict[str, type[ctypes.Structure]]:
     class Tx(ctypes.Structure):
         _fields_ = [("n_frames", ctypes.c_uint8), ("frame", Frame * 1)]
 
-    return {"Config": Config, "Counters": Counters, "Result": Result, "Tx": Tx, "DiagResult": DiagResult}
+    class SignalFrame(ctypes.Structure):
+        _fields_ = [("value", ctypes.c_float * c.max_signals)]
+
+    return {"Config": Config, "Counters": Counters, "Result": Result, "Tx": Tx, "DiagResult": DiagResult,
+            "DiagConfig": DiagConfig, "SignalFrame": SignalFrame}
 
 
 @dataclass(frozen=True)
 class _Lib:
     dll: ctypes.CDLL
     types: dict[str, type[ctypes.Structure]]
+    caps: _Caps
     ecu_size: int
+    diag_size: int
 
 
 @cache
@@ -129,34 +157,48 @@ def _lib() -> _Lib:
     dll = ctypes.CDLL(spec.origin)
     dll.fdi_py_sizeof.restype = ctypes.c_size_t
     dll.fdi_py_sizeof.argtypes = [ctypes.c_int]
-    max_tests = int(dll.fdi_py_sizeof(7))
-    types = _struct_types(max_tests)
-    for what, name in ((1, "Config"), (2, "Counters"), (3, "Result"), (4, "Tx")):
-        c_size, py_size = int(dll.fdi_py_sizeof(what)), ctypes.sizeof(types[name])
+
+    def size(what: int) -> int:
+        return int(dll.fdi_py_sizeof(what))
+
+    caps = _Caps(max_tests=size(7), max_msgs=size(9), max_sens=size(10), n_params=size(14), max_signals=size(15))
+    types = _struct_types(caps)
+    for what, name in ((1, "Config"), (2, "Counters"), (3, "Result"), (4, "Tx"), (12, "DiagResult"),
+                       (13, "DiagConfig")):
+        c_size, py_size = size(what), ctypes.sizeof(types[name])
         if c_size != py_size:
             raise ImportError(f"fdi_host.ecu.bindings: ctypes mirror of {name} has {py_size} bytes, C has {c_size}")
-    if int(dll.fdi_py_sizeof(5)) != types["Result"].diag.offset:
-        raise ImportError("fdi_host.ecu.bindings: layout of fdi_ecu_result_t differs from its ctypes mirror")
-    if int(dll.fdi_py_sizeof(6)) != types["DiagResult"].iso.offset:
-        raise ImportError("fdi_host.ecu.bindings: layout of fdi_diag_result_t differs from its ctypes mirror")
+    for what, (struct, field) in ((5, ("Result", "diag")), (6, ("DiagResult", "iso")),
+                                  (11, ("DiagResult", "sens_offset"))):
+        if size(what) != getattr(types[struct], field).offset:
+            raise ImportError(f"fdi_host.ecu.bindings: layout of {struct}.{field} differs from its ctypes mirror")
     vp, st = ctypes.c_void_p, ctypes.c_int
     sigs: dict[str, tuple[Any, list[Any]]] = {
         "fdi_py_table": (vp, [ctypes.c_char_p]),
+        "fdi_py_bus": (vp, [ctypes.c_char_p]),
         "fdi_py_table_int": (ctypes.c_longlong, [vp, ctypes.c_int, ctypes.c_int]),
         "fdi_py_table_str": (ctypes.c_char_p, [vp, ctypes.c_int, ctypes.c_int]),
-        "fdi_ecu_config_default": (st, [vp, vp]),
+        "fdi_py_bus_int": (ctypes.c_longlong, [vp, ctypes.c_int, ctypes.c_int]),
+        "fdi_py_bus_str": (ctypes.c_char_p, [vp, ctypes.c_int]),
+        "fdi_py_param_index": (ctypes.c_int, [ctypes.c_char_p]),
+        "fdi_py_ecu_config_default": (st, [vp, vp, vp]),
         "fdi_ecu_init": (st, [vp, vp]),
         "fdi_ecu_rx": (st, [vp, ctypes.c_uint32, ctypes.c_uint8, ctypes.c_char_p, ctypes.c_uint32]),
         "fdi_ecu_poll": (st, [vp, ctypes.c_uint32, vp]),
         "fdi_ecu_counters": (st, [vp, vp]),
         "fdi_ecu_result": (st, [vp, vp]),
         "fdi_py_process": (ctypes.c_long, [vp, ctypes.c_long, vp, vp, vp, vp, vp, vp, ctypes.c_long]),
+        "fdi_diag_config_default": (st, [vp, vp]),
+        "fdi_diag_init": (st, [vp, vp]),
+        "fdi_diag_step": (st, [vp, vp, ctypes.c_uint32]),
+        "fdi_diag_result": (st, [vp, vp]),
+        "fdi_py_diag_run": (ctypes.c_long, [vp, ctypes.c_long, ctypes.c_int, vp, vp, vp, vp]),
     }
     for name, (res, args) in sigs.items():
         fn = getattr(dll, name)
         fn.restype = res
         fn.argtypes = args
-    return _Lib(dll, types, int(dll.fdi_py_sizeof(0)))
+    return _Lib(dll, types, caps, size(0), size(8))
 
 
 # ------------------------------------------------------------------------------------------ tables
@@ -174,14 +216,20 @@ class TableInfo:
     has_generator: tuple[bool, ...]
     iso_class: tuple[int, ...]  # per fault: the faults structurally not isolable from it (bitmask)
     dt: float  # design sample time = diagnosis step [s]
+    signal_names: tuple[str, ...] = ()  # the frame's signals by index
+    sens_masks: tuple[int, ...] = ()  # per test: faults whose sensitivity its generator outputs (ascending)
 
     @property
     def n_tests(self) -> int:
         return len(self.mso_ids)
 
     def fault_labels(self, mask: int) -> list[str]:
-        """Short labels ("f4") of the faults in a bitmask."""
-        return [f"f{j + 1}" for j in range(self.n_faults) if mask >> j & 1]
+        """Short labels ("f4", the fault's name) of the faults in a bitmask."""
+        return [self.fault_names[j].split()[0] for j in range(self.n_faults) if mask >> j & 1]
+
+    def sens_faults(self, test: int) -> list[int]:
+        """Fault indices of test `test`'s sensitivities, in the order the diagnoser lists them."""
+        return [j for j in range(32) if self.sens_masks[test] >> j & 1]
 
 
 def _table_ptr(name: str) -> int:
@@ -198,6 +246,7 @@ def table_info(name: str) -> TableInfo:
     dll = _lib().dll
     t = _table_ptr(name)
     nf, nt = int(dll.fdi_py_table_int(t, 0, 0)), int(dll.fdi_py_table_int(t, 1, 0))
+    ns = int(dll.fdi_py_table_int(t, 9, 0))
 
     def ints(what: int, n: int) -> tuple[int, ...]:
         return tuple(int(dll.fdi_py_table_int(t, what, i)) for i in range(n))
@@ -212,8 +261,79 @@ def table_info(name: str) -> TableInfo:
         test_names=tuple(f"MSO{m}: {s}" for m, s in zip(mso, interp, strict=True)), mso_ids=mso,
         test_fault_masks=ints(4, nt), test_input_masks=ints(5, nt),
         has_generator=tuple(k != 0 for k in ints(3, nt)), iso_class=ints(6, nf),
-        dt=int(dll.fdi_py_table_int(t, 8, 0)) * 1e-6,
+        dt=int(dll.fdi_py_table_int(t, 8, 0)) * 1e-6, signal_names=strs(2, ns), sens_masks=ints(10, nt),
     )
+
+
+@dataclass(frozen=True)
+class BusInfo:
+    """A built-in bus (generated from its DBC): the input messages in the order of the ECU's counters."""
+
+    name: str
+    messages: tuple[tuple[str, int], ...]  # (DBC message name, CAN ID)
+    cycle_ms: tuple[int, ...]
+    signals: tuple[int, ...]  # frame signal mask per message
+    data_ids: tuple[int, ...]
+    diag_id: int
+    diag_data_id: int
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(n for n, _ in self.messages)
+
+
+def _bus_ptr(name: str) -> int:
+    if name not in BUSES:
+        raise ValueError(f"unknown bus {name!r}; use one of {BUSES}")
+    ptr = _lib().dll.fdi_py_bus(name.encode())
+    if not ptr:
+        raise EcuError(f"bus {name!r} is not in the library")
+    return int(ptr)
+
+
+@cache
+def bus_info(name: str = "romo") -> BusInfo:
+    dll = _lib().dll
+    b = _bus_ptr(name)
+    n = int(dll.fdi_py_bus_int(b, 0, 0))
+
+    def ints(what: int) -> tuple[int, ...]:
+        return tuple(int(dll.fdi_py_bus_int(b, what, i)) for i in range(n))
+
+    names = tuple((dll.fdi_py_bus_str(b, i) or b"").decode() for i in range(n))
+    return BusInfo(name, tuple(zip(names, ints(1), strict=True)), ints(3), ints(4), ints(6),
+                   int(dll.fdi_py_bus_int(b, 2, 0)), int(dll.fdi_py_bus_int(b, 7, 0)))
+
+
+def _apply_diag(d: Any, ov: dict[str, Any]) -> None:
+    """Overrides of the diagnoser settings (fdi_diag_config_t), consumed from `ov`."""
+    dll = _lib().dll
+    for key in ("d_x", "d_y"):
+        if key in ov:
+            k = int(dll.fdi_py_param_index(key.encode()))
+            assert k >= 0, key
+            d.gen_param[k] = float(ov.pop(key))
+    for key in ("cusum_k", "cusum_h"):
+        if key in ov:
+            setattr(d, key, float(ov.pop(key)))
+    for key in ("set_count", "clear_count", "warmup_steps", "iso_settle_steps", "episode_clear_steps"):
+        if key in ov:
+            v = int(ov.pop(key))
+            if not 0 <= v <= 0xFFFF:
+                raise ValueError(f"{key} = {v} is outside 0..65535")
+            setattr(d, key, v)
+    if "mode" in ov:
+        mode = ov.pop("mode")
+        if mode not in _MODES:
+            raise ValueError(f"mode {mode!r}: use one of {tuple(_MODES)}")
+        d.mode = _MODES[mode]
+    if "sensitivities" in ov:
+        d.sensitivities = bool(ov.pop("sensitivities"))
+
+
+def _sensitivities(d: Any, n_tests: int) -> tuple[tuple[float, ...], ...]:
+    off = [int(d.sens_offset[i]) for i in range(n_tests + 1)]
+    return tuple(tuple(float(d.sens[k]) for k in range(off[i], off[i + 1])) for i in range(n_tests))
 
 
 # ------------------------------------------------------------------------------------------ results
@@ -246,7 +366,7 @@ class EcuResult:
     step: int  # steps run so far (0: none)
     t_us: int  # time of the last step (wrapping uint32 microseconds)
     status: int  # FDI_Status of the diagnosis frame
-    validity: int  # FDI_SIGM_* mask used by the last step
+    validity: int  # frame signal mask (the table's signals by bit) used by the last step
     alarm_mask: int
     evaluable_mask: int
     accused_mask: int  # tests accused in the current isolation episode (latched alarms)
@@ -260,6 +380,7 @@ class EcuResult:
     residuals: tuple[float, ...]
     ratios: tuple[float, ...]
     test_names: tuple[str, ...]
+    sensitivities: tuple[tuple[float, ...], ...] = ()  # per test: d r / d f of its sens faults (with sensitivities)
 
     @property
     def status_name(self) -> str:
@@ -275,12 +396,13 @@ def _t_us(t: float) -> int:
 
 
 class Ecu:
-    """One ECU core instance (C struct in a ctypes buffer) on table ``"romo"`` (generated) or ``"kin"``.
+    """One ECU core instance (C struct in a ctypes buffer) on table ``"romo"`` (generated) or ``"kin"``, listening
+    to the table's bus (``TABLE_BUS``: the ROMO bus generated from dbc/romo.dbc).
 
-    Overrides: ``d_x``, ``d_y``, ``cusum_k``, ``cusum_h``, ``set_count``, ``clear_count``, ``warmup_steps``,
-    ``mode`` ("exoneration" | "no_exoneration"), ``iso_settle_steps``, ``episode_clear_steps`` (fdi_diag.h),
-    ``timeout_s`` (one value for all messages or a mapping
-    message name -> seconds), ``max_delta_counter``, ``max_catchup_steps``.
+    Overrides: ``d_x``, ``d_y`` (the ROMO kinematic generators' parameters), ``cusum_k``, ``cusum_h``,
+    ``set_count``, ``clear_count``, ``warmup_steps``, ``mode`` ("exoneration" | "no_exoneration"),
+    ``iso_settle_steps``, ``episode_clear_steps``, ``sensitivities`` (fdi_diag.h), ``timeout_s`` (one value for all
+    messages or a mapping message name -> seconds), ``max_delta_counter``, ``max_catchup_steps``.
     """
 
     def __init__(self, table: str = "romo", **overrides: Any) -> None:
@@ -288,9 +410,13 @@ class Ecu:
         self._dll = lib.dll
         self._types = lib.types
         self.table = table_info(table)
+        if table not in TABLE_BUS:
+            raise ValueError(f"table {table!r} has no bus to listen to; use Diagnoser({table!r})")
+        self.bus = bus_info(TABLE_BUS[table])
         cfg = lib.types["Config"]()
-        _check(self._dll.fdi_ecu_config_default(ctypes.byref(cfg), _table_ptr(table)), "fdi_ecu_config_default")
-        self._apply(cfg, dict(overrides))
+        _check(self._dll.fdi_py_ecu_config_default(ctypes.byref(cfg), _table_ptr(table), _bus_ptr(self.bus.name)),
+               "fdi_ecu_config_default")
+        self._apply(cfg, dict(overrides), self.bus.names)
         self.config = cfg
         self._buf = ctypes.create_string_buffer(lib.ecu_size)
         self._self = ctypes.cast(self._buf, ctypes.c_void_p)
@@ -298,31 +424,16 @@ class Ecu:
         self._tx = lib.types["Tx"]()
 
     @staticmethod
-    def _apply(cfg: Any, ov: dict[str, Any]) -> None:
-        d = cfg.diag
-        for key in ("d_x", "d_y", "cusum_k", "cusum_h"):
-            if key in ov:
-                setattr(d, key, float(ov.pop(key)))
-        for key in ("set_count", "clear_count", "warmup_steps", "iso_settle_steps", "episode_clear_steps"):
-            if key in ov:
-                v = int(ov.pop(key))
-                if not 0 <= v <= 0xFFFF:
-                    raise ValueError(f"{key} = {v} is outside 0..65535")
-                setattr(d, key, v)
-        if "mode" in ov:
-            mode = ov.pop("mode")
-            if mode not in _MODES:
-                raise ValueError(f"mode {mode!r}: use one of {tuple(_MODES)}")
-            d.mode = _MODES[mode]
+    def _apply(cfg: Any, ov: dict[str, Any], names: Sequence[str]) -> None:
+        _apply_diag(cfg.diag, ov)
         if "timeout_s" in ov:
             to = ov.pop("timeout_s")
-            names = [n for n, _ in MESSAGES]
             items: Iterable[tuple[str, float]] = (
                 to.items() if isinstance(to, Mapping) else ((n, float(to)) for n in names)
             )
             for name, sec in items:
                 if name not in names:
-                    raise ValueError(f"timeout_s: unknown message {name!r}; messages are {names}")
+                    raise ValueError(f"timeout_s: unknown message {name!r}; messages are {list(names)}")
                 us = round(float(sec) * 1e6)
                 if not 0 < us <= 0xFFFFFFFF:
                     raise ValueError(f"timeout_s[{name}] = {sec} s is not a positive time")
@@ -381,13 +492,38 @@ class Ecu:
         if m < 0:
             raise EcuError("fdi_ecu_rx/poll failed during process()")
         raw = bytes(out)
-        return [(float(fl[out_idx[i]][0]), DIAG_ID, raw[8 * i : 8 * i + 8]) for i in range(m)]
+        return [(float(fl[out_idx[i]][0]), self.bus.diag_id, raw[8 * i : 8 * i + 8]) for i in range(m)]
+
+    def process_arrays(self, t: Any, can_id: Any, dlc: Any, data: Any) -> tuple[NDArray[np.int64], bytes]:
+        """`process` on frames held in arrays, for a whole log without Python work per frame: times [s], CAN
+        IDs, payload lengths (above 8: bad DLC, as in rx) and payloads as n rows of 8 bytes (zero padded).
+        Returns the index of the frame after which each diagnosis frame was produced, and their payloads
+        (8 bytes each, concatenated)."""
+        t_us = (np.rint(np.asarray(t, dtype=np.float64) * 1e6).astype(np.int64) & 0xFFFFFFFF).astype(np.uint32)
+        n = t_us.size
+        ids_in = np.asarray(can_id)
+        if n and (ids_in.min() < 0 or ids_in.max() > 0xFFFFFFFF):
+            raise ValueError("CAN IDs must be 32-bit values")
+        ids = np.ascontiguousarray(ids_in, dtype=np.uint32)
+        dlcs = np.ascontiguousarray(np.minimum(np.asarray(dlc), 255), dtype=np.uint8)
+        raw_in = np.ascontiguousarray(np.frombuffer(data, dtype=np.uint8) if isinstance(data, bytes | bytearray)
+                                      else np.asarray(data, dtype=np.uint8).reshape(-1))
+        if not ids.size == dlcs.size == n or raw_in.size != 8 * n:
+            raise ValueError(f"process_arrays: {n} times, {ids.size} IDs, {dlcs.size} lengths, {raw_in.size} bytes "
+                             "(8 per frame)")
+        out = np.zeros(8 * n, dtype=np.uint8)
+        out_idx = np.zeros(n, dtype=np.int64 if ctypes.sizeof(ctypes.c_long) == 8 else np.int32)
+        m = int(self._dll.fdi_py_process(self._self, n, ids.ctypes.data, dlcs.ctypes.data, raw_in.ctypes.data,
+                                         t_us.ctypes.data, out.ctypes.data, out_idx.ctypes.data, n))
+        if m < 0:
+            raise EcuError("fdi_ecu_rx/poll failed during process_arrays()")
+        return out_idx[:m].astype(np.int64), out[: 8 * m].tobytes()
 
     def counters(self) -> EcuCounters:
         c = self._types["Counters"]()
         _check(self._dll.fdi_ecu_counters(self._self, ctypes.byref(c)), "fdi_ecu_counters")
         msgs = {}
-        for i, (name, _) in enumerate(MESSAGES):
+        for i, (name, _) in enumerate(self.bus.messages):
             m = c.msg[i]
             msgs[name] = MessageCounters(
                 name, int(m.can_id), int(m.received), int(m.accepted), int(m.timeouts),
@@ -412,4 +548,108 @@ class Ecu:
             residuals=tuple(float(d.residual[i]) for i in range(n)),
             ratios=tuple(float(d.ratio[i]) for i in range(n)),
             test_names=self.table.test_names,
+            sensitivities=_sensitivities(d, n),
         )
+
+
+# ------------------------------------------------------------------------------------------ the diagnoser alone
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class DiagRun:
+    """The diagnoser over a sequence of frames: per step and test the residual, per test its sensitivities
+    (columns in `TableInfo.sens_faults` order; empty without sensitivities), and the result after every step."""
+
+    residuals: FloatArray  # [step, test]
+    sensitivities: tuple[FloatArray, ...]  # per test: [step, sensitivity]
+    results: tuple[EcuResult, ...]
+
+
+class Diagnoser:
+    """The generic diagnoser (fw/include/fdi_diag.h) on a table without a bus (``"three_tank"``, or any built-in
+    table): frames of the table's signals in, alarms, isolation and sensitivities out, one step per frame.
+    Overrides as `Ecu` (no bus options); defaults fdi_diag_config_default."""
+
+    def __init__(self, table: str, **overrides: Any) -> None:
+        lib = _lib()
+        self._dll = lib.dll
+        self._types = lib.types
+        self._caps = lib.caps
+        self.table = table_info(table)
+        cfg = lib.types["DiagConfig"]()
+        _check(self._dll.fdi_diag_config_default(ctypes.byref(cfg), _table_ptr(table)), "fdi_diag_config_default")
+        ov = dict(overrides)
+        _apply_diag(cfg, ov)
+        if ov:
+            raise TypeError(f"unknown Diagnoser option(s): {sorted(ov)}")
+        self.config = cfg
+        self._buf = ctypes.create_string_buffer(lib.diag_size)
+        self._self = ctypes.cast(self._buf, ctypes.c_void_p)
+        _check(self._dll.fdi_diag_init(self._self, ctypes.byref(cfg)), "fdi_diag_init")
+        self._steps = 0
+
+    def _frames(self, signals: Mapping[str, Any]) -> NDArray[np.float32]:
+        names = self.table.signal_names
+        unknown = set(signals) - set(names)
+        if unknown:
+            raise ValueError(f"not signals of table {self.table.name}: {sorted(unknown)}; its signals are {names}")
+        n = len(next(iter(signals.values())))
+        cols = [np.asarray(signals[s], dtype=np.float32) if s in signals else np.full(n, np.nan, np.float32)
+                for s in names]
+        return np.ascontiguousarray(np.column_stack(cols), dtype=np.float32)
+
+    def _result(self) -> EcuResult:
+        r = self._types["DiagResult"]()
+        _check(self._dll.fdi_diag_result(self._self, ctypes.byref(r)), "fdi_diag_result")
+        n = self.table.n_tests
+        return EcuResult(
+            step=self._steps, t_us=0, status=0, validity=0, alarm_mask=int(r.alarm_mask),
+            evaluable_mask=int(r.evaluable_mask), accused_mask=int(r.accused_mask),
+            candidates=int(r.iso.candidates), class_mask=int(r.iso.class_mask), n_classes=int(r.iso.n_classes),
+            detected=bool(r.iso.detected), isolated=bool(r.iso.isolated), iso_class=0,
+            test_status=tuple(TEST_STATUS_NAMES[int(r.status[i])] for i in range(n)),
+            residuals=tuple(float(r.residual[i]) for i in range(n)), ratios=tuple(float(r.ratio[i]) for i in range(n)),
+            test_names=self.table.test_names, sensitivities=_sensitivities(r, n))
+
+    def step(self, values: Mapping[str, float], validity: int | None = None) -> EcuResult:
+        """One step with one frame (signals by name; a missing one is invalid); validity default: every signal
+        given."""
+        frame = self._frames({k: [v] for k, v in values.items()})[0]
+        sf = self._types["SignalFrame"]()
+        for i, v in enumerate(frame.tolist()):
+            sf.value[i] = v
+        names = self.table.signal_names
+        valid = sum(1 << i for i, s in enumerate(names) if s in values) if validity is None else validity
+        _check(self._dll.fdi_diag_step(self._self, ctypes.byref(sf), valid), "fdi_diag_step")
+        self._steps += 1
+        return self._result()
+
+    def run(self, signals: Mapping[str, Any], results: bool = True) -> DiagRun:
+        """One step per sample of `signals` (the table's signals by name, equal lengths; a signal not given is
+        invalid): the residuals and sensitivities in one C call per batch, and with `results` the result after
+        every step (slower: one call per step)."""
+        frames = self._frames(signals)
+        n, ns = frames.shape
+        valid = sum(1 << i for i, s in enumerate(self.table.signal_names) if s in signals)
+        validity = np.full(n, valid, dtype=np.uint32)
+        caps = self._caps
+        out_r = np.zeros((n, caps.max_tests), dtype=np.float32)
+        out_s = np.zeros((n, caps.max_sens), dtype=np.float32)
+        res: list[EcuResult] = []
+        chunk = 1 if results else max(n, 1)
+        for a in range(0, n, chunk):
+            b = min(n, a + chunk)
+            m = int(self._dll.fdi_py_diag_run(
+                self._self, b - a, ns, frames[a:b].ctypes.data, validity[a:b].ctypes.data,
+                out_r[a:b].ctypes.data, out_s[a:b].ctypes.data))
+            if m != b - a:
+                raise EcuError("fdi_diag_step failed during run()")
+            self._steps += m
+            if results:
+                res.append(self._result())
+        nt = self.table.n_tests
+        counts = [len(self.table.sens_faults(i)) if bool(self.config.sensitivities) else 0 for i in range(nt)]
+        starts = np.cumsum([0, *counts])
+        sens = tuple(out_s[:, starts[i]:starts[i + 1]].astype(np.float64) for i in range(nt))
+        return DiagRun(out_r[:, :nt].astype(np.float64), sens, tuple(res))

@@ -28,11 +28,13 @@ from dataclasses import asdict, dataclass, field, is_dataclass
 from pathlib import Path
 from typing import Any
 
+from fdi_host.can.dbc import DIAG_ID
 from fdi_host.ecu.records import DiagRecord, TableClasses
 from fdi_host.sim.faults import FAULT_IDS
 
+__all__ = ["DIAG_ID", "ORIGIN_LEAD", "EcuSession", "StepRecord", "load_steps", "table_classes"]
+
 ORIGIN_LEAD = 0.0005  # s
-DIAG_ID = 512  # FDI_Diagnosis
 
 
 @dataclass
@@ -50,6 +52,13 @@ class StepRecord:
     residuals: list[float]
     ratios: list[float]
     diag_counter: int
+
+
+def _due(t: float, step: float) -> bool:
+    """Whether the C core runs the step at ECU time `step` when called at `t`: the bindings round times to whole
+    microseconds and the core runs the steps strictly before the call's microsecond (a frame in the same
+    microsecond as a step boundary does not run it; the next frame does)."""
+    return round(t * 1e6) > round(step * 1e6)
 
 
 def _get(obj: Any, *names: str, default: Any = None) -> Any:
@@ -87,7 +96,7 @@ class EcuSession:
     steps: list[StepRecord] = field(default_factory=list)
     frames_in: int = 0
     ecu: Any = None
-    next_step: float = 0.0  # ECU time of the next step that is due [s]
+    next_step: float = 0.0  # ECU time of the next step not yet run [s]; due for a frame in a later microsecond
     dt: float = 0.01  # diagnosis step [s], from the table
 
     def __post_init__(self) -> None:
@@ -109,7 +118,7 @@ class EcuSession:
         if self.origin is None:  # anchor the step schedule (T_k = k * dt) half a millisecond before the frame
             out += self.anchor(wall, now)
         t = self._t(wall)
-        if t >= self.next_step:  # a poll with no step due does nothing: skip the call
+        if _due(t, self.next_step):  # a poll with no step due does nothing: skip the call
             out += self._poll(t, frame_id, data, wall, now)
         self.ecu.rx(frame_id, data, t)
         self.frames_in += 1
@@ -129,7 +138,7 @@ class EcuSession:
                 self.anchor(wall)
             origin = self.origin if self.origin is not None else wall
             t = max(t, wall - origin)
-            if t >= self.next_step:
+            if _due(t, self.next_step):
                 self._poll(t, frame_id, data, wall, 0.0)
             rx(frame_id, data, t)
             n += 1
@@ -163,7 +172,8 @@ class EcuSession:
 
     def _poll(self, t: float, trig_id: int, trig_data: bytes, wall: float, now: float) -> list[tuple[int, bytes]]:
         frames: list[tuple[int, bytes]] = list(self.ecu.poll(t))
-        self.next_step = (math.floor(round(t / self.dt, 6)) + 1) * self.dt
+        step_us = round(self.dt * 1e6)
+        self.next_step = -(-round(t * 1e6) // step_us) * self.dt  # the C core ran every step before t's microsecond
         if frames:
             r = self.ecu.result()
             _fid, data = frames[-1]

@@ -1,19 +1,19 @@
-"""Residual variances and reaction sizes of the hand-made kinematic table (fw/src/fdi_kin_table.c) from
+"""Residual variances and reaction sizes of the hand-made kinematic table (fw/vehicles/romo/src/fdi_kin_table.c) from
 simulated drives through the C ECU core: the rules of `fdi-tune calibrate` and `fdi-tune fault-sizes`
 for the generated table.
 
-The kinematic generators are hand-written C (fw/src/fdi_arr_kin.c), so their residuals are taken from the
-ECU itself (fdi_host.ecu.bindings, every evaluable step of every drive). Per test, the calibrated sigma is the
+The kinematic generators are hand-written C (fw/vehicles/romo/src/fdi_romo_kin.c), so their residuals are taken
+from the ECU itself (fdi_host.ecu.bindings, every evaluable step of every drive). Per test, the calibrated sigma is the
 smallest sigma with no raw alarm (|r| > gate sigma or CUSUM k = 1.5, h = 150) in any drive, times the margin
 1.25 (fdi_host.tuning.calibrate). Drives: every quality-suite scenario with the noise seeds of SEEDS,
 which neither the quality suite's fault cases (the scenario's own seed) nor its fault-free drives
 (1000 + 17 k) use. Each variance is at least the one measured on the C unit tests' synthetic manoeuvre
 (SYNTHETIC_VARIANCE): the table must hold in both environments. Reaction sizes (which quiet test may
-exonerate which fault, fw/include/fdi_iso.h): `reaction_sizes`. Output: fw/generated/fdi_kin_calibration.h,
-included by fdi_kin_table.c.
+exonerate which fault, fw/include/fdi_iso.h): `reaction_sizes`. Output:
+fw/vehicles/romo/generated/fdi_kin_calibration.h, included by fdi_kin_table.c.
 
-    fdi-tune kin-calibration --out fw/generated/fdi_kin_calibration.h    # regenerate (~3 min)
-    fdi-tune kin-calibration --check fw/generated/fdi_kin_calibration.h  # exit 1 when stale
+    fdi-tune kin-calibration --out fw/vehicles/romo/generated/fdi_kin_calibration.h    # regenerate (~3 min)
+    fdi-tune kin-calibration --check fw/vehicles/romo/generated/fdi_kin_calibration.h  # exit 1 when stale
 """
 
 from __future__ import annotations
@@ -35,14 +35,14 @@ from fdi_host.tuning.calibrate import MARGIN, Calibration, calibrate, first_alar
 from fdi_host.tuning.sweep import ON, grid, next_grid
 
 SEEDS: tuple[int, ...] = (500, 501, 502)
-# Variances measured on the synthetic manoeuvre of the C unit tests (tests/fw/fdi_test_util.h: turn at 10 m/s
+# Variances measured on the synthetic manoeuvre of the C unit tests (tests/fw/fdi_test_vehicle.h: turn at 10 m/s
 # and 0.5 rad/s plus sinusoidal speed, side-slip and yaw manoeuvres, white sensor noise), sigma rounded up by
 # ~20 %: the table must hold in both environments, so each variance is the larger of the two.
 SYNTHETIC_VARIANCE: tuple[float, ...] = (1.3e-4, 1.44e-4, 3.2e-4, 3.8e-4)
 SIZE_SEEDS: tuple[int, ...] = (777, 778)  # noise seeds of the reaction-size sweep (as `fdi-tune fault-sizes`)
 SIZE_ONSET = 6.0  # s, fault step in the cornering drive (steady state from 5 s)
 GATE = 5.0  # the kinematic table's gate [sigma]
-COMMAND = "fdi-tune kin-calibration --out fw/generated/fdi_kin_calibration.h"
+COMMAND = "fdi-tune kin-calibration --out fw/vehicles/romo/generated/fdi_kin_calibration.h"
 
 
 def kin_residuals(progress: Callable[[str], None] | None = None) -> list[list[np.ndarray]]:
@@ -125,7 +125,7 @@ def render(cals: list[Calibration], sizes: list[list[float]]) -> str:
         f" * the smallest sigma with no raw alarm (gate {GATE:g} sigma, CUSUM k 1.5, h 150) in any fault-free drive",
         f" * ({', '.join(SCENARIOS)}; noise seeds {', '.join(map(str, SEEDS))}; simulator host_tools/fdi_host,",
         f" * through the C ECU core), times {MARGIN:g}; at least the variance measured on the synthetic manoeuvre",
-        " * of the C unit tests (tests/fw/fdi_test_util.h), so that the table holds in both environments.",
+        " * of the C unit tests (tests/fw/fdi_test_vehicle.h), so that the table holds in both environments.",
         " */",
         "#ifndef FDI_KIN_CALIBRATION_H",
         "#define FDI_KIN_CALIBRATION_H",

@@ -29,7 +29,7 @@ EPILOG = """examples:
       --sizes host_tools/scenarios/fault_sizes.toml
   fdi-tune residuals analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \\
       --log out/drive.blf --plot out/residuals.png --compare-ecu
-  fdi-tune kin-calibration --out fw/generated/fdi_kin_calibration.h
+  fdi-tune kin-calibration --out fw/vehicles/romo/generated/fdi_kin_calibration.h
 """
 
 

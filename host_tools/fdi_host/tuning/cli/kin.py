@@ -1,5 +1,5 @@
 """`fdi-tune kin-calibration`: the hand-written kinematic table's variances and reaction sizes
-(fw/generated/fdi_kin_calibration.h) from simulated drives through the C ECU core."""
+(fw/vehicles/romo/generated/fdi_kin_calibration.h) from simulated drives through the C ECU core."""
 
 from __future__ import annotations
 

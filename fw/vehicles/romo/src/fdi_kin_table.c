@@ -1,6 +1,6 @@
 /*
  * fdi_kin_table.c - hand-made diagnosis table of the kinematic tests MSO1..MSO4 (see fdi_kin_table.h).
- * Data only. Variances and reaction sizes: fw/generated/fdi_kin_calibration.h, from drives of the vehicle
+ * Data only. Variances and reaction sizes: generated/fdi_kin_calibration.h, from drives of the vehicle
  * simulator through the C ECU core at the design point below (100 Hz, 1 Hz derivative filters) by
  * `fdi-tune kin-calibration` (the rules of `fdi-tune calibrate` and `fault-sizes`; a test fails
  * when the header is stale).
@@ -10,7 +10,8 @@
 #include <stddef.h>
 
 #include "fdi_kin_calibration.h"
-#include "fdi_signals.h"
+#include "fdi_romo_kin.h"
+#include "fdi_romo_signals.h"
 
 #define F1 0x01U /* ax sensor */
 #define F2 0x02U /* ay sensor */
@@ -22,13 +23,13 @@ static const char *const kin_fault_names[5] = {"f1 ax sensor", "f2 ay sensor", "
                                                "f4 vx sensor", "f5 vy sensor"};
 
 static const fdi_test_desc_t kin_tests[4] = {
-    {1U, FDI_GEN_KIN_X_DERIV, F1 | F3 | F4 | F5, FDI_SIGM_AX_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M,
+    {1U, &fdi_romo_kin_x_deriv, F1 | F3 | F4 | F5, ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
      5.0f, FDI_KIN_VARIANCE_1, "Kinematics. Measured a_x & measured velocities"},
-    {2U, FDI_GEN_KIN_Y_DERIV, F2 | F3 | F4 | F5, FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M | FDI_SIGM_VY_M,
+    {2U, &fdi_romo_kin_y_deriv, F2 | F3 | F4 | F5, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
      5.0f, FDI_KIN_VARIANCE_2, "Kinematics. Measured a_y & measured velocities"},
-    {3U, FDI_GEN_KIN_ARR3, F1 | F2 | F3 | F4, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VX_M,
+    {3U, &fdi_romo_kin_arr3, F1 | F2 | F3 | F4, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M,
      5.0f, FDI_KIN_VARIANCE_3, "Kinematics. No v_y measurement"},
-    {4U, FDI_GEN_KIN_ARR4, F1 | F2 | F3 | F5, FDI_SIGM_AX_M | FDI_SIGM_AY_M | FDI_SIGM_PSIDOT_M | FDI_SIGM_VY_M,
+    {4U, &fdi_romo_kin_arr4, F1 | F2 | F3 | F5, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VY_M,
      5.0f, FDI_KIN_VARIANCE_4, "Kinematics. No v_x measurement"},
 };
 
@@ -45,8 +46,10 @@ static const float kin_test_size[5 * 4] = FDI_KIN_TEST_SIZES;
 const fdi_table_t fdi_kin_table = {
     FDI_TABLE_FORMAT_VERSION,
     {0.01f, 1.0f, 0.7071f, 2.0f},
+    ROMO_SIG_COUNT,
     5U,
     4U,
+    fdi_romo_signal_names,
     kin_fault_names,
     kin_tests,
     kin_signature,

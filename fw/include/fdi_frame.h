@@ -1,0 +1,39 @@
+/*
+ * fdi_frame.h - the signal frame: one sample of every measured signal of a vehicle, by index.
+ *
+ * The library knows no signal by name. A vehicle's generated code (fw/vehicles/<vehicle>/generated/
+ * fdi_<vehicle>_signals.h, written by `fdi-analyze export-c` from the model file) numbers its measured
+ * signals 0..n-1 in the model's order and defines for each the index <VEHICLE>_SIG_<NAME> and the mask
+ * <VEHICLE>_SIGM_<NAME> = 1 << index; the table says how many there are (fdi_table_t.n_signals). A validity
+ * bitmask with the same bit layout accompanies every frame: bit set = the sample is fresh and plausible (the
+ * caller's CAN layer clears it on timeout, checksum or range errors). Generators declare the signals they read
+ * as such a mask; the diagnoser reports a test "not evaluable" when any of them is invalid or not finite.
+ *
+ * fdi_frame_finite_mask() returns the signals of a mask whose value is finite: one compare pair per bit up to
+ * the highest bit of the mask.
+ * Memory: fdi_frame_t is FDI_FRAME_MAX_SIGNALS floats (128 bytes), asserted below.
+ */
+#ifndef FDI_FRAME_H
+#define FDI_FRAME_H
+
+#include <stdint.h>
+
+#include "fdi_static_assert.h"
+
+#define FDI_FRAME_MAX_SIGNALS 32U /* validity and input masks are uint32_t */
+
+typedef struct
+{
+    float value[FDI_FRAME_MAX_SIGNALS]; /* value[i]: signal i of the vehicle, in its SI unit */
+} fdi_frame_t;
+
+/* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
+FDI_STATIC_ASSERT(sizeof(fdi_frame_t) == (FDI_FRAME_MAX_SIGNALS * sizeof(float)), fdi_sa_frame_size);
+
+/* The signals of `mask` whose value in *frame is finite (bit layout as the mask). frame == NULL gives 0. */
+uint32_t fdi_frame_finite_mask(const fdi_frame_t *frame, uint32_t mask);
+
+/* Mask of the first n signals (n >= 32: all 32). Cannot fail. */
+uint32_t fdi_frame_low_mask(uint32_t n);
+
+#endif /* FDI_FRAME_H */

@@ -1,0 +1,31 @@
+/* fdi_frame.c - finiteness mask of a signal frame (see fdi_frame.h). */
+#include "fdi_frame.h"
+
+#include <stddef.h>
+
+#include "fdi_float.h"
+
+uint32_t fdi_frame_finite_mask(const fdi_frame_t *frame, uint32_t mask)
+{
+    uint32_t m = 0U;
+    if (frame != NULL)
+    {
+        uint32_t bit = 1U;
+        uint32_t i;
+        /* every signal up to the highest bit of the mask (a simple body the compiler keeps tight), then masked */
+        for (i = 0U; (i < FDI_FRAME_MAX_SIGNALS) && (bit <= mask); ++i)
+        {
+            if (fdi_float_is_finite(frame->value[i]))
+            {
+                m |= bit;
+            }
+            bit <<= 1U; /* 0 after bit 31: the loop ends by i */
+        }
+    }
+    return m & mask;
+}
+
+uint32_t fdi_frame_low_mask(uint32_t n)
+{
+    return (n >= 32U) ? 0xFFFFFFFFU : (((uint32_t)1U << n) - 1U);
+}
