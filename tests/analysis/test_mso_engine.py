@@ -10,13 +10,21 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fdi_analysis.mso import MsoSummary, bits, find_msos, iter_msos, load_reference, mtes, prepare, reference
+from fdi_analysis.model_loader import load_model
+from fdi_analysis.mso import MsoSummary, bits, find_msos, iter_msos, mtes, prepare, reference
 from fdi_analysis.mso.engine import split_tasks
 from fdi_analysis.random_structures import sparse_random_structure
 from fdi_analysis.structure import Structure
 
-SHARED_REF = Path(__file__).resolve().parents[2].parent / "shared" / "reference" / "romo_model"
-REF = Path(os.environ.get("ROMO_REFERENCE_DIR", SHARED_REF))
+MODELS = Path(__file__).resolve().parents[2] / "analysis" / "models"
+
+
+def romo(name: str) -> Structure:
+    """A ROMO model of the repository as a structure: grouped (41 equations), quasistatic (82) or full
+    (the full vertical dynamics, 115)."""
+    files = {"grouped": "romo_grouped.toml", "quasistatic": "romo_quasistatic.toml",
+             "full": "romo_full_vertical.toml"}
+    return load_model(MODELS / files[name]).structure()
 
 try:
     import faultdiagnosistoolbox as fdt
@@ -172,9 +180,8 @@ def test_parallel_equals_serial() -> None:
     assert (a.count, a.by_equations, a.signatures) == (b.count, b.by_equations, b.signatures)
 
 
-@pytest.mark.skipif(not (REF / "romo_dual_track_grouped.json").exists(), reason="ROMO reference JSON not found")
 def test_grouped_romo_parallel_equals_serial_and_reduction_free() -> None:
-    g = load_reference(REF / "romo_dual_track_grouped.json")
+    g = romo("grouped")
     a = find_msos(g, workers=2, progress=False)
     b = find_msos(g, workers=1, progress=False)
     assert a.complete and b.complete
@@ -182,10 +189,9 @@ def test_grouped_romo_parallel_equals_serial_and_reduction_free() -> None:
     assert sum(a.by_equations.values()) == a.count == sum(e.count for e in a.signatures)
 
 
-@pytest.mark.skipif(not (REF / "romo_dual_track_grouped.json").exists(), reason="ROMO reference JSON not found")
 @pytest.mark.parametrize("workers", [1, 2])
 def test_ctrl_c_gives_partial_result(workers: int) -> None:
-    g = load_reference(REF / "romo_dual_track_grouped.json")
+    g = romo("grouped")
     full = find_msos(g, workers=1, progress=False).count
     # like Ctrl-C: SIGINT from outside (a thread could not run while the C loop holds the GIL). On a loaded
     # machine the signal may come only after the search ended; such a run proves nothing and is repeated.
