@@ -18,12 +18,11 @@ fw/vehicles/romo/generated/fdi_kin_calibration.h, included by fdi_kin_table.c.
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Callable
 
 import numpy as np
 
-from fdi_analysis.export.fault_sizes import EXONERATION_MARGIN
+from fdi_analysis.export.fault_sizes import EXONERATION_MARGIN, FaultSizes
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.can.traffic import build_frames
 from fdi_host.ecu.bindings import table_info
@@ -80,10 +79,10 @@ def reaction_sizes(variance: list[float], progress: Callable[[str], None] | None
     """Per fault of the kinematic table and per test of its signature, the size at which the test reacts: a
     step at SIZE_ONSET of the cornering drive, raw alarm (gate or CUSUM from the onset, at the table's
     sigma) within ON seconds with every seed of SIZE_SEEDS, sizes on the grid of `fdi-tune fault-sizes`
-    from [sizes] / 10 up to [limits] of fault_sizes.toml; stated = the grid value above the first alarm
+    from [requirement] / 10 up to [limits] of fault_sizes.toml; stated = the grid value above the first alarm
     (as there). 0 where a test of the signature does not react up to the limit."""
     info = table_info("kin")
-    doc = tomllib.loads(FAULT_SIZES_FILE.read_text(encoding="utf-8"))
+    sizes = FaultSizes.load(FAULT_SIZES_FILE)
     sigma = [float(np.sqrt(v)) for v in variance]
     db = RomoDatabase()
     scen = load_scenario("cornering")
@@ -94,7 +93,7 @@ def reaction_sizes(variance: list[float], progress: Callable[[str], None] | None
         tests = [i for i in range(info.n_tests) if info.test_fault_masks[i] >> j & 1]
         row = [0.0] * info.n_tests
         pending = set(tests)
-        for m in grid(float(doc["sizes"][fault]) / 10.0, float(doc["limits"][fault])):
+        for m in grid(sizes.requirement[fault] / 10.0, sizes.limits[fault]):
             hit = set(pending)
             for base in bases:
                 res = replay("kin", build_frames(faulty_drive(base, FaultSpec(fault, SIZE_ONSET, m)), db),
