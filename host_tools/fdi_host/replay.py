@@ -27,7 +27,7 @@ from typing import Any
 import can
 from tqdm import tqdm
 
-from fdi_analysis.cli_common import EXIT_ERROR, INPUT_ERRORS, add_version, fail, one_line, run, use_file_backend
+from fdi_analysis.cli.common import EXIT_ERROR, INPUT_ERRORS, add_version, fail, one_line, run, use_file_backend
 from fdi_host import fleet
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.can.frame import Frame

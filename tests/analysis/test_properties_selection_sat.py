@@ -1,4 +1,4 @@
-"""The SAT selection (`selection_sat`: count and cost) against brute force on random small problems, including
+"""The SAT selection (`selection.sat`: count and cost) against brute force on random small problems, including
 families closed under item permutations (interchangeable classes as count rows, lex-leader constraints):
 every "no selection with k tests" and every minimum cost must equal exhaustive enumeration."""
 
@@ -11,10 +11,10 @@ from hypothesis import event, given, settings
 from hypothesis import strategies as hst
 
 from fdi_analysis.fault_matrix import Method
-from fdi_analysis.selection_exact import Problem, cover_matrix, reduce_problem
+from fdi_analysis.selection.exact import Problem, cover_matrix, reduce_problem
 
 pytest.importorskip("pysat")
-from fdi_analysis.selection_sat import SatSelector, interchangeable_classes, prepare, separates
+from fdi_analysis.selection.sat import SatSelector, interchangeable_classes, prepare, separates
 
 DEADLINE_S = 30.0
 MAX_COLUMNS = 22  # brute force stays below ~30k combinations per k

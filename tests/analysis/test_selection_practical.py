@@ -1,4 +1,4 @@
-"""Selection by practical isolability (fdi_analysis.selection_practical): the requirements it builds, the
+"""Selection by practical isolability (fdi_analysis.selection.practical): the requirements it builds, the
 unmet ones and their reasons, optimality against brute force, and the two exact solvers agreeing."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import random
 
 import pytest
 
-from fdi_analysis.selection_practical import (
+from fdi_analysis.selection.practical import (
     CandidateScreen,
     FaultScreen,
     PracticalCandidate,

@@ -18,8 +18,8 @@ from typing import Any
 
 import can
 
-from fdi_analysis.cli_common import EXIT_ERROR, add_version
-from fdi_analysis.cli_common import run as run_main
+from fdi_analysis.cli.common import EXIT_ERROR, add_version
+from fdi_analysis.cli.common import run as run_main
 from fdi_host.can.frame import Frame
 from fdi_host.can.logs import write_log
 from fdi_host.ecu.session import DIAG_ID, EcuSession

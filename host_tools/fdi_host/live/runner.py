@@ -28,7 +28,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from fdi_analysis.cli_common import EXIT_ERROR, EXIT_USAGE, add_version, run
+from fdi_analysis.cli.common import EXIT_ERROR, EXIT_USAGE, add_version, run
 from fdi_host.live.netns import check_unshare, inside_private_netns, netns_command, vcan_available
 from fdi_host.live.restart import Managed, RestartEvent, restart_schedule
 from fdi_host.live.sender import SendLog

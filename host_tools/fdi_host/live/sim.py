@@ -25,7 +25,7 @@ from pathlib import Path
 
 import can
 
-from fdi_analysis.cli_common import EXIT_ERROR
+from fdi_analysis.cli.common import EXIT_ERROR
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.can.frame import Frame
 from fdi_host.can.logs import LOG_SUFFIXES, read_log, write_log

@@ -51,7 +51,7 @@ from fdi_analysis.residuals.reasons import NotRealizableError
 from fdi_analysis.residuals.sensitivity import J_FLOOR, faulty_residual
 from fdi_analysis.residuals.signals import Node
 from fdi_analysis.residuals.solvability import Solver
-from fdi_analysis.selection_practical import MARGIN, CandidateScreen, FaultScreen
+from fdi_analysis.selection.practical import MARGIN, CandidateScreen, FaultScreen
 from fdi_host.tuning.calibrate import calibrate
 
 FloatArray = NDArray[np.float64]

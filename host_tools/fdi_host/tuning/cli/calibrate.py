@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from fdi_analysis.cli_common import EXIT_ERROR
+from fdi_analysis.cli.common import EXIT_ERROR
 
 EXAMPLE = ("example: fdi-tune calibrate analysis/models/romo_grouped.toml "
            "--thresholds analysis/models/romo_thresholds.toml --scenarios cornering slalom straight")

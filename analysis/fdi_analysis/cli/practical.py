@@ -12,7 +12,7 @@ from typing import Any
 from fdi_analysis.export.thresholds import with_selection
 from fdi_analysis.model_loader import load_model
 from fdi_analysis.plots import plot_practical_isolability, save
-from fdi_analysis.selection_practical import (
+from fdi_analysis.selection.practical import (
     PracticalSelection,
     Screening,
     Unmet,

@@ -1,6 +1,6 @@
 """Exact minimum test selection as SAT (count) and incremental SAT (cost) on a symmetry-reduced code model.
 
-The model is the code assignment of `selection_exact` (k selected tests; every item gets the k-bit code of
+The model is the code assignment of `selection.exact` (k selected tests; every item gets the k-bit code of
 the tests sensitive to it; required pairs must be separated), written as CNF and given to CaDiCaL
 (PyPI `python-sat`):
 
@@ -50,7 +50,7 @@ from typing import cast
 import numpy as np
 import numpy.typing as npt
 
-from fdi_analysis.selection_exact import Problem, automorphisms, search_order
+from fdi_analysis.selection.exact import Problem, automorphisms, search_order
 
 try:  # optional: without python-sat the exact stages fall back to the code search (and may stay unproven)
     from pysat.solvers import Solver
