@@ -76,7 +76,7 @@ static inline fdi_diag_config_t bench_config(const fdi_table_t *table)
     c.clear_count = 100U;
     c.warmup_steps = 320U;
     c.mode = FDI_ISO_EXONERATION;
-    c.iso_settle_steps = 0U;
+    c.noise_allowance = 3.0f;
     c.episode_clear_steps = 1U;
     c.sensitivities = false;
     return c;

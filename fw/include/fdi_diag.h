@@ -14,30 +14,47 @@
  *
  * Isolation episodes. An episode starts at the first alarm; the tests in alarm at any step of the episode
  * stay accused (latched: a test that reacts only transiently to a step fault still counts) until no test
- * has been in alarm for episode_clear_steps steps. `detected` holds during the episode. With exoneration, a
- * test clears the faults of its table row `exonerating` only once it has had time to react: it must have
- * been evaluable and quiet for iso_settle_steps consecutive steps and the episode must be that old. Before
- * that the candidates are the faults that explain every accused test (no exoneration), which contains the
- * true fault but may span several classes. iso_settle_steps = 0 and episode_clear_steps = 1 give the
- * memoryless rule (isolation on this step's masks only).
- * Signals that no test needs do not matter. fdi_diag_step() returns FDI_OK for invalid or non-finite
- * signals: that is an operating condition reported per test, not an error of the call.
- *
+ * has been in alarm for episode_clear_steps steps. `detected` holds during the episode. The candidates are
+ * the faults that explain every accused test and that no quiet test clears (fdi_iso.h). With exoneration, a
+ * quiet test takes part once it has had time to react: it has been evaluable and quiet for its
+ * response_steps (table) plus set_count (the alarm's confirmation) and the episode is that old. It clears
+ * fault j
+ *   - on line, where its generator gives j's sensitivity (gen->sens_mask): during an episode the diagnoser
+ *     asks the generators for their sensitivities s_ij = d r_i / d f_j at the current operating point. Each
+ *     test i in alarm for at least its response_steps, whose residual has settled (within a fifth plus 2
+ *     sigma of both its 0.1 s and 0.3 s averages: a step through a filtered derivative first kicks a residual
+ *     far above its steady value), bounds the size of every fault j of its sensitivities from below,
+ *     f_j >= (min(|r_i|, |0.1 s average|) - noise_allowance sigma_i) / |s_ij|,
+ *     and the largest recent bound is the size the alarms imply, F_j (the bounds are forgotten with a 1 s time
+ *     constant: where an alarmed test's sensitivity passes near zero its bound spikes). A settled quiet test q
+ *     clears j when |s_qj| F_j >= sensitivity_margin * gate_q * sigma_q: at that size it would have crossed its
+ *     gate with margin. The decision is re-made at every step (operating points change); j leaves the
+ *     candidates once the rule has cleared it for 0.1 s in a row;
+ *   - by the reaction sizes (test_size) for the pairs without an on-line sensitivity (fdi_iso_size_cleared).
+ * The first class isolated in an episode is latched: exoneration no longer removes its faults (the on-line
+ * rule is a linearisation: a later operating point may make a quiet test look as if it should have seen the
+ * true fault). An accused test that none of them explains contradicts it: several faults, or the vehicle in a
+ * state no test was calibrated for (a spin); the episode then stays "detected, not isolated" (no candidate)
+ * until it ends, rather than name another class.
+ * Before any quiet test has settled, the candidates are all the faults that explain the alarms, which
+ * contains the true fault but may span several classes. episode_clear_steps = 1 and response_steps of 1
+ * give the memoryless rule (isolation on this step's masks only).
  * Warm-up: fdi_diag_init() rejects warmup_steps shorter than the settling time of the table's design
  * point, FDI_DIAG_SETTLE_TAUS time constants of every filter stage (2 stages: 2 * 6 / (zeta * W)) and
  * of the observer (6 / L), rounded up to whole steps.
  *
- * Fault sensitivities: with cfg->sensitivities the diagnoser asks every generator for d r / d f_j of the
- * faults of its sens_mask at every step (fdi_gen.h) and keeps the last ones: the result lists them per test
- * (sens_offset, sens); without it no sensitivity is computed (no cost) and they stay 0. They are 0 while a
- * test lacks its inputs or its domain; a non-finite sensitivity makes the step fail like a non-finite
- * residual (the test is "not evaluable" and restarts). They do not enter the isolation (yet).
+ * Fault sensitivities: during an isolation episode (from its second step, with exoneration) and at every
+ * step with cfg->sensitivities, the diagnoser asks every generator for d r / d f_j of the faults of its
+ * sens_mask (fdi_gen.h) and keeps the last ones: the result lists them per test (sens_offset, sens; all
+ * offsets 0 without cfg->sensitivities). Outside episodes and without cfg->sensitivities none is computed
+ * (no cost). They are 0 while a test lacks its inputs or its domain; a non-finite sensitivity makes the step
+ * fail like a non-finite residual (the test is "not evaluable" and restarts).
  *
  * Cost per step: sum of the generators + ~25 operations per test for evaluation + n_faults iterations of
  * isolation + one finiteness compare pair per signal. Measured by scripts/bench_fw.sh (instructions per step
  * of a table on x86-64 with callgrind and on Cortex-M4F under qemu -icount; it prints the numbers).
- * Memory: sizeof(fdi_diag_t) ~ 120 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_gen_t) + sizeof(fdi_eval_t) + 13) +
- * 4 * FDI_DIAG_MAX_SENS bytes (bound asserted below; scripts/bench_fw.sh prints the value), caller-owned
+ * Memory: sizeof(fdi_diag_t) ~ 152 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_gen_t) + sizeof(fdi_eval_t) + 27) +
+ * 4 * FDI_DIAG_MAX_SENS + 6 * FDI_TABLE_MAX_FAULTS bytes (bound asserted below; scripts/bench_fw.sh prints the value), caller-owned
  * (static or stack); the library itself has no .data/.bss.
  */
 #ifndef FDI_DIAG_H
@@ -71,6 +88,7 @@
 #endif
 
 #define FDI_DIAG_SETTLE_TAUS 6.0f
+#define FDI_DIAG_CONTRADICTED 0xFFFFFFFFU /* latched: the isolated class was contradicted in this episode */
 
 typedef struct
 {
@@ -82,9 +100,9 @@ typedef struct
     uint16_t clear_count;     /* consecutive quiet samples to clear it, >= 1 */
     uint16_t warmup_steps;    /* steps after (re)start before a test is evaluable, >= the settling time */
     fdi_iso_mode_t mode;      /* isolation with or without exoneration */
-    uint16_t iso_settle_steps;    /* steps a quiet test (and the episode) must last before it exonerates */
     uint16_t episode_clear_steps; /* steps without any alarm that end an episode, >= 1 */
-    bool sensitivities;           /* compute the generators' fault sensitivities at every step */
+    float noise_allowance;        /* sigmas of an alarmed residual not counted as fault response, >= 0 */
+    bool sensitivities;           /* compute and report the generators' fault sensitivities at every step */
 } fdi_diag_config_t;
 
 typedef struct
@@ -93,8 +111,14 @@ typedef struct
     fdi_gen_param_t par;
     fdi_iso_mode_t mode;
     uint16_t warmup_steps;
-    uint16_t iso_settle_steps;
     uint16_t episode_clear_steps;
+    uint16_t set_count; /* the evaluators' alarm delay, added to every test's response_steps */
+    float noise_allowance;
+    float fast_gain; /* dt / tau of the residuals' fast average */
+    float implied_keep; /* 1 - dt / tau of the implied sizes' forgetting */
+    uint16_t clear_confirm; /* steps the on-line rule must clear a fault before it leaves the candidates */
+    uint8_t n_faults;
+    float slow_gain; /* dt / tau of the residuals' slow average */
     uint16_t episode_age; /* steps since the episode started (saturating) */
     uint16_t calm;        /* consecutive steps without an alarm during the episode */
     uint8_t n_tests;
@@ -111,13 +135,22 @@ typedef struct
     float ratio[FDI_DIAG_MAX_TESTS];
     uint16_t warm[FDI_DIAG_MAX_TESTS];
     uint16_t quiet_run[FDI_DIAG_MAX_TESTS]; /* consecutive evaluable steps without alarm (saturating) */
+    uint16_t alarm_run[FDI_DIAG_MAX_TESTS]; /* consecutive steps in alarm (saturating) */
+    uint32_t clears[FDI_DIAG_MAX_TESTS];    /* faults each settled quiet test clears on line (last decision) */
+    float implied[FDI_TABLE_MAX_FAULTS];    /* fault sizes the recent alarms imply (lower bounds) */
+    uint16_t cleared_run[FDI_TABLE_MAX_FAULTS]; /* consecutive steps the on-line rule cleared each fault */
+    float r_fast[FDI_DIAG_MAX_TESTS];       /* each residual's average over 0.1 s ... */
+    float r_slow[FDI_DIAG_MAX_TESTS];       /* ... and over 0.3 s (whether it has settled) */
+    uint32_t fresh;                         /* tests whose sensitivities were computed at the last step */
+    uint32_t latched; /* faults isolated first in the episode (exonerated no more), or FDI_DIAG_CONTRADICTED */
     uint8_t sens_offset[FDI_DIAG_MAX_TESTS + 1U]; /* test i: sens[sens_offset[i] .. sens_offset[i + 1] - 1] */
     float sens[FDI_DIAG_MAX_SENS];
 } fdi_diag_t; /* opaque by convention */
 
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
-FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (128U + (FDI_DIAG_MAX_TESTS * (sizeof(fdi_gen_t) + sizeof(fdi_eval_t) + 13U)) +
-                                         (sizeof(float) * FDI_DIAG_MAX_SENS)),
+FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (152U + (FDI_DIAG_MAX_TESTS * (sizeof(fdi_gen_t) + sizeof(fdi_eval_t) + 27U)) +
+                                         (sizeof(float) * FDI_DIAG_MAX_SENS) +
+                                         ((sizeof(float) + sizeof(uint16_t)) * FDI_TABLE_MAX_FAULTS)),
                   fdi_sa_diag_size);
 
 typedef struct
@@ -136,14 +169,15 @@ typedef struct
     float sens[FDI_DIAG_MAX_SENS];      /* last sensitivities d r / d f; only the listed entries are written */
 } fdi_diag_result_t;
 
-/* Defaults for `table`: settings as validated in tests/fw/test_fdi_diag.c (CUSUM k 1.5, h 150, set 10, clear 100,
-   warm-up = the design point's settling time + 20 steps, exoneration after a 3 s settle window, episodes ending
-   after 3 s without alarm), generator parameters 0, no sensitivities. BAD_ARG on NULL; BAD_TABLE when the design
-   point has no finite settling time (the table itself is checked by fdi_diag_init). */
+/* Defaults for `table`: CUSUM k 1.5, h 150 (as validated in tests/fw/test_fdi_diag.c), set 3, clear 100,
+   warm-up = the design point's settling time + 20 steps, exoneration, episodes ending after 3 s without alarm,
+   noise allowance 3 sigma, generator parameters 0, no reported sensitivities. BAD_ARG on NULL; BAD_TABLE when
+   the design point has no finite settling time (the table itself is checked by fdi_diag_init). */
 fdi_status_t fdi_diag_config_default(fdi_diag_config_t *cfg, const fdi_table_t *table);
 
-/* BAD_ARG: NULL or bad config (also: sensitivities requested and the table's generators output more than
-   FDI_DIAG_MAX_SENS); BAD_TABLE: table fails fdi_table_check(); NOT_FINITE: NaN/Inf in cfg. */
+/* BAD_ARG: NULL or bad config (also: the table's generators output more sensitivities than FDI_DIAG_MAX_SENS
+   while they are needed: reported, or exoneration); BAD_TABLE: table fails fdi_table_check(); NOT_FINITE:
+   NaN/Inf in cfg. */
 fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg);
 
 /* One fixed step with the current frame; validity uses the frame's bit layout. BAD_ARG on NULL only. */

@@ -9,11 +9,29 @@
 
 #define FDI_TWO_PI_F 6.28318530717959f
 #define WARMUP_MARGIN_STEPS 20U
-/* Isolation episodes: a quiet test exonerates only after 3 s, the response window in which the analysis states the
-   per-test fault sizes (fdi-tune fault-sizes: alarm within a 3 s step); an episode ends after 3 s without any
-   alarm. */
-#define ISO_SETTLE_S 3.0f
+/* Isolation episodes end after 3 s without any alarm; an alarmed residual's first 3 sigma are taken as noise
+   when it implies a fault size. */
 #define EPISODE_CLEAR_S 3.0f
+#define NOISE_ALLOWANCE_SIGMA 3.0f
+/* An alarm sets after 3 raw alarms in a row (30 ms at 10 ms): with the gates calibrated so that no fault-free
+   calibration drive ever crossed them (the largest excursion 1 / 1.25 of the gate), the confirmation is short, so
+   that a test whose fault-to-noise ratio is 1.67 times its gate alarms within 300 ms of a step fault (the
+   practical selection's criterion, fdi_analysis.selection.practical.DETECT_S). */
+#define SET_COUNT 3U
+/* An alarmed residual implies fault sizes only once it has settled: within a fifth (plus two sigma of noise) of both
+   its averages over SETTLE_FAST_S and SETTLE_SLOW_S (exponential averages). A step fault that enters through a
+   filtered derivative first kicks the residual far above its steady value, and the kick decays with the filters;
+   a decaying residual crosses one average at a time, never both (one alone was fooled where the decay and the
+   average have the same rate). The implied size uses the smaller of the residual and its fast average. */
+#define SETTLE_FAST_S 0.1f
+#define SETTLE_SLOW_S 0.3f
+#define SETTLE_REL 0.2f
+#define SETTLE_NOISE_SIGMA 2.0f
+/* The implied sizes forget with this time constant (recent evidence only: where an alarmed test's sensitivity
+   passes near zero its bound spikes, and an episode may last as long as the fault), and a fault leaves the
+   candidates only once the on-line rule has cleared it for CLEAR_CONFIRM_S. */
+#define IMPLIED_TAU_S 1.0f
+#define CLEAR_CONFIRM_S 0.1f
 
 /* Settling time of the design point in steps (see fdi_diag.h); 0 if it is not representable. */
 static uint32_t settle_steps(const fdi_table_design_t *d)
@@ -88,12 +106,12 @@ fdi_status_t fdi_diag_config_default(fdi_diag_config_t *cfg, const fdi_table_t *
             }
             cfg->cusum_k = 1.5f;
             cfg->cusum_h = 150.0f;
-            cfg->set_count = 10U;
+            cfg->set_count = SET_COUNT;
             cfg->clear_count = 100U;
             cfg->warmup_steps = (uint16_t)(settle + WARMUP_MARGIN_STEPS);
             cfg->mode = FDI_ISO_EXONERATION;
-            cfg->iso_settle_steps = steps_of(ISO_SETTLE_S, table->design.dt);
             cfg->episode_clear_steps = steps_of(EPISODE_CLEAR_S, table->design.dt);
+            cfg->noise_allowance = NOISE_ALLOWANCE_SIGMA;
             cfg->sensitivities = false;
             st = FDI_OK;
         }
@@ -108,11 +126,13 @@ static fdi_status_t check_config(const fdi_diag_config_t *cfg)
     {
         /* keep the status of the table check */
     }
-    else if (!fdi_float_is_finite(cfg->cusum_k) || !fdi_float_is_finite(cfg->cusum_h))
+    else if (!fdi_float_is_finite(cfg->cusum_k) || !fdi_float_is_finite(cfg->cusum_h) ||
+             !fdi_float_is_finite(cfg->noise_allowance))
     {
         st = FDI_NOT_FINITE;
     }
     else if ((cfg->table->n_tests > FDI_DIAG_MAX_TESTS) || (cfg->episode_clear_steps == 0U) ||
+             (cfg->noise_allowance < 0.0f) ||
              ((cfg->mode != FDI_ISO_NO_EXONERATION) && (cfg->mode != FDI_ISO_EXONERATION)))
     {
         st = FDI_BAD_ARG;
@@ -146,7 +166,8 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             gcfg.param[i] = cfg->gen_param[i];
         }
         st = fdi_gen_param_init(&self->par, &gcfg);
-        if ((st == FDI_OK) && !sens_layout(t, self->sens_offset) && cfg->sensitivities)
+        if ((st == FDI_OK) && !sens_layout(t, self->sens_offset) &&
+            (cfg->sensitivities || (cfg->mode == FDI_ISO_EXONERATION)))
         {
             st = FDI_BAD_ARG;
         }
@@ -170,14 +191,31 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             self->ratio[i] = 0.0f;
             self->warm[i] = cfg->warmup_steps;
             self->quiet_run[i] = 0U;
+            self->alarm_run[i] = 0U;
+            self->clears[i] = 0U;
+            self->r_fast[i] = 0.0f;
+            self->r_slow[i] = 0.0f;
+        }
+        for (i = 0U; i < FDI_TABLE_MAX_FAULTS; ++i)
+        {
+            self->implied[i] = 0.0f;
+            self->cleared_run[i] = 0U;
         }
         if (st == FDI_OK)
         {
             self->table = t;
             self->mode = cfg->mode;
             self->warmup_steps = cfg->warmup_steps;
-            self->iso_settle_steps = cfg->iso_settle_steps;
             self->episode_clear_steps = cfg->episode_clear_steps;
+            self->set_count = cfg->set_count;
+            self->noise_allowance = cfg->noise_allowance;
+            self->fast_gain = t->design.dt / SETTLE_FAST_S;
+            self->implied_keep = 1.0f - (t->design.dt / IMPLIED_TAU_S);
+            self->clear_confirm = steps_of(CLEAR_CONFIRM_S, t->design.dt);
+            self->n_faults = t->n_faults;
+            self->slow_gain = t->design.dt / SETTLE_SLOW_S;
+            self->fresh = 0U;
+            self->latched = 0U;
             self->episode_age = 0U;
             self->calm = 0U;
             self->accused = 0U;
@@ -210,11 +248,13 @@ static void clear_sens(fdi_diag_t *self, uint32_t i)
     }
 }
 
-/* Run test i on a usable frame; returns true if it is evaluable this step (then *alarm is set). */
-static bool run_test(fdi_diag_t *self, uint32_t i, const fdi_frame_t *in, bool *alarm)
+/* Run test i on a usable frame; returns true if it is evaluable this step (then *alarm is set). With want_sens
+   its sensitivities are computed into self->sens (and the test marked fresh). */
+static bool run_test(fdi_diag_t *self, uint32_t i, const fdi_frame_t *in, bool want_sens, bool *alarm)
 {
     const uint32_t bit = (uint32_t)1U << i;
-    float *sens = self->sensitivities ? &self->sens[self->sens_offset[i]] : NULL;
+    float *sens = (want_sens && (self->sens_offset[i + 1U] > self->sens_offset[i])) ? &self->sens[self->sens_offset[i]]
+                                                                                   : NULL;
     bool evaluable = false;
     fdi_status_t st = FDI_OK;
     float r = 0.0f;
@@ -239,6 +279,18 @@ static bool run_test(fdi_diag_t *self, uint32_t i, const fdi_frame_t *in, bool *
         self->residual[i] = 0.0f;
         self->ratio[i] = 0.0f;
         clear_sens(self, i);
+    }
+    else if (sens != NULL)
+    {
+        self->fresh |= bit;
+    }
+    else
+    {
+        /* no sensitivities asked for */
+    }
+    if (st != FDI_OK)
+    {
+        /* rejected above */
     }
     else if (self->warm[i] > 0U)
     {
@@ -269,21 +321,115 @@ static uint16_t sat_inc(uint16_t x)
     return (x < 0xFFFFU) ? (uint16_t)(x + 1U) : x;
 }
 
-/* Episode bookkeeping and the isolation of this step (see "Isolation episodes" in fdi_diag.h). */
-static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable)
+/* Sigma of test i's residual (only asked for during episodes). */
+static float test_sigma(const fdi_diag_t *self, uint32_t i)
 {
-    uint32_t exonerate = 0U;
+    return sqrtf(self->table->tests[i].variance);
+}
+
+/* Test i is in alarm and has been for its response time: once its residual has settled, its average and its fresh
+   sensitivities bound the size of each fault of its sens_mask from below; the episode keeps the largest bound (see
+   fdi_diag.h). */
+static void raise_implied(fdi_diag_t *self, uint32_t i)
+{
+    const fdi_gen_desc_t *g = self->table->tests[i].gen;
+    const float sigma = test_sigma(self, i);
+    const float r = self->residual[i];
+    const float fast = self->r_fast[i];
+    const float slow = self->r_slow[i];
+    const bool settled = (fabsf(r - fast) <= ((SETTLE_REL * fabsf(fast)) + (SETTLE_NOISE_SIGMA * sigma))) &&
+                         (fabsf(r - slow) <= ((SETTLE_REL * fabsf(slow)) + (SETTLE_NOISE_SIGMA * sigma)));
+    const float least = fminf(fabsf(r), fabsf(fast));
+    const float excess = least - (self->noise_allowance * sigma);
+    if ((g != NULL) && settled && (excess > 0.0f))
+    {
+        uint32_t k = (uint32_t)self->sens_offset[i];
+        uint32_t j;
+        for (j = 0U; j < (uint32_t)self->table->n_faults; ++j)
+        {
+            if ((g->sens_mask & ((uint32_t)1U << j)) != 0U)
+            {
+                const float s = fabsf(self->sens[k]);
+                if (s > 0.0f)
+                {
+                    const float f = excess / s;
+                    if (fdi_float_is_finite(f) && (f > self->implied[j]))
+                    {
+                        self->implied[j] = f;
+                    }
+                }
+                ++k;
+            }
+        }
+    }
+}
+
+/* The faults a settled quiet test i clears with its fresh sensitivities: |s_ij| F_j >= margin * gate * sigma. */
+static uint32_t quiet_clears(const fdi_diag_t *self, uint32_t i)
+{
+    const fdi_test_desc_t *d = &self->table->tests[i];
+    uint32_t out = 0U;
+    if (d->gen != NULL)
+    {
+        const float need = self->table->sensitivity_margin * d->gate * test_sigma(self, i);
+        uint32_t k = (uint32_t)self->sens_offset[i];
+        uint32_t j;
+        for (j = 0U; j < (uint32_t)self->table->n_faults; ++j)
+        {
+            const uint32_t fbit = (uint32_t)1U << j;
+            if ((d->gen->sens_mask & fbit) != 0U)
+            {
+                if ((fabsf(self->sens[k]) * self->implied[j]) >= need)
+                {
+                    out |= fbit;
+                }
+                ++k;
+            }
+        }
+    }
+    return out;
+}
+
+/* The residuals' averages over SETTLE_FAST_S and SETTLE_SLOW_S (restarted when a test becomes evaluable again). */
+static void track_residuals(fdi_diag_t *self, uint32_t evaluable, uint32_t before)
+{
     uint32_t i;
     for (i = 0U; i < (uint32_t)self->n_tests; ++i)
     {
         const uint32_t bit = (uint32_t)1U << i;
-        self->quiet_run[i] = (((evaluable & bit) != 0U) && ((alarm & bit) == 0U)) ? sat_inc(self->quiet_run[i]) : 0U;
+        const float r = self->residual[i];
+        if ((evaluable & before & bit) != 0U)
+        {
+            self->r_fast[i] += self->fast_gain * (r - self->r_fast[i]);
+            self->r_slow[i] += self->slow_gain * (r - self->r_slow[i]);
+        }
+        else
+        {
+            self->r_fast[i] = r;
+            self->r_slow[i] = r;
+        }
     }
+}
+
+/* Episode start/end and age (see "Isolation episodes" in fdi_diag.h). */
+static void track_episode(fdi_diag_t *self, uint32_t alarm)
+{
     if (alarm != 0U)
     {
         if (self->accused == 0U)
         {
+            uint32_t i;
             self->episode_age = 0U;
+            self->latched = 0U;
+            for (i = 0U; i < FDI_TABLE_MAX_FAULTS; ++i)
+            {
+                self->implied[i] = 0.0f;
+                self->cleared_run[i] = 0U;
+            }
+            for (i = 0U; i < FDI_DIAG_MAX_TESTS; ++i)
+            {
+                self->clears[i] = 0U;
+            }
         }
         self->accused |= alarm;
         self->calm = 0U;
@@ -304,19 +450,112 @@ static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable
     {
         self->episode_age = sat_inc(self->episode_age);
     }
-    if ((self->mode == FDI_ISO_EXONERATION) && (self->episode_age >= self->iso_settle_steps))
+}
+
+/* The faults the exoneration clears this step (see "Isolation episodes" in fdi_diag.h): on line by the settled
+   quiet tests' fresh sensitivities (confirmed for clear_confirm steps), and by reaction sizes for the pairs
+   without an on-line sensitivity. */
+static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
+{
+    uint32_t settled = 0U;
+    uint32_t online = 0U;
+    uint32_t cleared = 0U;
+    uint32_t i;
+    for (i = 0U; i < (uint32_t)self->n_faults; ++i)
     {
-        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+        self->implied[i] *= self->implied_keep;
+    }
+    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+    {
+        const uint32_t bit = (uint32_t)1U << i;
+        const uint32_t resp = (uint32_t)self->table->tests[i].response_steps + (uint32_t)self->set_count;
+        if (((self->fresh & alarm & bit) != 0U) && ((uint32_t)self->alarm_run[i] >= resp))
         {
-            if (self->quiet_run[i] >= self->iso_settle_steps)
-            {
-                exonerate |= ((uint32_t)1U << i) & evaluable;
-            }
+            raise_implied(self, i);
+        }
+        if (((self->accused & bit) == 0U) && ((uint32_t)self->quiet_run[i] >= resp) &&
+            ((uint32_t)self->episode_age >= resp))
+        {
+            settled |= bit;
         }
     }
-    exonerate &= ~self->accused;
-    /* accused tests stay in the alarm set even while not evaluable now: they alarmed in this episode */
-    return fdi_iso_run(self->table, self->accused, self->accused | exonerate, self->mode, &self->iso);
+    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+    {
+        const uint32_t bit = (uint32_t)1U << i;
+        if ((settled & bit) == 0U)
+        {
+            self->clears[i] = 0U;
+        }
+        else if ((self->fresh & bit) != 0U)
+        {
+            self->clears[i] = quiet_clears(self, i);
+        }
+        else
+        {
+            /* keep the last decision until its sensitivities are computed again */
+        }
+        online |= self->clears[i];
+    }
+    for (i = 0U; i < (uint32_t)self->n_faults; ++i)
+    {
+        const uint32_t fbit = (uint32_t)1U << i;
+        self->cleared_run[i] = ((online & fbit) != 0U) ? sat_inc(self->cleared_run[i]) : 0U;
+        cleared |= (self->cleared_run[i] >= self->clear_confirm) ? fbit : 0U;
+    }
+    return cleared | fdi_iso_size_cleared(self->table, self->accused, settled);
+}
+
+/* The first class isolated in the episode is latched; an accused test it cannot explain contradicts it for the
+   rest of the episode (fdi_diag.h). */
+static void latch(fdi_diag_t *self)
+{
+    if ((self->latched != 0U) && ((self->iso.candidates & self->latched) == 0U))
+    {
+        self->latched = FDI_DIAG_CONTRADICTED;
+    }
+    if (self->latched == FDI_DIAG_CONTRADICTED)
+    {
+        self->iso.candidates = 0U;
+        self->iso.class_mask = 0U;
+        self->iso.n_classes = 0U;
+        self->iso.isolated = false;
+    }
+    else if ((self->latched == 0U) && self->iso.isolated)
+    {
+        self->latched = self->iso.candidates;
+    }
+    else
+    {
+        /* keep the latched class */
+    }
+}
+
+/* Episode bookkeeping and the isolation of this step (see "Isolation episodes" in fdi_diag.h). */
+static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable)
+{
+    uint32_t cleared = 0U;
+    fdi_status_t st;
+    uint32_t i;
+    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+    {
+        const uint32_t bit = (uint32_t)1U << i;
+        const bool quiet = ((evaluable & bit) != 0U) && ((alarm & bit) == 0U);
+        self->quiet_run[i] = quiet ? sat_inc(self->quiet_run[i]) : 0U;
+        self->alarm_run[i] = ((alarm & bit) != 0U) ? sat_inc(self->alarm_run[i]) : 0U;
+    }
+    track_episode(self, alarm);
+    if ((self->mode == FDI_ISO_EXONERATION) && (self->accused != 0U))
+    {
+        cleared = exonerated(self, alarm);
+    }
+    /* accused tests stay in the alarm set even while not evaluable now: they alarmed in this episode; the faults
+       isolated first in the episode are exonerated no more */
+    st = fdi_iso_match(self->table, self->accused, cleared & ~self->latched, &self->iso);
+    if (st == FDI_OK)
+    {
+        latch(self);
+    }
+    return st;
 }
 
 fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t validity)
@@ -329,9 +568,11 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
     else
     {
         const uint32_t usable = fdi_frame_finite_mask(frame, validity & self->signals);
+        const bool want_sens = self->sensitivities || ((self->mode == FDI_ISO_EXONERATION) && (self->accused != 0U));
         uint32_t alarm = 0U;
         uint32_t evaluable = 0U;
         uint32_t i;
+        self->fresh = 0U;
         for (i = 0U; i < (uint32_t)self->n_tests; ++i)
         {
             const fdi_test_desc_t *d = &self->table->tests[i];
@@ -347,7 +588,7 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
                 self->residual[i] = 0.0f;
                 self->ratio[i] = 0.0f;
             }
-            else if (run_test(self, i, frame, &test_alarm))
+            else if (run_test(self, i, frame, want_sens, &test_alarm))
             {
                 evaluable |= bit;
                 alarm |= test_alarm ? bit : 0U;
@@ -358,6 +599,7 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
             }
         }
         self->alarm = alarm;
+        track_residuals(self, evaluable, self->evaluable);
         self->evaluable = evaluable;
         st = isolate(self, alarm, evaluable);
     }

@@ -89,6 +89,7 @@ static void random_table(table_buf_t *b, const fdi_table_t *design_from, fuzz_in
         b->tests[i].input_mask = ((gen != NULL) ? gen->input_mask : 0U) | (fz_u32(in) & ROMO_SIGM_ALL);
         b->tests[i].gate = 1.0f + (float)(fz_u8(in) % 10U);
         b->tests[i].variance = design_from->tests[i % design_from->n_tests].variance;
+        b->tests[i].response_steps = (uint16_t)(1U + (fz_u32(in) & 0x01FFU));
         b->tests[i].interpretation = "fuzz";
     }
     for (j = 0U; j < nf; ++j)
@@ -113,6 +114,7 @@ static void random_table(table_buf_t *b, const fdi_table_t *design_from, fuzz_in
     b->t.fault_signature = b->sig;
     b->t.iso_class = b->cls;
     b->t.exoneration_margin = 1.0f + (float)(fz_u8(in) % 4U);
+    b->t.sensitivity_margin = 1.0f + (0.25f * (float)(fz_u8(in) % 8U));
     for (j = 0U; j < nf; ++j)
     {
         for (i = 0U; i < nt; ++i)
@@ -138,7 +140,7 @@ static fdi_diag_config_t good_config(const fdi_table_t *t)
     c.clear_count = 100U;
     c.warmup_steps = 400U; /* > the settling time of the kin design point (300 steps) */
     c.mode = FDI_ISO_EXONERATION;
-    c.iso_settle_steps = 300U;
+    c.noise_allowance = 3.0f;
     c.episode_clear_steps = 300U;
     return c;
 }
@@ -216,6 +218,17 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             return 0; /* e.g. more tests than the template has variances for: not a case for the diagnoser */
         }
         table = &tb.t;
+        uint32_t n_sens = 0U;
+        for (i = 0U; i < tb.t.n_tests; ++i)
+        {
+            n_sens += fdi_gen_sens_count(tb.t.tests[i].gen);
+        }
+        if (n_sens > FDI_DIAG_MAX_SENS) /* more sensitivities than the diagnoser holds: refused, documented */
+        {
+            c = good_config(table);
+            FUZZ_CHECK(fdi_diag_init(&d, &c) == FDI_BAD_ARG, "a table over FDI_DIAG_MAX_SENS was accepted");
+            return 0;
+        }
     }
     FUZZ_CHECK(fdi_diag_init(NULL, NULL) == FDI_BAD_ARG, "init NULL");
     c = good_config(table);
@@ -225,7 +238,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     c.clear_count = (uint16_t)fz_u8(&in);
     c.warmup_steps = (uint16_t)(fz_u32(&in) & 0x0FFFU);
     c.mode = (fdi_iso_mode_t)(fz_u8(&in) % 3U);
-    c.iso_settle_steps = (uint16_t)(fz_u32(&in) & 0x03FFU);
+    c.noise_allowance = fz_f32(&in);
     c.episode_clear_steps = (uint16_t)fz_u8(&in);
     c.sensitivities = (fz_u8(&in) & 1U) != 0U;
     bool good_cfg = false;

@@ -112,69 +112,6 @@ static void test_unlinked_and_bad_inputs(void **state)
     }
 }
 
-/* The test of the table whose MSO is Table II's MSO3 (equations K1 K2 D1 D2 S1 S2 S3 S4), -1 if none. */
-static int arr3_test(void)
-{
-    int found = -1;
-    uint32_t i;
-    for (i = 0U; i < (uint32_t)fdi_romo_table.n_tests; ++i)
-    {
-        if (strcmp(fdi_romo_table_equations[i], "K1 K2 D1 D2 S1 S2 S3 S4") == 0)
-        {
-            found = (int)i;
-        }
-    }
-    return found;
-}
-
-static void test_generated_mso3_equals_handwritten_arr3(void **state)
-{
-    fdi_gen_param_t p;
-    fdi_gen_t gen;
-    fdi_gen_t hand;
-    fdi_frame_t in;
-    veh_meas_cfg_t mc = {{0.0, 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0, 0.0}};
-    test_rng_t rng = {7ULL};
-    const int k = arr3_test();
-    double worst = 0.0;
-    double scale = 0.0;
-    int n;
-    (void)state;
-    if (k < 0)
-    {
-        skip(); /* MSO3 not in the current selection */
-    }
-    params(&p);
-    assert_int_equal(fdi_gen_init(&gen, fdi_romo_table.tests[k].gen), FDI_OK);
-    assert_int_equal(fdi_gen_init(&hand, &fdi_romo_kin_arr3), FDI_OK);
-    veh_measure(0.0, &mc, &rng, &in);
-    assert_int_equal(fdi_gen_reset(&gen, &p, &in), FDI_OK);
-    assert_int_equal(fdi_gen_reset(&hand, &p, &in), FDI_OK);
-    for (n = 1; n < 3000; ++n)
-    {
-        float rg = 0.0f;
-        float rh = 0.0f;
-        veh_measure((double)n * DT, &mc, &rng, &in);
-        if (n == 1500)
-        {
-            mc.f[3] = 0.5; /* f4: vx sensor offset, the residuals must move together */
-        }
-        assert_int_equal(fdi_gen_step(&gen, &p, &in, &rg, NULL), FDI_OK);
-        assert_int_equal(fdi_gen_step(&hand, &p, &in, &rh, NULL), FDI_OK);
-        if (fabs((double)rh) > scale)
-        {
-            scale = fabs((double)rh);
-        }
-        if (fabs((double)rg + (double)rh) > worst)
-        {
-            worst = fabs((double)rg + (double)rh);
-        }
-    }
-    print_message("generated MSO3 vs fdi_romo_kin_arr3: max |r_gen + r3| = %.3g, max |r3| = %.3g\n", worst, scale);
-    assert_true(scale > 0.0);
-    assert_true(worst < 1e-3 * scale);
-}
-
 static void frame(fdi_frame_t *in, float vx)
 {
     veh_meas_cfg_t mc = {{0.0, 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0, 0.0}};
@@ -218,8 +155,11 @@ static void test_operating_domain(void **state)
     fdi_frame_t in;
     fdi_diag_t d;
     fdi_diag_result_t res;
-    const fdi_diag_config_t cfg = {&fdi_romo_table, {(float)VEH_DX, (float)VEH_DY, 0.0f, 0.0f}, 1.5f, 150.0f, 1U, 1U,
-                                   300U, FDI_ISO_EXONERATION, 0U, 1U, false};
+    const fdi_diag_config_t cfg = {.table = &fdi_romo_table,
+                                   .gen_param = {(float)VEH_DX, (float)VEH_DY, 0.0f, 0.0f},
+                                   .cusum_k = 1.5f, .cusum_h = 150.0f, .set_count = 1U, .clear_count = 1U,
+                                   .warmup_steps = 300U, .mode = FDI_ISO_EXONERATION, .episode_clear_steps = 1U,
+                                   .noise_allowance = 3.0f, .sensitivities = false};
     const uint32_t all = ((uint32_t)1U << fdi_romo_table.n_tests) - 1U;
     uint32_t low;
     int n;
@@ -365,7 +305,6 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_slots_and_inputs),
         cmocka_unit_test(test_unlinked_and_bad_inputs),
-        cmocka_unit_test(test_generated_mso3_equals_handwritten_arr3),
         cmocka_unit_test(test_operating_domain),
         cmocka_unit_test(test_sensitivities_leave_the_residual_alone),
         cmocka_unit_test(test_observer_building_blocks),

@@ -94,6 +94,7 @@ typedef struct
     uint32_t candidates; /* at the end */
     bool isolated;
     uint32_t evaluable;  /* at the end */
+    int excluded;        /* steps with candidates that do not hold the fault */
 } run_out_t;
 
 /* One 300 s drive with fault `fault` (index into f[], -1: none) of size `size` from T_FAULT on. */
@@ -105,7 +106,7 @@ static run_out_t drive(int fault, double size, uint64_t seed, bool sensitivities
     test_rng_t rng = {seed};
     double h[3] = {0.2997, 0.1998, 0.0999};
     double f[N_F] = {0.0};
-    run_out_t out = {-1, 0U, false, 0U};
+    run_out_t out = {-1, 0U, false, 0U, 0};
     const long n = (long)(T_END / DT);
     long k;
     assert_int_equal(fdi_diag_config_default(&c, &fdi_three_tank_table), FDI_OK);
@@ -140,6 +141,10 @@ static run_out_t drive(int fault, double size, uint64_t seed, bool sensitivities
         if ((out.detected_step < 0) && res.iso.detected)
         {
             out.detected_step = (int)k;
+        }
+        if ((fault >= 0) && (res.iso.candidates != 0U) && (((res.iso.candidates >> (uint32_t)fault) & 1U) == 0U))
+        {
+            out.excluded++;
         }
         derivs(h, u, f, k1);
         for (i = 0; i < 3; ++i)
@@ -203,7 +208,10 @@ static void test_fault_free(void **state)
     assert_int_equal(r.evaluable, all);
 }
 
-static void expect_run(int fault, double size, uint64_t seed, uint32_t want)
+/* The run detects `fault` within 2 s, never excludes it, and ends with candidates within `allowed` (exactly the fault
+   and isolated when `allowed` is the fault alone). See host_tools/scenarios/three_tank.toml for why some sizes
+   leave a sensor offset among the candidates. */
+static void expect_run(int fault, double size, uint64_t seed, uint32_t allowed)
 {
     const run_out_t r = drive(fault, size, seed, false);
     const int onset = (int)(T_FAULT / DT);
@@ -213,13 +221,18 @@ static void expect_run(int fault, double size, uint64_t seed, uint32_t want)
     assert_true(r.detected_step >= onset);           /* no detection before the fault */
     assert_true(r.detected_step <= onset + 200);     /* within 2 s */
     assert_true((r.candidates >> (uint32_t)fault) & 1U); /* the true fault is never excluded */
-    assert_int_equal(r.candidates, want);
+    assert_int_equal(r.excluded, 0);
+    assert_int_equal(r.candidates & ~allowed, 0U);
+    if (allowed == ((uint32_t)1U << (uint32_t)fault))
+    {
+        assert_true(r.isolated);
+    }
 }
 
-static void test_clogging_isolated(void **state)
+static void test_clogging_detected(void **state)
 {
     (void)state;
-    expect_run(F_C12, 2.0e-5, 42ULL, (uint32_t)1U << F_C12);
+    expect_run(F_C12, 2.0e-5, 42ULL, ((uint32_t)1U << F_C12) | ((uint32_t)1U << F_S2));
 }
 
 static void test_sensor_offset_isolated(void **state)
@@ -231,7 +244,8 @@ static void test_sensor_offset_isolated(void **state)
 static void test_leak_detected(void **state)
 {
     (void)state;
-    expect_run(F_L2, 2.0e-5, 44ULL, ((uint32_t)1U << F_L2) | ((uint32_t)1U << F_S2));
+    expect_run(F_L2, 2.0e-5, 44ULL,
+               ((uint32_t)1U << F_L2) | ((uint32_t)1U << F_S1) | ((uint32_t)1U << F_S2) | ((uint32_t)1U << F_S3));
 }
 
 int main(void)
@@ -239,7 +253,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_table),
         cmocka_unit_test(test_fault_free),
-        cmocka_unit_test(test_clogging_isolated),
+        cmocka_unit_test(test_clogging_detected),
         cmocka_unit_test(test_sensor_offset_isolated),
         cmocka_unit_test(test_leak_detected),
     };

@@ -82,7 +82,7 @@ def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
             ("table", ctypes.c_void_p), ("gen_param", ctypes.c_float * c.n_params),
             ("cusum_k", ctypes.c_float), ("cusum_h", ctypes.c_float), ("set_count", ctypes.c_uint16),
             ("clear_count", ctypes.c_uint16), ("warmup_steps", ctypes.c_uint16), ("mode", ctypes.c_int),
-            ("iso_settle_steps", ctypes.c_uint16), ("episode_clear_steps", ctypes.c_uint16),
+            ("episode_clear_steps", ctypes.c_uint16), ("noise_allowance", ctypes.c_float),
             ("sensitivities", ctypes.c_bool),
         ]
 
@@ -313,10 +313,10 @@ def _apply_diag(d: Any, ov: dict[str, Any]) -> None:
             k = int(dll.fdi_py_param_index(key.encode()))
             assert k >= 0, key
             d.gen_param[k] = float(ov.pop(key))
-    for key in ("cusum_k", "cusum_h"):
+    for key in ("cusum_k", "cusum_h", "noise_allowance"):
         if key in ov:
             setattr(d, key, float(ov.pop(key)))
-    for key in ("set_count", "clear_count", "warmup_steps", "iso_settle_steps", "episode_clear_steps"):
+    for key in ("set_count", "clear_count", "warmup_steps", "episode_clear_steps"):
         if key in ov:
             v = int(ov.pop(key))
             if not 0 <= v <= 0xFFFF:
@@ -401,7 +401,7 @@ class Ecu:
 
     Overrides: ``d_x``, ``d_y`` (the ROMO kinematic generators' parameters), ``cusum_k``, ``cusum_h``,
     ``set_count``, ``clear_count``, ``warmup_steps``, ``mode`` ("exoneration" | "no_exoneration"),
-    ``iso_settle_steps``, ``episode_clear_steps``, ``sensitivities`` (fdi_diag.h), ``timeout_s`` (one value for all
+    ``episode_clear_steps``, ``noise_allowance``, ``sensitivities`` (fdi_diag.h), ``timeout_s`` (one value for all
     messages or a mapping message name -> seconds), ``max_delta_counter``, ``max_catchup_steps``.
     """
 

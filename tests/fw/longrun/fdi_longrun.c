@@ -78,7 +78,7 @@ static fdi_diag_config_t config(const fdi_table_t *table, uint16_t warmup)
     c.clear_count = 100U;
     c.warmup_steps = warmup;
     c.mode = FDI_ISO_EXONERATION;
-    c.iso_settle_steps = 300U;
+    c.noise_allowance = 3.0f;
     c.episode_clear_steps = 300U;
     return c;
 }
