@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Benchmarks of the fdi library (prints numbers; not a test), for the table that ships (the generated ROMO table)
-# and the kinematic table, both through one simulated drive as the ECU sees it (fw/bench/bench_drive.py: cornering,
+# and the kinematic table, both through one simulated drive as the ECU sees it (host_tools/bench/fw_bench_drive.py: cornering,
 # fault-free, then a vx sensor offset that starts an isolation episode; fw/bench/bench_drive.h classifies the steps):
 #   host:   instructions per fdi_diag_step with valgrind callgrind (build/bench, gcc -O3), fault-free steps and steps
 #           inside an isolation episode, sensitivities off and on
@@ -20,7 +20,7 @@ goal_lib=32768
 
 mkdir -p build/bench
 drive="$top/build/bench/fdi_bench_drive.bin"
-.venv/bin/python fw/bench/bench_drive.py "$drive"
+.venv/bin/python host_tools/bench/fw_bench_drive.py "$drive"
 
 echo "== host (x86-64, gcc -O3): callgrind, instructions per fdi_diag_step"
 cmake -S . -B build/bench -DCMAKE_BUILD_TYPE=Release -DFDI_BUILD_TESTS=OFF -DFDI_BUILD_BENCH=ON >/dev/null

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # Regenerates every committed generated file from its source (tests fail when a committed copy is stale):
+#   analysis/models/romo_thresholds.toml [selection], [generated]  <- the screening of the candidates + drives;
 #   fw/vehicles/romo/generated/fdi_romo_{table,generators,signals}.{h,c}  <- analysis/models/romo_grouped.toml +
 #     romo_thresholds.toml + fault sizes;  fdi_kin_calibration.h <- simulated drives;
 #   fw/vehicles/romo/generated/can/  <- dbc/romo.dbc (cantools code + the ECU core's bus description);
@@ -11,6 +12,16 @@ cd "$top"
 [ -x .venv/bin/fdi-analyze ] || bash scripts/bootstrap.sh
 romo=fw/vehicles/romo/generated
 tank=fw/vehicles/three_tank/generated
+# analysis/models/romo_screening.json.gz  <- every realizable candidate's fault-to-noise ratio at the required fault
+#   sizes along the fault-free drives (~30 min on 2 workers; only with FDI_SCREEN=1)
+if [ "${FDI_SCREEN:-0}" = 1 ]; then
+  .venv/bin/fdi-tune screen analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \
+    --sizes host_tools/scenarios/fault_sizes.toml --out analysis/models/romo_screening.json.gz
+fi
+# analysis/models/romo_thresholds.toml [selection]  <- the practical selection from the screening (MaxSAT, ~15 s;
+#   the report in out/practical/)
+.venv/bin/fdi-analyze practical analysis/models/romo_grouped.toml --screening analysis/models/romo_screening.json.gz \
+  --thresholds analysis/models/romo_thresholds.toml -o out/practical
 # analysis/models/romo_thresholds.toml [generated]  <- fault-free simulated drives, their CAN frames as the ECU's
 #   steps see them (fdi_host.can.ecu_view), through the generators (~1.5 min; checked by test_calibration_current.py)
 .venv/bin/fdi-tune calibrate analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml

@@ -2,7 +2,7 @@
 # The main job, from nothing: set-up, then
 #   1. structural analysis of the ROMO model (summary, DM, isolability)   -> out/romo_quasistatic/
 #   2. all MSO sets of the grouped model, fault matrices, minimal selections -> out/romo_grouped/
-#   3. generated C: diagnosis table + CAN codec (scripts/generate.sh)      -> fw/generated/
+#   3. generated C: diagnosis tables + CAN codec (scripts/generate.sh)     -> fw/vehicles/*/generated/
 #      and the generator report (per test: residual, causality, fault sizes) -> out/romo_grouped/generators.md
 #   4. build: the C library and ECU (CMake, build/main) and the Python bindings (pip install -e .)
 #   5. a simulated drive with the paper's faults f4, f5, f6 and ARR3/ARR4   -> out/fig6/
@@ -10,7 +10,8 @@
 #      otherwise python-can udp_multicast in a private network namespace): simulator, ECU process and
 #      monitor as separate processes; prints the score table             -> out/live/
 # FDI_MAIN_TABLE selects the ECU's diagnosis table for step 6: romo (default; the generated residual generators of
-# the optimal selection among realizable MSO sets) or kin (the hand-written kinematic tests MSO1..4).
+# the practical selection, [selection] of analysis/models/romo_thresholds.toml) or kin (the hand-written kinematic
+# tests MSO1..4).
 set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$top"

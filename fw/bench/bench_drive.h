@@ -3,7 +3,7 @@
  * bench_host.c and m4/bench_m4.c).
  *
  * The drive: a simulated ROMO drive as the ECU's steps see it, fault-free and then with a step fault
- * (fw/bench/bench_drive.py writes it; scripts/bench_fw.sh makes it). In memory: a buffer of 32-bit words,
+ * (host_tools/bench/fw_bench_drive.py writes it; scripts/bench_fw.sh makes it). In memory: a buffer of 32-bit words,
  * [magic, n_steps, n_signals, fault_step] then per step the validity mask and n_signals float values.
  * The tables: the kinematic table (4 hand-written tests) and the generated ROMO table that ships, each with the
  * diagnoser's defaults (fdi_diag_config_default) and the ROMO model's velocity-sensor position.

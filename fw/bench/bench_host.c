@@ -57,7 +57,7 @@ int main(int argc, char **argv)
     }
     if (!bench_drive_open(&drive, words, (uint32_t)n_words))
     {
-        fprintf(stderr, "usage: bench_host DRIVE.bin TABLE SENS (a drive of fw/bench/bench_drive.py)\n");
+        fprintf(stderr, "usage: bench_host DRIVE.bin TABLE SENS (a drive of host_tools/bench/fw_bench_drive.py)\n");
         return 1;
     }
     if ((fdi_diag_init(&d, &cfg) != FDI_OK) || (fdi_diag_result(&d, &res) != FDI_OK))

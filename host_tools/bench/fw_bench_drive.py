@@ -7,7 +7,7 @@ File layout (little-endian): uint32 magic 0x42494446 ("FDIB"), uint32 n_steps, u
 ROMO target (fdi_romo_signal_names). The omega1_m sample is invalid for 20 steps at 1 s (a re-arm and a filter
 restart inside the warm-up).
 
-Usage: python fw/bench/bench_drive.py OUT.bin
+Usage: python host_tools/bench/fw_bench_drive.py OUT.bin
 """
 
 from __future__ import annotations
