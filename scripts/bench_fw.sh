@@ -1,27 +1,47 @@
 #!/usr/bin/env bash
-# Benchmarks of the fdi library (prints numbers; not a test). Uses the builds of scripts/test_fw.sh layout:
-#   host:   instructions per fdi_diag_step with valgrind callgrind (build/bench, Release, N steps), for the
-#           kinematic table (4 hand-written tests) and the generated ROMO table (fw/vehicles/romo), sensitivities off
-#   target: arm-none-eabi-size of the libraries for Cortex-M4F and instructions per fdi_diag_step of both tables
-#           under qemu-system-arm -M mps2-an386 -icount shift=0 (SysTick counted, calibrated by a known loop)
-# Usage: scripts/bench_fw.sh [N]   (N host steps, default 10000; the first 320 are warm-up steps)
+# Benchmarks of the fdi library (prints numbers; not a test), for the table that ships (the generated ROMO table)
+# and the kinematic table, both through one simulated drive as the ECU sees it (fw/bench/bench_drive.py: cornering,
+# fault-free, then a vx sensor offset that starts an isolation episode; fw/bench/bench_drive.h classifies the steps):
+#   host:   instructions per fdi_diag_step with valgrind callgrind (build/bench, gcc -O3), fault-free steps and steps
+#           inside an isolation episode, sensitivities off and on
+#   target: Cortex-M4F under qemu-system-arm -M mps2-an386 -icount shift=0 (SysTick counted, calibrated by a known
+#           loop): the same per phase and the largest single step of the drive; arm-none-eabi-size of the libraries,
+#           the ROMO target with and without its sensitivity code (-DFDI_GEN_SENSITIVITIES=0), sizeof(fdi_diag_t)
+# and the goals of issue 21 with PASS/MISS: <= 5,000 instructions per step on the M4 (largest step of the ROMO table,
+# sensitivities on, isolation included), sizeof(fdi_diag_t) <= 4 KB on the M4, libfdi.a <= 32 KB of text.
+# Usage: scripts/bench_fw.sh
 set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$top"
-n="${1:-10000}"
+[ -x .venv/bin/python ] || bash scripts/bootstrap.sh
+goal_insn=5000
+goal_ram=4096
+goal_lib=32768
 
-echo "== host (x86-64, gcc -O3): callgrind"
+mkdir -p build/bench
+drive="$top/build/bench/fdi_bench_drive.bin"
+.venv/bin/python fw/bench/bench_drive.py "$drive"
+
+echo "== host (x86-64, gcc -O3): callgrind, instructions per fdi_diag_step"
 cmake -S . -B build/bench -DCMAKE_BUILD_TYPE=Release -DFDI_BUILD_TESTS=OFF -DFDI_BUILD_BENCH=ON >/dev/null
 cmake --build build/bench -j 2 >/dev/null
 for table in 0 1; do
-  out="$(mktemp)"
-  line="$(valgrind --tool=callgrind --toggle-collect=fdi_diag_step --callgrind-out-file="$out" \
-    build/bench/fw/bench/fdi_bench_host "$n" "$table" 2>&1 | grep -E "^steps")" || true
-  echo "$line"
-  ir="$(callgrind_annotate "$out" 2>/dev/null | awk '/PROGRAM TOTALS/ {gsub(",", "", $1); print $1; exit}')"
-  rm -f "$out"
-  name="$(echo "$line" | sed -E 's/^steps [0-9]+ ([^:]*):.*/\1/')"
-  echo "fdi_diag_step: $ir instructions in $n steps = $((ir / n)) instructions/step ($name)"
+  for sens in 0 1; do
+    out="$(mktemp)"
+    line="$(valgrind --tool=callgrind --collect-atstart=no --toggle-collect='bench_step_*' --callgrind-out-file="$out" \
+      build/bench/fw/bench/fdi_bench_host "$drive" "$table" "$sens" 2>&1 | grep -E "^steps")"
+    ann="$(callgrind_annotate --inclusive=yes "$out" 2>/dev/null)"
+    rm -f "$out"
+    ir_of() { echo "$ann" | awk -v f="$1" '$0 ~ (":" f " ") {gsub(",", "", $1); print $1; exit}'; }
+    n_free="$(echo "$line" | sed -E 's/.*fault-free ([0-9]+),.*/\1/')"
+    n_epi="$(echo "$line" | sed -E 's/.*episode ([0-9]+) steps.*/\1/')"
+    ir_free="$(ir_of bench_step_fault_free)"
+    ir_epi="$(ir_of bench_step_episode)"
+    name="$(echo "$line" | sed -E 's/^steps [0-9]+ ([^,]*),.*/\1/')"
+    echo "x86-64: $name, sensitivities $([ "$sens" = 1 ] && echo on || echo off): fault-free" \
+      "$(( ${ir_free:-0} / (n_free > 0 ? n_free : 1) )), episode $(( ${ir_epi:-0} / (n_epi > 0 ? n_epi : 1) ))" \
+      "instructions/step ($n_free and $n_epi steps)"
+  done
 done
 
 echo "== target (Cortex-M4F, arm-none-eabi-gcc -O3)"
@@ -29,10 +49,34 @@ toolchain=()
 [ -f build/m4/CMakeCache.txt ] || toolchain=(-DCMAKE_TOOLCHAIN_FILE=cmake/arm-none-eabi-cortex-m4f.cmake)
 cmake -S . -B build/m4 "${toolchain[@]}" -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build/m4 -j 2 >/dev/null
+toolchain=()
+[ -f build/m4-nosens/CMakeCache.txt ] || toolchain=(-DCMAKE_TOOLCHAIN_FILE=cmake/arm-none-eabi-cortex-m4f.cmake)
+cmake -S . -B build/m4-nosens "${toolchain[@]}" -DCMAKE_BUILD_TYPE=Release -DCMAKE_C_FLAGS=-DFDI_GEN_SENSITIVITIES=0 \
+  >/dev/null
+cmake --build build/m4-nosens -j 2 --target fdi_romo >/dev/null
+text_of() { arm-none-eabi-size -t "$1" | tail -1 | awk '{print $1}'; }
 for lib in fw/libfdi.a fw/ecu/libfdi_ecu.a fw/vehicles/romo/libfdi_romo.a fw/vehicles/romo/libfdi_romo_can.a \
            fw/vehicles/three_tank/libfdi_three_tank.a; do
   arm-none-eabi-size -t "build/m4/$lib"
 done
+gens=fw/vehicles/romo/CMakeFiles/fdi_romo.dir/generated
+romo_gen="$(arm-none-eabi-size "build/m4/$gens/fdi_romo_generators.c.obj" | tail -1 | awk '{print $1}')"
+romo_gen_nosens="$(arm-none-eabi-size "build/m4-nosens/$gens/fdi_romo_generators.c.obj" | tail -1 | awk '{print $1}')"
+romo_lib="$(text_of build/m4/fw/vehicles/romo/libfdi_romo.a)"
+romo_lib_nosens="$(text_of build/m4-nosens/fw/vehicles/romo/libfdi_romo.a)"
+lib_text="$(text_of build/m4/fw/libfdi.a)"
+echo "m4 flash: libfdi.a (generic core) text $lib_text B; ROMO target libfdi_romo.a text $romo_lib B" \
+  "($romo_lib_nosens B with -DFDI_GEN_SENSITIVITIES=0), of which the generated generators $romo_gen B ($romo_gen_nosens B)"
 arm-none-eabi-size build/m4/fw/bench/fdi_bench_m4.elf
-timeout 120 qemu-system-arm -M mps2-an386 -cpu cortex-m4 -icount shift=0 -nographic -monitor none -serial none \
-  -semihosting-config enable=on,target=native -kernel build/m4/fw/bench/fdi_bench_m4.elf
+m4_out="$(cd build/bench && timeout 300 qemu-system-arm -M mps2-an386 -cpu cortex-m4 -icount shift=0 -nographic \
+  -monitor none -serial none -semihosting-config enable=on,target=native -kernel "$top/build/m4/fw/bench/fdi_bench_m4.elf" 2>&1)"
+echo "$m4_out"
+
+echo "== goals (issue 21)"
+verdict() { if [ "$1" -le "$2" ]; then echo PASS; else echo MISS; fi; }
+worst="$(echo "$m4_out" | awk '/generated ROMO table, sensitivities on/ {for (i = 1; i <= NF; ++i) if ($i == "worst") {print $(i + 1); exit}}')"
+ram="$(echo "$m4_out" | awk '/sizeof\(fdi_diag_t\)/ {print $3; exit}')"
+echo "ROMO table, Cortex-M4F, largest step of the drive (sensitivities on, isolation included): ${worst:-?} <= $goal_insn" \
+  "instructions: $(verdict "${worst:-999999}" "$goal_insn")"
+echo "sizeof(fdi_diag_t) on Cortex-M4F: ${ram:-?} <= $goal_ram bytes: $(verdict "${ram:-999999}" "$goal_ram")"
+echo "libfdi.a text on Cortex-M4F: $lib_text <= $goal_lib bytes: $(verdict "$lib_text" "$goal_lib")"

@@ -1,55 +1,95 @@
 /*
- * bench_host.c - host benchmark: steps one fdi_diag N times on precomputed frames, for one table (0: the
- * kinematic table, 1: the generated ROMO table). Run under `valgrind --tool=callgrind
- * --toggle-collect=fdi_diag_step` (scripts/bench_fw.sh): the collected instruction count divided by N is the cost
- * per step. Usage: bench_host [N] [table]
+ * bench_host.c - host benchmark: one table through the drive of bench_drive.h, every fdi_diag_step called through
+ * the wrapper of its phase (bench_step_warmup, bench_step_fault_free, bench_step_episode). Run under
+ * `valgrind --tool=callgrind --collect-atstart=no --toggle-collect='bench_step_*'` (scripts/bench_fw.sh): the
+ * inclusive instruction count of a wrapper divided by its step count (printed) is the cost per step of that phase.
+ * Usage: bench_host DRIVE.bin TABLE(0 kinematic, 1 ROMO) SENSITIVITIES(0, 1)
  */
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "bench_signals.h"
+#include "bench_drive.h"
 #include "fdi_diag.h"
 #include "fdi_gen.h"
 
-#define MAX_N 100000L
+static uint32_t words[BENCH_WORDS];
 
-static fdi_frame_t frames[MAX_N];
+/* One wrapper per phase, never inlined: callgrind attributes each step to its phase. */
+__attribute__((noinline)) fdi_status_t bench_step_warmup(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
+__attribute__((noinline)) fdi_status_t bench_step_fault_free(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
+__attribute__((noinline)) fdi_status_t bench_step_episode(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
+
+fdi_status_t bench_step_warmup(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v)
+{
+    return fdi_diag_step(d, in, v);
+}
+
+fdi_status_t bench_step_fault_free(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v)
+{
+    return fdi_diag_step(d, in, v);
+}
+
+fdi_status_t bench_step_episode(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v)
+{
+    return fdi_diag_step(d, in, v);
+}
 
 int main(int argc, char **argv)
 {
-    fdi_diag_t d;
-    fdi_diag_result_t res;
+    static fdi_diag_t d;
+    static fdi_diag_result_t res;
+    bench_drive_t drive;
     const char *name = "";
-    const long which = (argc > 2) ? strtol(argv[2], NULL, 10) : 0L;
-    const fdi_table_t *table = bench_table((which == 1L) ? 1U : 0U, &name);
-    const fdi_diag_config_t cfg = bench_config(table);
-    long n = (argc > 1) ? strtol(argv[1], NULL, 10) : 10000L;
-    long k;
+    const long which = (argc > 2) ? strtol(argv[2], NULL, 10) : 1L;
+    const bool sens = (argc > 3) && (strtol(argv[3], NULL, 10) != 0L);
+    const fdi_table_t *table = bench_table((which == 0L) ? 0U : 1U, &name);
+    const fdi_diag_config_t cfg = bench_config(table, sens);
+    uint32_t count[3] = {0U, 0U, 0U};
+    bool settled = false;
+    uint32_t k;
+    size_t n_words = 0U;
     int rc = 0;
-    if ((n < 1L) || (n > MAX_N))
+    FILE *f = (argc > 1) ? fopen(argv[1], "rb") : NULL;
+    if (f != NULL)
     {
-        n = 10000L;
+        n_words = fread(words, sizeof(uint32_t), BENCH_WORDS, f);
+        (void)fclose(f);
     }
-    for (k = 0; k < n; ++k)
+    if (!bench_drive_open(&drive, words, (uint32_t)n_words))
     {
-        bench_frame((float)k * BENCH_DT, &frames[k]);
+        fprintf(stderr, "usage: bench_host DRIVE.bin TABLE SENS (a drive of fw/bench/bench_drive.py)\n");
+        return 1;
     }
-    if (fdi_diag_init(&d, &cfg) != FDI_OK)
+    if ((fdi_diag_init(&d, &cfg) != FDI_OK) || (fdi_diag_result(&d, &res) != FDI_OK))
     {
-        rc = 1;
+        return 2;
     }
-    for (k = 0; (rc == 0) && (k < n); ++k)
+    for (k = 0U; (rc == 0) && (k < drive.n_steps); ++k)
     {
-        if (fdi_diag_step(&d, &frames[k], ROMO_SIGM_ALL) != FDI_OK)
+        fdi_frame_t in;
+        const uint32_t validity = bench_drive_frame(&drive, k, &in);
+        const bench_phase_t ph = bench_phase(table, &res, k, drive.fault_step, &settled);
+        fdi_status_t st;
+        if (ph == BENCH_EPISODE)
         {
-            rc = 2;
+            st = bench_step_episode(&d, &in, validity);
+        }
+        else if (ph == BENCH_FAULT_FREE)
+        {
+            st = bench_step_fault_free(&d, &in, validity);
+        }
+        else
+        {
+            st = bench_step_warmup(&d, &in, validity);
+        }
+        count[ph]++;
+        if ((st != FDI_OK) || (fdi_diag_result(&d, &res) != FDI_OK))
+        {
+            rc = 3;
         }
     }
-    if ((rc == 0) && (fdi_diag_result(&d, &res) == FDI_OK))
-    {
-        printf("steps %ld %s: %u tests, evaluable 0x%X alarms 0x%X sizeof(fdi_diag_t) %zu sizeof(fdi_gen_t) %zu\n", n,
-               name, (unsigned)table->n_tests, (unsigned)res.evaluable_mask, (unsigned)res.alarm_mask, sizeof d,
-               sizeof(fdi_gen_t));
-    }
+    printf("steps %u %s, sensitivities %s: warm-up %u, fault-free %u, episode %u steps; sizeof(fdi_diag_t) %zu\n",
+           (unsigned)drive.n_steps, name, sens ? "on" : "off", (unsigned)count[BENCH_WARMUP],
+           (unsigned)count[BENCH_FAULT_FREE], (unsigned)count[BENCH_EPISODE], sizeof d);
     return rc;
 }
