@@ -3,13 +3,14 @@
  *
  * From the input: a table (the kinematic table, the generated ROMO table, or a random table of the ROMO
  * target's generator descriptors, hand-written and generated, that passes fdi_table_check()), a configuration
- * (sensitivities on or off) (any float bits for the CUSUM, counts, warm-up,
+ * (sensitivities off, during episodes, always, or an invalid mode) (any float bits for the CUSUM, counts, warm-up,
  * mode; init may reject it, then the default configuration, for the kin and ROMO tables from an instance
  * warmed up once by 10 s of clean driving), then up to 1,200 steps. Each step starts
  * from the fault-free reference vehicle at that instant and applies input-chosen edits: a signal set to
  * arbitrary float bits (NaN, Inf, denormals, +-FLT_MAX), a signal scaled or offset, validity bits cleared or
  * set at random, and occasional NULL arguments. Invariants after every call:
  *  - init / step / result never crash; NULL arguments give FDI_BAD_ARG; step returns FDI_OK otherwise;
+ *  - at most one test's sensitivities per step, of an evaluated test, none when they are off;
  *  - alarm within evaluable; a test is evaluable only if it has a generator and all its inputs are valid
  *    and finite in this step; residuals of evaluable tests are finite, ratios >= 0 and not NaN (+Inf for
  *    a huge residual, documented in fdi_eval.c);
@@ -123,6 +124,27 @@ static void random_table(table_buf_t *b, const fdi_table_t *design_from, fuzz_in
     b->t.test_size = b->size;
 }
 
+/* Filter states a table needs in the diagnoser: its set's bank and the hand-written generators' filters. */
+static uint32_t filters_needed(const fdi_table_t *t)
+{
+    uint32_t n = 0U;
+    const fdi_gen_set_t *set = NULL;
+    uint32_t i;
+    for (i = 0U; i < t->n_tests; ++i)
+    {
+        const fdi_gen_desc_t *g = t->tests[i].gen;
+        if ((g != NULL) && (g->set != NULL))
+        {
+            set = g->set;
+        }
+        else if (g != NULL)
+        {
+            n += g->n_filters;
+        }
+    }
+    return n + ((set != NULL) ? set->n_bank : 0U);
+}
+
 static fdi_diag_config_t good_config(const fdi_table_t *t)
 {
     fdi_diag_config_t c;
@@ -131,7 +153,7 @@ static fdi_diag_config_t good_config(const fdi_table_t *t)
     c.gen_param[FDI_ROMO_KIN_PARAM_D_Y] = (float)VEH_DY;
     c.gen_param[2] = 0.0f;
     c.gen_param[3] = 0.0f;
-    c.sensitivities = false;
+    c.sensitivities = FDI_DIAG_SENS_OFF;
     c.cusum_k = 1.5f;
     c.cusum_h = 150.0f;
     c.set_count = 10U;
@@ -211,9 +233,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     else
     {
         random_table(&tb, &fdi_kin_table, &in);
-        if (fdi_table_check(&tb.t) != FDI_OK)
+        if ((fdi_table_check(&tb.t) != FDI_OK) || (filters_needed(&tb.t) > FDI_DIAG_MAX_FILTERS))
         {
-            return 0; /* e.g. more tests than the template has variances for: not a case for the diagnoser */
+            return 0; /* e.g. a generated generator twice, or more hand-written filters than the diagnoser holds:
+                         not a case for the diagnoser */
         }
         table = &tb.t;
     }
@@ -227,7 +250,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     c.mode = (fdi_iso_mode_t)(fz_u8(&in) % 3U);
     c.iso_settle_steps = (uint16_t)(fz_u32(&in) & 0x03FFU);
     c.episode_clear_steps = (uint16_t)fz_u8(&in);
-    c.sensitivities = (fz_u8(&in) & 1U) != 0U;
+    c.sensitivities = (fdi_diag_sens_mode_t)(fz_u8(&in) % 4U); /* 3: refused */
     bool good_cfg = false;
     if (fdi_diag_init(&d, &c) != FDI_OK)
     {
@@ -292,6 +315,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             const uint32_t usable = validity & fdi_frame_finite_mask(&x, ROMO_SIGM_ALL);
             FUZZ_CHECK(res.n_tests == table->n_tests, "n_tests");
             FUZZ_CHECK((res.alarm_mask & ~res.evaluable_mask) == 0U, "alarm outside evaluable");
+            FUZZ_CHECK((res.sens_fresh_mask & (res.sens_fresh_mask - 1U)) == 0U, "two tests' sensitivities");
+            FUZZ_CHECK((res.sens_fresh_mask & ~res.evaluable_mask) == 0U, "sensitivities of a test not evaluated");
+            FUZZ_CHECK((c.sensitivities != FDI_DIAG_SENS_OFF) || (res.sens_fresh_mask == 0U), "sensitivities off");
             FUZZ_CHECK((res.evaluable_mask & ~with_gen) == 0U, "a test without generator is evaluable");
             for (i = 0U; i < table->n_tests; ++i)
             {

@@ -11,7 +11,9 @@
  *     {fL2, fS2}: the reaction sizes of the sweep (a sensor-2 step alarms the derivative tests from 1.5 mm) do not
  *     let the quiet tank-1/tank-3 tests clear a sensor-2 offset (what the sensitivities at the operating point are
  *     for);
- *   - with sensitivities requested every test lists one finite d r / d f per fault of its generator's sens_mask.
+ *   - with sensitivities requested (during isolation episodes) one test per step is refreshed, in round robin, every
+ *     test at least once in an episode and none without one; every test lists one finite d r / d f per fault of its
+ *     generator's sens_mask.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -107,9 +109,11 @@ static run_out_t drive(int fault, double size, uint64_t seed, bool sensitivities
     double f[N_F] = {0.0};
     run_out_t out = {-1, 0U, false, 0U};
     const long n = (long)(T_END / DT);
+    uint32_t refreshed = 0U;
     long k;
+    res.iso.detected = false;
     assert_int_equal(fdi_diag_config_default(&c, &fdi_three_tank_table), FDI_OK);
-    c.sensitivities = sensitivities;
+    c.sensitivities = sensitivities ? FDI_DIAG_SENS_EPISODE : FDI_DIAG_SENS_OFF;
     assert_int_equal(fdi_diag_init(&d, &c), FDI_OK);
     for (k = 0; k < n; ++k)
     {
@@ -135,8 +139,16 @@ static run_out_t drive(int fault, double size, uint64_t seed, bool sensitivities
         in.value[THREE_TANK_SIG_Y1] = (float)(h[0] + f[F_S1] + (NOISE * test_normal(&rng)));
         in.value[THREE_TANK_SIG_Y2] = (float)(h[1] + f[F_S2] + (NOISE * test_normal(&rng)));
         in.value[THREE_TANK_SIG_Y3] = (float)(h[2] + f[F_S3] + (NOISE * test_normal(&rng)));
-        assert_int_equal(fdi_diag_step(&d, &in, THREE_TANK_SIGM_ALL), FDI_OK);
-        assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
+        {
+            const bool episode_before = (k > 0) && res.iso.detected;
+            assert_int_equal(fdi_diag_step(&d, &in, THREE_TANK_SIGM_ALL), FDI_OK);
+            assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
+            /* sensitivities: one test per step at most, only during an isolation episode */
+            assert_int_equal(res.sens_fresh_mask & (res.sens_fresh_mask - 1U), 0U);
+            assert_true(episode_before || (res.sens_fresh_mask == 0U));
+            assert_int_equal(res.sens_fresh_mask, fdi_diag_sens_fresh(&d));
+            refreshed |= res.sens_fresh_mask;
+        }
         if ((out.detected_step < 0) && res.iso.detected)
         {
             out.detected_step = (int)k;
@@ -177,7 +189,14 @@ static run_out_t drive(int fault, double size, uint64_t seed, bool sensitivities
             {
                 assert_true(fdi_float_is_finite(res.sens[j]));
             }
+            /* refreshed in round robin during the episode (every test evaluated), never without one */
+            assert_true(((refreshed >> i) & 1U) == ((out.detected_step >= 0) ? 1U : 0U));
+            assert_true((res.sens_step[i] > 0U) == (((refreshed >> i) & 1U) != 0U));
         }
+    }
+    else
+    {
+        assert_int_equal(refreshed, 0U);
     }
     return out;
 }
@@ -205,7 +224,7 @@ static void test_fault_free(void **state)
 
 static void expect_run(int fault, double size, uint64_t seed, uint32_t want)
 {
-    const run_out_t r = drive(fault, size, seed, false);
+    const run_out_t r = drive(fault, size, seed, true);
     const int onset = (int)(T_FAULT / DT);
     print_message("%s size %g: detected %.2f s after the onset, candidates 0x%X, isolated %d\n",
                   fdi_three_tank_table.fault_names[fault], size, (double)(r.detected_step - onset) * DT,

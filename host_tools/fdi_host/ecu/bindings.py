@@ -13,8 +13,12 @@ of ``fw/ecu/include/fdi_ecu.h`` and ``fw/include/fdi_diag.h``::
             bus.send(...)
     ecu.result().candidates, ecu.counters().rejected
 
-    diag = Diagnoser("three_tank", sensitivities=True)   # no bus: frames of the table's signals
+    diag = Diagnoser("three_tank", sensitivities="always")   # no bus: frames of the table's signals
     runs = diag.run({"u": u, "y1": y1, "y2": y2, "y3": y3})   # residuals, sensitivities, results per step
+
+Sensitivities (fdi_diag.h): ``sensitivities=True`` (or ``"episode"``) computes them during isolation episodes,
+``"always"`` at every step, one test per step in round robin either way; a result lists each test's last refreshed
+values, `EcuResult.sens_fresh_mask` the tests refreshed at its step.
 
 Semantics (frame checks, timeouts, fixed steps at the table's dt, the diagnosis frame) are those of the C core:
 a step at T_k sees exactly the frames with t <= T_k, whatever the poll pattern. Times are converted to wrapping
@@ -52,6 +56,7 @@ BUSES = ("romo",)
 TABLE_BUS = {"kin": "romo", "romo": "romo"}  # the bus an ECU of a table listens to (three_tank: none)
 _N_REASONS = len(REASONS)
 _MODES = {"no_exoneration": 0, "exoneration": 1}
+_SENS_MODES = {"off": 0, "episode": 1, "always": 2}  # fdi_diag_sens_mode_t
 
 
 class EcuError(RuntimeError):
@@ -83,7 +88,7 @@ def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
             ("cusum_k", ctypes.c_float), ("cusum_h", ctypes.c_float), ("set_count", ctypes.c_uint16),
             ("clear_count", ctypes.c_uint16), ("warmup_steps", ctypes.c_uint16), ("mode", ctypes.c_int),
             ("iso_settle_steps", ctypes.c_uint16), ("episode_clear_steps", ctypes.c_uint16),
-            ("sensitivities", ctypes.c_bool),
+            ("sensitivities", ctypes.c_int),
         ]
 
     class Config(ctypes.Structure):
@@ -116,6 +121,8 @@ def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
             ("n_tests", ctypes.c_uint8), ("alarm_mask", ctypes.c_uint32), ("evaluable_mask", ctypes.c_uint32),
             ("status", ctypes.c_int * c.max_tests), ("residual", ctypes.c_float * c.max_tests),
             ("ratio", ctypes.c_float * c.max_tests), ("accused_mask", ctypes.c_uint32), ("iso", IsoResult),
+            ("step", ctypes.c_uint32), ("sens_fresh_mask", ctypes.c_uint32),
+            ("sens_step", ctypes.c_uint32 * c.max_tests),
             ("sens_offset", ctypes.c_uint8 * (c.max_tests + 1)), ("sens", ctypes.c_float * c.max_sens),
         ]
 
@@ -192,7 +199,7 @@ def _lib() -> _Lib:
         "fdi_diag_init": (st, [vp, vp]),
         "fdi_diag_step": (st, [vp, vp, ctypes.c_uint32]),
         "fdi_diag_result": (st, [vp, vp]),
-        "fdi_py_diag_run": (ctypes.c_long, [vp, ctypes.c_long, ctypes.c_int, vp, vp, vp, vp]),
+        "fdi_py_diag_run": (ctypes.c_long, [vp, ctypes.c_long, ctypes.c_int, vp, vp, vp, vp, vp, vp]),
     }
     for name, (res, args) in sigs.items():
         fn = getattr(dll, name)
@@ -328,7 +335,11 @@ def _apply_diag(d: Any, ov: dict[str, Any]) -> None:
             raise ValueError(f"mode {mode!r}: use one of {tuple(_MODES)}")
         d.mode = _MODES[mode]
     if "sensitivities" in ov:
-        d.sensitivities = bool(ov.pop("sensitivities"))
+        sens = ov.pop("sensitivities")
+        mode = ("episode" if sens else "off") if isinstance(sens, bool) else sens
+        if mode not in _SENS_MODES:
+            raise ValueError(f"sensitivities {sens!r}: use True, False or one of {tuple(_SENS_MODES)}")
+        d.sensitivities = _SENS_MODES[mode]
 
 
 def _sensitivities(d: Any, n_tests: int) -> tuple[tuple[float, ...], ...]:
@@ -380,7 +391,9 @@ class EcuResult:
     residuals: tuple[float, ...]
     ratios: tuple[float, ...]
     test_names: tuple[str, ...]
-    sensitivities: tuple[tuple[float, ...], ...] = ()  # per test: d r / d f of its sens faults (with sensitivities)
+    sensitivities: tuple[tuple[float, ...], ...] = ()  # per test: d r / d f of its sens faults, last refreshed
+    sens_fresh_mask: int = 0  # tests whose sensitivities were refreshed at this step (at most one)
+    sens_steps: tuple[int, ...] = ()  # per test: the step of its last refresh (0: never)
 
     @property
     def status_name(self) -> str:
@@ -548,7 +561,8 @@ class Ecu:
             residuals=tuple(float(d.residual[i]) for i in range(n)),
             ratios=tuple(float(d.ratio[i]) for i in range(n)),
             test_names=self.table.test_names,
-            sensitivities=_sensitivities(d, n),
+            sensitivities=_sensitivities(d, n), sens_fresh_mask=int(d.sens_fresh_mask),
+            sens_steps=tuple(int(d.sens_step[i]) for i in range(n)),
         )
 
 
@@ -559,11 +573,13 @@ FloatArray = NDArray[np.float64]
 @dataclass(frozen=True)
 class DiagRun:
     """The diagnoser over a sequence of frames: per step and test the residual, per test its sensitivities
-    (columns in `TableInfo.sens_faults` order; empty without sensitivities), and the result after every step."""
+    (columns in `TableInfo.sens_faults` order, the last refreshed values at every step, 0 before the first refresh;
+    empty without sensitivities), per step the tests refreshed at it, and the result after every step."""
 
     residuals: FloatArray  # [step, test]
     sensitivities: tuple[FloatArray, ...]  # per test: [step, sensitivity]
     results: tuple[EcuResult, ...]
+    sens_fresh: NDArray[np.uint32]  # [step]: bit i = test i refreshed at the step
 
 
 class Diagnoser:
@@ -588,6 +604,8 @@ class Diagnoser:
         self._self = ctypes.cast(self._buf, ctypes.c_void_p)
         _check(self._dll.fdi_diag_init(self._self, ctypes.byref(cfg)), "fdi_diag_init")
         self._steps = 0
+        self._res = lib.types["DiagResult"]()  # kept across steps: it holds each test's last sensitivities
+        _check(self._dll.fdi_diag_result(self._self, ctypes.byref(self._res)), "fdi_diag_result")
 
     def _frames(self, signals: Mapping[str, Any]) -> NDArray[np.float32]:
         names = self.table.signal_names
@@ -600,7 +618,7 @@ class Diagnoser:
         return np.ascontiguousarray(np.column_stack(cols), dtype=np.float32)
 
     def _result(self) -> EcuResult:
-        r = self._types["DiagResult"]()
+        r = self._res
         _check(self._dll.fdi_diag_result(self._self, ctypes.byref(r)), "fdi_diag_result")
         n = self.table.n_tests
         return EcuResult(
@@ -610,7 +628,8 @@ class Diagnoser:
             detected=bool(r.iso.detected), isolated=bool(r.iso.isolated), iso_class=0,
             test_status=tuple(TEST_STATUS_NAMES[int(r.status[i])] for i in range(n)),
             residuals=tuple(float(r.residual[i]) for i in range(n)), ratios=tuple(float(r.ratio[i]) for i in range(n)),
-            test_names=self.table.test_names, sensitivities=_sensitivities(r, n))
+            test_names=self.table.test_names, sensitivities=_sensitivities(r, n),
+            sens_fresh_mask=int(r.sens_fresh_mask), sens_steps=tuple(int(r.sens_step[i]) for i in range(n)))
 
     def step(self, values: Mapping[str, float], validity: int | None = None) -> EcuResult:
         """One step with one frame (signals by name; a missing one is invalid); validity default: every signal
@@ -636,20 +655,21 @@ class Diagnoser:
         caps = self._caps
         out_r = np.zeros((n, caps.max_tests), dtype=np.float32)
         out_s = np.zeros((n, caps.max_sens), dtype=np.float32)
+        out_f = np.zeros(n, dtype=np.uint32)
         res: list[EcuResult] = []
         chunk = 1 if results else max(n, 1)
         for a in range(0, n, chunk):
             b = min(n, a + chunk)
             m = int(self._dll.fdi_py_diag_run(
                 self._self, b - a, ns, frames[a:b].ctypes.data, validity[a:b].ctypes.data,
-                out_r[a:b].ctypes.data, out_s[a:b].ctypes.data))
+                out_r[a:b].ctypes.data, out_s[a:b].ctypes.data, out_f[a:b].ctypes.data, ctypes.byref(self._res)))
             if m != b - a:
                 raise EcuError("fdi_diag_step failed during run()")
             self._steps += m
             if results:
                 res.append(self._result())
         nt = self.table.n_tests
-        counts = [len(self.table.sens_faults(i)) if bool(self.config.sensitivities) else 0 for i in range(nt)]
+        counts = [len(self.table.sens_faults(i)) if int(self.config.sensitivities) else 0 for i in range(nt)]
         starts = np.cumsum([0, *counts])
         sens = tuple(out_s[:, starts[i]:starts[i + 1]].astype(np.float64) for i in range(nt))
-        return DiagRun(out_r[:, :nt].astype(np.float64), sens, tuple(res))
+        return DiagRun(out_r[:, :nt].astype(np.float64), sens, tuple(res), out_f)
