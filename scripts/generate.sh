@@ -16,23 +16,11 @@ tank=fw/vehicles/three_tank/generated
 .venv/bin/fdi-tune calibrate analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml
 # host_tools/scenarios/fault_sizes.toml [per_test.*]  <- step-fault sweep through the generators in cornering, the
 # pairs it leaves without a size in the other scenarios [per_test_scenario.*] (~25 min; only with FDI_SWEEP_SIZES=1;
-# tests/analysis/test_residual_faults.py checks the committed sizes against the thresholds);
-# then analysis/models/romo_thresholds.toml [augment]  <- tests added for the faults that no test of the structural
-# selection detects within its limit (~1 min); when that changed the tests, calibrate and sweep again
+# extra information next to the [requirement] sizes; tests/analysis/test_residual_faults.py checks the committed
+# sizes against the thresholds)
 if [ "${FDI_SWEEP_SIZES:-0}" = 1 ]; then
-  sweep_sizes() {
-    .venv/bin/fdi-tune fault-sizes analysis/models/romo_grouped.toml \
-      --thresholds analysis/models/romo_thresholds.toml --sizes host_tools/scenarios/fault_sizes.toml
-  }
-  augment_tests() { sed -n '/^\[augment\]/,/^\]/p' analysis/models/romo_thresholds.toml | grep -v '^ *#' || true; }
-  sweep_sizes
-  tests_before="$(augment_tests)"
-  .venv/bin/fdi-tune augment analysis/models/romo_grouped.toml \
+  .venv/bin/fdi-tune fault-sizes analysis/models/romo_grouped.toml \
     --thresholds analysis/models/romo_thresholds.toml --sizes host_tools/scenarios/fault_sizes.toml
-  if [ "$(augment_tests)" != "$tests_before" ]; then
-    .venv/bin/fdi-tune calibrate analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml
-    sweep_sizes
-  fi
 fi
 # fw/vehicles/romo/generated/fdi_romo_{table,generators,signals}.{h,c}  <- model + thresholds (realizable MSOs only)
 #   + the per-test fault sizes (which quiet tests may exonerate which fault); not committed: the generator report

@@ -22,7 +22,7 @@ LAYERS: tuple[tuple[str, int], ...] = (
     ("fdi_analysis.dm", 1), ("fdi_analysis.isolability", 1), ("fdi_analysis.fault_matrix", 1),
     ("fdi_analysis.summary", 1), ("fdi_analysis.interpretation", 1), ("fdi_analysis.report", 1),
     ("fdi_analysis.plots", 1), ("fdi_analysis.mso", 1),
-    ("fdi_analysis.selection", 2), ("fdi_analysis.candidates", 2),
+    ("fdi_analysis.selection", 2),
     ("fdi_analysis.residuals", 3),
     ("fdi_analysis.export", 4),
     ("fdi_analysis.cli", 5), ("fdi_analysis.api", 5),

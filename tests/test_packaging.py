@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from fdi_analysis import resources as analysis_resources
-from fdi_analysis.cli_common import EXIT_ERROR, one_line
+from fdi_analysis.cli.common import EXIT_ERROR, one_line
 from fdi_host import resources as host_resources
 
 REPO = Path(__file__).resolve().parents[1]

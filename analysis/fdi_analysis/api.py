@@ -262,8 +262,7 @@ class DiagnosisModel:
                    workers: int = 2) -> list[Candidate]:
         """The candidate tests of a selection: one MSO set (or MTES) per fault signature, the cheapest; with
         `realizable` only those with a sequential residual generator (what `export_c` can put on board)."""
-        from fdi_analysis.candidates import mso_candidates
-        from fdi_analysis.candidates_mtes import mtes_candidates
+        from fdi_analysis.selection.candidates import mso_candidates, mtes_candidates
 
         st = self.structure
         cands = mso_candidates(st, workers=workers, progress=False)[1] if kind == "mso" else mtes_candidates(st)[1]
@@ -318,7 +317,7 @@ class DiagnosisModel:
         export-c`` does: the tests of the thresholds file's selection, or the optimal realizable selection.
         `thresholds` is a file or the name of a shipped one (``romo_thresholds``); `fault_sizes` a file
         (host_tools/scenarios/fault_sizes.toml: the stated size per test, see ``fdi-tune fault-sizes``)."""
-        from fdi_analysis.cli_export import generate_all
+        from fdi_analysis.cli.export import generate_all
 
         if self.model.source is None or not self.model.symbolic:
             raise ApiError(f"{self.name}: C export needs a model file with equations (TOML); this one is "

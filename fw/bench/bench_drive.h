@@ -73,15 +73,14 @@ static inline const fdi_table_t *bench_table(uint32_t k, const char **name)
     return (k == 0U) ? &fdi_kin_table : &fdi_romo_table;
 }
 
-/* The diagnoser's defaults for `table`, the vehicle's sensor position, sensitivities during isolation episodes
-   (one test per step) when requested. */
+/* The diagnoser's defaults for `table`, the vehicle's sensor position, sensitivities as requested. */
 static inline fdi_diag_config_t bench_config(const fdi_table_t *table, bool sens)
 {
     fdi_diag_config_t c;
     (void)fdi_diag_config_default(&c, table);
     c.gen_param[FDI_ROMO_KIN_PARAM_D_X] = FDI_ROMO_KIN_D_X;
     c.gen_param[FDI_ROMO_KIN_PARAM_D_Y] = FDI_ROMO_KIN_D_Y;
-    c.sensitivities = sens ? FDI_DIAG_SENS_EPISODE : FDI_DIAG_SENS_OFF;
+    c.sensitivities = sens;
     return c;
 }
 

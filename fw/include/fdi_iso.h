@@ -2,19 +2,23 @@
  * fdi_iso.h - fault isolation: pattern matching of the alarm vector against the fault signatures.
  *
  * Single-fault hypotheses, one bit per fault (uint32_t). With A = alarmed tests, Q = evaluable tests
- * that are quiet, sig[j] = signature of fault j (tests sensitive to it), both as test bitmasks:
- *   no exoneration:  j is a candidate  iff  A != 0  and  (A & ~sig[j]) == 0
- *                    (fault j is in the fault set of every alarmed test)
- *   exoneration:     additionally no test of Q & sig[j] clears j. With s(j,i) the size of fault j at which
- *                    test i reacts (table test_size, 0: never within the limits) and the size the alarms
- *                    imply were the fault j, S = max over i in A of s(j,i) (infinite if some s(j,i) = 0),
- *                    quiet test q clears j when s(j,q) > 0 and margin * s(j,q) <= S: at the size the
- *                    alarms imply, q would have reacted. (Sizes 1 and margin 1: the classic rule
- *                    (Q & sig[j]) == 0.) A weak test (s = 0) accuses when it alarms, never clears.
- *                    The sizes come from one manoeuvre (the analysis' sweep); a test whose sensitivity
- *                    depends on the operating point (e.g. through the yaw rate) can still stay quiet where
- *                    it would have reacted there, so a quiet test may clear the true fault: the candidate set
- *                    is then empty or, rarely, another class. The margin guards against it.
+ * that are quiet, sig[j] = signature of fault j (tests sensitive to it), both as test bitmasks, and C = the
+ * faults some quiet test clears:
+ *   j is a candidate  iff  A != 0  and  (A & ~sig[j]) == 0  and  j not in C
+ *   (fault j is in the fault set of every alarmed test, and no quiet test says it would have seen j).
+ * fdi_iso_match() takes C from the caller: the diagnoser (fdi_diag.h) builds it from the tests' on-line
+ * fault sensitivities and from the reaction sizes below. fdi_iso_run() builds it from the reaction sizes
+ * only, in one of two modes:
+ *   no exoneration:  C = {} (every fault that explains the alarms stays a candidate)
+ *   exoneration:     with s(j,i) the size of fault j at which test i reacts (table test_size, 0: never
+ *                    within the limits) and the size the alarms imply were the fault j, S = max over i in A
+ *                    of s(j,i) (infinite if some s(j,i) = 0), quiet test q clears j when s(j,q) > 0 and
+ *                    margin * s(j,q) <= S: at the size the alarms imply, q would have reacted. (Sizes 1 and
+ *                    margin 1: the classic rule (Q & sig[j]) == 0.) A weak test (s = 0) accuses when it
+ *                    alarms, never clears. Pairs (j, q) for which q's generator outputs the sensitivity to
+ *                    j (gen->sens_mask) are left to the on-line rule (fdi_iso_size_cleared skips them).
+ *                    Sizes come from one manoeuvre; a test whose sensitivity depends on the operating point
+ *                    can still stay quiet where it would have reacted there: the margin guards against it.
  * Tests that are not evaluable are in neither A nor Q, so they neither accuse nor exonerate. With no alarm
  * there is no candidate (nothing detected). An alarm pattern no single fault explains gives an empty
  * candidate set with `detected` set ("unexplained": multiple faults or a fault outside the model).
@@ -55,10 +59,24 @@ typedef struct
 } fdi_iso_result_t;
 
 /*
- * Isolate. alarm_mask and evaluable_mask are test bitmasks; alarm_mask must be a subset of evaluable_mask
- * and both within n_tests (else BAD_ARG). The table must have passed fdi_table_check().
+ * Isolate by reaction sizes. alarm_mask and evaluable_mask are test bitmasks; alarm_mask must be a subset of
+ * evaluable_mask and both within n_tests (else BAD_ARG). The table must have passed fdi_table_check().
  */
 fdi_status_t fdi_iso_run(const fdi_table_t *table, uint32_t alarm_mask, uint32_t evaluable_mask,
                          fdi_iso_mode_t mode, fdi_iso_result_t *out);
+
+/*
+ * The faults that the quiet tests `quiet` (test bitmask within n_tests, disjoint from alarm_mask) clear by
+ * the reaction-size rule, for the pairs their generators give no sensitivity for. 0 for a NULL table or bad
+ * masks. The table must have passed fdi_table_check(). Cannot fail.
+ */
+uint32_t fdi_iso_size_cleared(const fdi_table_t *table, uint32_t alarm_mask, uint32_t quiet);
+
+/*
+ * Isolate with the cleared faults given: candidates = the faults that explain alarm_mask (a test bitmask
+ * within n_tests) and are not in `cleared` (a fault bitmask). BAD_ARG on NULL or masks beyond n_tests /
+ * n_faults. The table must have passed fdi_table_check().
+ */
+fdi_status_t fdi_iso_match(const fdi_table_t *table, uint32_t alarm_mask, uint32_t cleared, fdi_iso_result_t *out);
 
 #endif /* FDI_ISO_H */

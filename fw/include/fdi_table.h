@@ -24,14 +24,21 @@
  *    signature equals fault j's (faults with identical signatures cannot be told apart by any selected
  *    test). It contains bit j itself; a fault with a unique signature has a class of one bit. The classes
  *    partition the faults and fdi_table_check() verifies them against the signatures.
- *  - test_size is an n_faults x n_tests matrix, row j = fault j, column i = test i: the size of fault j (in
- *    the fault's unit) at which test i reacts, from the analysis' fault-size sweep; 0 where test i does not
- *    react to fault j within the fault's physical limits (or is not sensitive to it at all). It decides
- *    exoneration (fdi_iso.h): a quiet test clears fault j only when the tests in alarm imply, were the fault
- *    j, a size of at least exoneration_margin times the size at which the quiet test reacts. A structurally
- *    sensitive but weak test therefore accuses a fault when it alarms and never clears it. A table without
- *    measured sizes uses 1 for every signature pair and margin 1: the classic rule (every quiet test of the
- *    signature clears the fault).
+ *  - Exoneration (fdi_iso.h, fdi_diag.h): a quiet test clears a fault only where it would have reacted to it.
+ *    Where its generator outputs the fault's sensitivity (gen->sens_mask), the diagnoser decides on line:
+ *    the alarms imply a size of the fault, and the quiet test clears it when its current sensitivity times
+ *    that size reaches sensitivity_margin times its gate. For the other pairs, test_size: an n_faults x
+ *    n_tests matrix, row j = fault j, column i = test i, the size of fault j (in the fault's unit) at which
+ *    test i reacts (from a fault-size sweep); 0 where test i does not react to fault j within the fault's
+ *    physical limits (or is not sensitive to it at all): a quiet test clears fault j only when the tests in
+ *    alarm imply, by the same matrix, a size of at least exoneration_margin times the size at which it
+ *    reacts. A structurally sensitive but weak test therefore accuses a fault when it alarms and never clears
+ *    it. A table without sensitivities and sizes uses 1 for every signature pair and margin 1: the classic
+ *    rule (every quiet test of the signature clears the fault).
+ *  - tests[i].response_steps: a quiet test takes part in the exoneration only after it has been evaluable and
+ *    quiet for this many steps and the isolation episode is that old: the time its residual needs to show a
+ *    fault (its filters' and observer's response, for the sensitivity rule; the window in which test_size was
+ *    measured, for the size rule).
  *  - tests[i].input_mask must contain every signal the generator reads (gen->input_mask; it may contain
  *    more), and tests[i].gen->sens_mask must lie within tests[i].fault_mask. The generated generators of a table
  *    are slots of one generator set (fdi_gen.h), each used by one test at most.
@@ -42,7 +49,7 @@
  *  - gen == NULL marks a selected test without an on-board generator yet: it is always reported "not
  *    evaluable" and therefore neither accuses nor exonerates any fault.
  *
- * Memory (flash, 32-bit target): fdi_table_t 52 bytes + 28 bytes per test (fdi_test_desc_t) + 12 bytes per
+ * Memory (flash, 32-bit target): fdi_table_t 56 bytes + 32 bytes per test (fdi_test_desc_t) + 12 bytes per
  * fault (name pointer, signature, class) + 4 bytes per (fault, test) + 4 bytes per signal + the strings; the
  * two struct sizes are asserted below for 32-bit targets. Cost: none at run time.
  */
@@ -55,20 +62,21 @@
 #include "fdi_static_assert.h"
 #include "fdi_status.h"
 
-#define FDI_TABLE_FORMAT_VERSION 4U /* bump on any change of these types; checked by fdi_table_check() */
+#define FDI_TABLE_FORMAT_VERSION 5U /* bump on any change of these types; checked by fdi_table_check() */
 #define FDI_TABLE_MAX_FAULTS 32U    /* fault bitmasks are uint32_t */
 #define FDI_TABLE_MAX_TESTS 32U     /* test bitmasks are uint32_t */
 
 /* One selected MSO set = one test. */
 typedef struct
 {
-    uint32_t mso_id;            /* MSO number from the analysis (e.g. 3 for MSO3, 433 for MSO433) */
     const fdi_gen_desc_t *gen;  /* residual generator; NULL: none on board yet ("not evaluable") */
+    const char *interpretation; /* physical meaning, for logs and tools */
+    uint32_t mso_id;            /* MSO number from the analysis (e.g. 3 for MSO3, 433 for MSO433) */
     uint32_t fault_mask;        /* faults the test is sensitive to (bit j = fault j) */
     uint32_t input_mask;        /* frame signals the test reads (fdi_frame.h bit layout) */
     float gate;                 /* threshold in standard deviations, > 0 (e.g. 5) */
     float variance;             /* fault-free residual variance, > 0 */
-    const char *interpretation; /* physical meaning, for logs and tools */
+    uint16_t response_steps;    /* steps a quiet test needs to have reacted to a fault (>= 1; see below) */
 } fdi_test_desc_t;
 
 /*
@@ -97,22 +105,23 @@ typedef struct
     const uint32_t *fault_signature; /* n_faults rows: bit i = test i is sensitive to the fault */
     const uint32_t *iso_class;       /* n_faults rows: faults structurally not isolable from the fault */
     const float *test_size;          /* n_faults * n_tests, row-major: size of fault j test i reacts to; 0: never */
-    float exoneration_margin;        /* >= 1: how much larger the implied fault size must be to exonerate */
+    float exoneration_margin;        /* >= 1: reaction-size rule: implied size / reaction size to exonerate */
+    float sensitivity_margin;        /* >= 1: on-line rule: |s| * implied size / (gate * sigma) to exonerate */
 } fdi_table_t;
 
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
-FDI_STATIC_ASSERT((sizeof(void *) != 4U) || (sizeof(fdi_test_desc_t) == 28U), fdi_sa_test_desc_size);
+FDI_STATIC_ASSERT((sizeof(void *) != 4U) || (sizeof(fdi_test_desc_t) == 32U), fdi_sa_test_desc_size);
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
-FDI_STATIC_ASSERT((sizeof(void *) != 4U) || (sizeof(fdi_table_t) == 52U), fdi_sa_table_size);
+FDI_STATIC_ASSERT((sizeof(void *) != 4U) || (sizeof(fdi_table_t) == 56U), fdi_sa_table_size);
 
 /*
  * Validate a table: version, counts, non-NULL arrays and strings, no bits beyond n_signals / n_faults /
  * n_tests, usable generator descriptors (fdi_gen_desc_check) whose signals lie within the test's input mask
  * and whose sensitivities within its fault mask, generated generators from one set with each slot at most once
- * and the set's bank within the vehicle's signals, finite positive gate and variance, signature matrix equal
- * to the transposed fault masks, classes equal to the sets of faults with identical signatures, finite
- * non-negative test sizes that are 0 outside the signatures, margin finite and >= 1. FDI_OK or FDI_BAD_ARG
- * (NULL) or FDI_BAD_TABLE.
+ * and the set's bank within the vehicle's signals, finite positive gate and variance, response_steps >= 1,
+ * signature matrix equal to the transposed fault masks, classes equal to the sets of faults with identical
+ * signatures, finite non-negative test sizes that are 0 outside the signatures, margins finite and >= 1.
+ * FDI_OK or FDI_BAD_ARG (NULL) or FDI_BAD_TABLE.
  * Cost: O(n_faults^2 + n_tests * n_faults) bit operations, once at init.
  */
 fdi_status_t fdi_table_check(const fdi_table_t *table);

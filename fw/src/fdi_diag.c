@@ -9,11 +9,29 @@
 
 #define FDI_TWO_PI_F 6.28318530717959f
 #define WARMUP_MARGIN_STEPS 20U
-/* Isolation episodes: a quiet test exonerates only after 3 s, the response window in which the analysis states the
-   per-test fault sizes (fdi-tune fault-sizes: alarm within a 3 s step); an episode ends after 3 s without any
-   alarm. */
-#define ISO_SETTLE_S 3.0f
+/* Isolation episodes end after 3 s without any alarm; an alarmed residual's first 3 sigma are taken as noise
+   when it implies a fault size. */
 #define EPISODE_CLEAR_S 3.0f
+#define NOISE_ALLOWANCE_SIGMA 3.0f
+/* An alarm sets after 3 raw alarms in a row (30 ms at 10 ms): with the gates calibrated so that no fault-free
+   calibration drive ever crossed them (the largest excursion 1 / 1.25 of the gate), the confirmation is short, so
+   that a test whose fault-to-noise ratio is 1.67 times its gate alarms within 300 ms of a step fault (the
+   practical selection's criterion, fdi_analysis.selection.practical.DETECT_S). */
+#define SET_COUNT 3U
+/* An alarmed residual implies fault sizes only once it has settled: within a fifth (plus two sigma of noise) of both
+   its averages over SETTLE_FAST_S and SETTLE_SLOW_S (exponential averages). A step fault that enters through a
+   filtered derivative first kicks the residual far above its steady value, and the kick decays with the filters;
+   a decaying residual crosses one average at a time, never both (one alone was fooled where the decay and the
+   average have the same rate). The implied size uses the smaller of the residual and its fast average. */
+#define SETTLE_FAST_S 0.1f
+#define SETTLE_SLOW_S 0.3f
+#define SETTLE_REL 0.2f
+#define SETTLE_NOISE_SIGMA 2.0f
+/* The implied sizes forget with this time constant (recent evidence only: where an alarmed test's sensitivity
+   passes near zero its bound spikes, and an episode may last as long as the fault), and a fault leaves the
+   candidates only once the on-line rule has cleared it for CLEAR_CONFIRM_S. */
+#define IMPLIED_TAU_S 1.0f
+#define CLEAR_CONFIRM_S 0.1f
 
 /* Settling time of the design point in steps (see fdi_diag.h); 0 if it is not representable. */
 static uint32_t settle_steps(const fdi_table_design_t *d)
@@ -88,50 +106,21 @@ fdi_status_t fdi_diag_config_default(fdi_diag_config_t *cfg, const fdi_table_t *
             }
             cfg->cusum_k = 1.5f;
             cfg->cusum_h = 150.0f;
-            cfg->set_count = 10U;
+            cfg->set_count = SET_COUNT;
             cfg->clear_count = 100U;
             cfg->warmup_steps = (uint16_t)(settle + WARMUP_MARGIN_STEPS);
             cfg->mode = FDI_ISO_EXONERATION;
-            cfg->iso_settle_steps = steps_of(ISO_SETTLE_S, table->design.dt);
             cfg->episode_clear_steps = steps_of(EPISODE_CLEAR_S, table->design.dt);
-            cfg->sensitivities = FDI_DIAG_SENS_OFF;
+            cfg->noise_allowance = NOISE_ALLOWANCE_SIGMA;
+            cfg->sensitivities = false;
             st = FDI_OK;
         }
     }
     return st;
 }
 
-static fdi_status_t check_config(const fdi_diag_config_t *cfg)
-{
-    fdi_status_t st = fdi_table_check(cfg->table);
-    if (st != FDI_OK)
-    {
-        /* keep the status of the table check */
-    }
-    else if (!fdi_float_is_finite(cfg->cusum_k) || !fdi_float_is_finite(cfg->cusum_h))
-    {
-        st = FDI_NOT_FINITE;
-    }
-    else if ((cfg->table->n_tests > FDI_DIAG_MAX_TESTS) || (cfg->episode_clear_steps == 0U) ||
-             ((cfg->mode != FDI_ISO_NO_EXONERATION) && (cfg->mode != FDI_ISO_EXONERATION)) ||
-             ((cfg->sensitivities != FDI_DIAG_SENS_OFF) && (cfg->sensitivities != FDI_DIAG_SENS_EPISODE) &&
-              (cfg->sensitivities != FDI_DIAG_SENS_ALWAYS)))
-    {
-        st = FDI_BAD_ARG;
-    }
-    else
-    {
-        const uint32_t need = settle_steps(&cfg->table->design);
-        if ((need == 0U) || ((uint32_t)cfg->warmup_steps < need))
-        {
-            st = FDI_BAD_ARG;
-        }
-    }
-    return st;
-}
-
 /* The generator state of the table: the set (the bank first in filt[]), the instance filters of the hand-written
-   generators after it, the slot map, every state zeroed. false when the filters do not fit FDI_DIAG_MAX_FILTERS. */
+   generators after it, the slot maps, every state zeroed. false when the filters do not fit FDI_DIAG_MAX_FILTERS. */
 static bool gen_layout(fdi_diag_t *self, const fdi_table_t *t)
 {
     uint32_t used = 0U;
@@ -141,6 +130,7 @@ static bool gen_layout(fdi_diag_t *self, const fdi_table_t *t)
     for (i = 0U; i < FDI_GEN_MAX_SLOTS; ++i)
     {
         self->slot_test[i] = 0U;
+        self->slot_sens[i] = 0U;
     }
     for (i = 0U; i < (uint32_t)t->n_tests; ++i)
     {
@@ -151,6 +141,7 @@ static bool gen_layout(fdi_diag_t *self, const fdi_table_t *t)
             self->set = g->set;
             self->set_tests |= (uint32_t)1U << i;
             self->slot_test[g->slot & 31U] = (uint8_t)i;
+            self->slot_sens[g->slot & 31U] = self->sens_offset[i];
         }
     }
     if (self->set != NULL)
@@ -180,6 +171,35 @@ static bool gen_layout(fdi_diag_t *self, const fdi_table_t *t)
     return used <= FDI_DIAG_MAX_FILTERS;
 }
 
+static fdi_status_t check_config(const fdi_diag_config_t *cfg)
+{
+    fdi_status_t st = fdi_table_check(cfg->table);
+    if (st != FDI_OK)
+    {
+        /* keep the status of the table check */
+    }
+    else if (!fdi_float_is_finite(cfg->cusum_k) || !fdi_float_is_finite(cfg->cusum_h) ||
+             !fdi_float_is_finite(cfg->noise_allowance))
+    {
+        st = FDI_NOT_FINITE;
+    }
+    else if ((cfg->table->n_tests > FDI_DIAG_MAX_TESTS) || (cfg->episode_clear_steps == 0U) ||
+             (cfg->noise_allowance < 0.0f) ||
+             ((cfg->mode != FDI_ISO_NO_EXONERATION) && (cfg->mode != FDI_ISO_EXONERATION)))
+    {
+        st = FDI_BAD_ARG;
+    }
+    else
+    {
+        const uint32_t need = settle_steps(&cfg->table->design);
+        if ((need == 0U) || ((uint32_t)cfg->warmup_steps < need))
+        {
+            st = FDI_BAD_ARG;
+        }
+    }
+    return st;
+}
+
 fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
 {
     fdi_status_t st = FDI_BAD_ARG;
@@ -198,7 +218,8 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             gcfg.param[i] = cfg->gen_param[i];
         }
         st = fdi_gen_param_init(&self->par, &gcfg);
-        if ((st == FDI_OK) && !sens_layout(t, self->sens_offset) && (cfg->sensitivities != FDI_DIAG_SENS_OFF))
+        if ((st == FDI_OK) && !sens_layout(t, self->sens_offset) &&
+            (cfg->sensitivities || (cfg->mode == FDI_ISO_EXONERATION)))
         {
             st = FDI_BAD_ARG;
         }
@@ -206,7 +227,7 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
         {
             st = FDI_BAD_ARG;
         }
-        for (i = 0U; i < FDI_DIAG_MAX_TEST_SENS; ++i)
+        for (i = 0U; i < FDI_DIAG_MAX_SENS; ++i)
         {
             self->sens[i] = 0.0f;
         }
@@ -222,27 +243,40 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             self->ratio[i] = 0.0f;
             self->warm[i] = cfg->warmup_steps;
             self->quiet_run[i] = 0U;
-            self->sens_step[i] = 0U;
+            self->alarm_run[i] = 0U;
+            self->clears[i] = 0U;
+            self->r_fast[i] = 0.0f;
+            self->r_slow[i] = 0.0f;
+        }
+        for (i = 0U; i < FDI_TABLE_MAX_FAULTS; ++i)
+        {
+            self->implied[i] = 0.0f;
+            self->cleared_run[i] = 0U;
         }
         if (st == FDI_OK)
         {
             self->table = t;
             self->mode = cfg->mode;
-            self->sens_mode = cfg->sensitivities;
             self->warmup_steps = cfg->warmup_steps;
-            self->iso_settle_steps = cfg->iso_settle_steps;
             self->episode_clear_steps = cfg->episode_clear_steps;
+            self->set_count = cfg->set_count;
+            self->noise_allowance = cfg->noise_allowance;
+            self->fast_gain = t->design.dt / SETTLE_FAST_S;
+            self->implied_keep = 1.0f - (t->design.dt / IMPLIED_TAU_S);
+            self->clear_confirm = steps_of(CLEAR_CONFIRM_S, t->design.dt);
+            self->n_faults = t->n_faults;
+            self->slow_gain = t->design.dt / SETTLE_SLOW_S;
+            self->fresh = 0U;
+            self->latched = 0U;
             self->episode_age = 0U;
             self->calm = 0U;
             self->accused = 0U;
             self->n_tests = t->n_tests;
-            self->sens_next = 0U;
+            self->sensitivities = cfg->sensitivities;
             self->rearm = 0xFFFFFFFFU;
             self->alarm = 0U;
             self->evaluable = 0U;
             self->bank_live = 0U;
-            self->steps = 0U;
-            self->sens_fresh = 0U;
             self->iso.candidates = 0U;
             self->iso.class_mask = 0U;
             self->iso.n_classes = 0U;
@@ -255,6 +289,16 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
         self->table = NULL; /* a failed init leaves an instance that fdi_diag_step() refuses */
     }
     return st;
+}
+
+/* The sensitivities of test i back to 0. */
+static void clear_sens(fdi_diag_t *self, uint32_t i)
+{
+    uint32_t k;
+    for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
+    {
+        self->sens[k] = 0.0f;
+    }
 }
 
 /* Run hand-written test i on a usable frame (restarting it first when re-armed): *r, sens when non-NULL. */
@@ -277,6 +321,96 @@ static fdi_status_t run_hand_written(fdi_diag_t *self, uint32_t i, const fdi_fra
     return st;
 }
 
+/* Whether test i's sensitivities in self->sens are all finite. */
+static bool sens_finite(const fdi_diag_t *self, uint32_t i)
+{
+    bool finite = true;
+    uint32_t k;
+    for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
+    {
+        finite = finite && fdi_float_is_finite(self->sens[k]);
+    }
+    return finite;
+}
+
+/* The generators of the tests of `run` (inputs usable, in their domain): the set's slots in one call, the
+   hand-written ones one by one; r[i] and the returned mask (bit i: finite residual and sensitivities). With
+   want_sens every test's sensitivities are computed into self->sens (and the test marked fresh). */
+static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t run, bool want_sens, float *r)
+{
+    uint32_t ok = 0U;
+    uint32_t i;
+    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+    {
+        const uint32_t bit = (uint32_t)1U << i;
+        if ((run & ~self->set_tests & bit) != 0U)
+        {
+            float *sens = (want_sens && (self->sens_offset[i + 1U] > self->sens_offset[i]))
+                              ? &self->sens[self->sens_offset[i]]
+                              : NULL;
+            if (run_hand_written(self, i, in, &r[i], sens) == FDI_OK)
+            {
+                ok |= bit;
+                self->fresh |= (sens != NULL) ? bit : 0U;
+            }
+        }
+    }
+    if ((run & self->set_tests) != 0U)
+    {
+        fdi_gen_io_t io;
+        io.par = &self->par;
+        io.in = in;
+        io.bank = self->filt;
+        io.obs = self->obs;
+        io.r = r;
+        io.at = self->slot_test;
+        io.sens = self->sens;
+        io.sens_at = self->slot_sens;
+        io.run = 0U;
+        io.restart = 0U;
+        io.sens_mask = 0U;
+        io.failed = 0U;
+        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+        {
+            const uint32_t bit = (uint32_t)1U << i;
+            if ((run & self->set_tests & bit) != 0U)
+            {
+                const uint32_t slot = (uint32_t)1U << (self->table->tests[i].gen->slot & 31U);
+                io.run |= slot;
+                io.restart |= ((self->rearm & bit) != 0U) ? slot : 0U;
+                io.sens_mask |= (want_sens && (self->sens_offset[i + 1U] > self->sens_offset[i])) ? slot : 0U;
+            }
+        }
+        self->set->step(&io);
+        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+        {
+            const uint32_t bit = (uint32_t)1U << i;
+            if ((run & self->set_tests & bit) != 0U)
+            {
+                const uint32_t slot = (uint32_t)1U << (self->table->tests[i].gen->slot & 31U);
+                if ((io.failed & slot) != 0U)
+                {
+                    /* not finite: rejected by the evaluation */
+                }
+                else if ((io.sens_mask & slot) == 0U)
+                {
+                    ok |= bit;
+                }
+                else if (sens_finite(self, i))
+                {
+                    ok |= bit;
+                    self->fresh |= bit;
+                }
+                else
+                {
+                    /* a non-finite sensitivity fails the step like a non-finite residual */
+                }
+            }
+        }
+    }
+    return ok;
+}
+
 /* Evaluation of test i after its generator ran (ok: a finite residual r); true if it is evaluable this step (then
    *alarm is set). */
 static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r, bool *alarm)
@@ -295,6 +429,8 @@ static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r, bool *alarm
         self->rearm |= bit;
         self->residual[i] = 0.0f;
         self->ratio[i] = 0.0f;
+        self->fresh &= ~bit;
+        clear_sens(self, i);
     }
     else if (self->warm[i] > 0U)
     {
@@ -320,130 +456,120 @@ static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r, bool *alarm
     return evaluable;
 }
 
-/* The test whose sensitivities this step computes (round robin over the tests of `run` that are evaluated this step
-   and have some), or FDI_DIAG_MAX_TESTS for none. */
-static uint32_t sens_pick(fdi_diag_t *self, uint32_t run)
-{
-    const uint32_t n = (uint32_t)self->n_tests;
-    uint32_t pick = FDI_DIAG_MAX_TESTS;
-    if ((self->sens_mode == FDI_DIAG_SENS_ALWAYS) || ((self->sens_mode == FDI_DIAG_SENS_EPISODE) &&
-                                                      (self->accused != 0U)))
-    {
-        uint32_t k;
-        for (k = 0U; (pick == FDI_DIAG_MAX_TESTS) && (k < n); ++k)
-        {
-            const uint32_t i = ((uint32_t)self->sens_next + k) % n;
-            const uint32_t bit = (uint32_t)1U << i;
-            if (((run & ~self->rearm & bit) != 0U) && (self->warm[i] == 0U) &&
-                (self->sens_offset[i + 1U] > self->sens_offset[i]))
-            {
-                pick = i;
-                self->sens_next = (uint8_t)((i + 1U) % n);
-            }
-        }
-    }
-    return pick;
-}
-
-/* The generators of the tests of `run` (inputs usable, in their domain): the set's slots in one call, the
-   hand-written ones one by one; r[i] and ok (bit i: finite residual); sensitivities of test `pick`. */
-static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t run, uint32_t pick, float *r)
-{
-    uint32_t ok = 0U;
-    uint32_t i;
-    float *sens_of_pick = NULL;
-    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
-    {
-        const uint32_t bit = (uint32_t)1U << i;
-        if ((run & ~self->set_tests & bit) != 0U)
-        {
-            float *sens = (i == pick) ? self->sens : NULL;
-            if (run_hand_written(self, i, in, &r[i], sens) == FDI_OK)
-            {
-                ok |= bit;
-                sens_of_pick = (sens != NULL) ? sens : sens_of_pick;
-            }
-        }
-    }
-    if ((run & self->set_tests) != 0U)
-    {
-        static const uint8_t at_zero[FDI_GEN_MAX_SLOTS] = {0U}; /* the one picked slot writes at sens[0] */
-        fdi_gen_io_t io;
-        io.par = &self->par;
-        io.in = in;
-        io.bank = self->filt;
-        io.obs = self->obs;
-        io.r = r;
-        io.at = self->slot_test;
-        io.sens = self->sens;
-        io.sens_at = at_zero;
-        io.run = 0U;
-        io.restart = 0U;
-        io.sens_mask = 0U;
-        io.failed = 0U;
-        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
-        {
-            const uint32_t bit = (uint32_t)1U << i;
-            if ((run & self->set_tests & bit) != 0U)
-            {
-                const uint32_t slot = (uint32_t)1U << (self->table->tests[i].gen->slot & 31U);
-                io.run |= slot;
-                io.restart |= ((self->rearm & bit) != 0U) ? slot : 0U;
-                io.sens_mask |= (i == pick) ? slot : 0U;
-            }
-        }
-        self->set->step(&io);
-        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
-        {
-            const uint32_t bit = (uint32_t)1U << i;
-            if ((run & self->set_tests & bit) != 0U)
-            {
-                const uint32_t slot = (uint32_t)1U << (self->table->tests[i].gen->slot & 31U);
-                if ((io.failed & slot) == 0U)
-                {
-                    ok |= bit;
-                    sens_of_pick = (i == pick) ? self->sens : sens_of_pick;
-                }
-            }
-        }
-    }
-    if ((pick < FDI_DIAG_MAX_TESTS) && (sens_of_pick != NULL))
-    {
-        const uint32_t n = (uint32_t)self->sens_offset[pick + 1U] - (uint32_t)self->sens_offset[pick];
-        bool finite = true;
-        for (i = 0U; i < n; ++i)
-        {
-            finite = finite && fdi_float_is_finite(self->sens[i]);
-        }
-        if (finite)
-        {
-            self->sens_fresh = (uint32_t)1U << pick;
-            self->sens_step[pick] = self->steps;
-        }
-    }
-    return ok;
-}
-
 static uint16_t sat_inc(uint16_t x)
 {
     return (x < 0xFFFFU) ? (uint16_t)(x + 1U) : x;
 }
 
-/* Episode bookkeeping and the isolation of this step (see "Isolation episodes" in fdi_diag.h). */
-static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable)
+/* Sigma of test i's residual (only asked for during episodes). */
+static float test_sigma(const fdi_diag_t *self, uint32_t i)
 {
-    uint32_t exonerate = 0U;
+    return sqrtf(self->table->tests[i].variance);
+}
+
+/* Test i is in alarm and has been for its response time: once its residual has settled, its average and its fresh
+   sensitivities bound the size of each fault of its sens_mask from below; the episode keeps the largest bound (see
+   fdi_diag.h). */
+static void raise_implied(fdi_diag_t *self, uint32_t i)
+{
+    const fdi_gen_desc_t *g = self->table->tests[i].gen;
+    const float sigma = test_sigma(self, i);
+    const float r = self->residual[i];
+    const float fast = self->r_fast[i];
+    const float slow = self->r_slow[i];
+    const bool settled = (fabsf(r - fast) <= ((SETTLE_REL * fabsf(fast)) + (SETTLE_NOISE_SIGMA * sigma))) &&
+                         (fabsf(r - slow) <= ((SETTLE_REL * fabsf(slow)) + (SETTLE_NOISE_SIGMA * sigma)));
+    const float least = fminf(fabsf(r), fabsf(fast));
+    const float excess = least - (self->noise_allowance * sigma);
+    if ((g != NULL) && settled && (excess > 0.0f))
+    {
+        uint32_t k = (uint32_t)self->sens_offset[i];
+        uint32_t j;
+        for (j = 0U; j < (uint32_t)self->table->n_faults; ++j)
+        {
+            if ((g->sens_mask & ((uint32_t)1U << j)) != 0U)
+            {
+                const float s = fabsf(self->sens[k]);
+                if (s > 0.0f)
+                {
+                    const float f = excess / s;
+                    if (fdi_float_is_finite(f) && (f > self->implied[j]))
+                    {
+                        self->implied[j] = f;
+                    }
+                }
+                ++k;
+            }
+        }
+    }
+}
+
+/* The faults a settled quiet test i clears with its fresh sensitivities: |s_ij| F_j >= margin * gate * sigma. */
+static uint32_t quiet_clears(const fdi_diag_t *self, uint32_t i)
+{
+    const fdi_test_desc_t *d = &self->table->tests[i];
+    uint32_t out = 0U;
+    if (d->gen != NULL)
+    {
+        const float need = self->table->sensitivity_margin * d->gate * test_sigma(self, i);
+        uint32_t k = (uint32_t)self->sens_offset[i];
+        uint32_t j;
+        for (j = 0U; j < (uint32_t)self->table->n_faults; ++j)
+        {
+            const uint32_t fbit = (uint32_t)1U << j;
+            if ((d->gen->sens_mask & fbit) != 0U)
+            {
+                if ((fabsf(self->sens[k]) * self->implied[j]) >= need)
+                {
+                    out |= fbit;
+                }
+                ++k;
+            }
+        }
+    }
+    return out;
+}
+
+/* The residuals' averages over SETTLE_FAST_S and SETTLE_SLOW_S (restarted when a test becomes evaluable again). */
+static void track_residuals(fdi_diag_t *self, uint32_t evaluable, uint32_t before)
+{
     uint32_t i;
     for (i = 0U; i < (uint32_t)self->n_tests; ++i)
     {
         const uint32_t bit = (uint32_t)1U << i;
-        self->quiet_run[i] = (((evaluable & bit) != 0U) && ((alarm & bit) == 0U)) ? sat_inc(self->quiet_run[i]) : 0U;
+        const float r = self->residual[i];
+        if ((evaluable & before & bit) != 0U)
+        {
+            self->r_fast[i] += self->fast_gain * (r - self->r_fast[i]);
+            self->r_slow[i] += self->slow_gain * (r - self->r_slow[i]);
+        }
+        else
+        {
+            self->r_fast[i] = r;
+            self->r_slow[i] = r;
+        }
     }
+}
+
+/* Episode start/end and age (see "Isolation episodes" in fdi_diag.h). */
+static void track_episode(fdi_diag_t *self, uint32_t alarm)
+{
     if (alarm != 0U)
     {
         if (self->accused == 0U)
         {
+            uint32_t i;
             self->episode_age = 0U;
+            self->latched = 0U;
+            for (i = 0U; i < FDI_TABLE_MAX_FAULTS; ++i)
+            {
+                self->implied[i] = 0.0f;
+                self->cleared_run[i] = 0U;
+            }
+            for (i = 0U; i < FDI_DIAG_MAX_TESTS; ++i)
+            {
+                self->clears[i] = 0U;
+            }
         }
         self->accused |= alarm;
         self->calm = 0U;
@@ -464,19 +590,112 @@ static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable
     {
         self->episode_age = sat_inc(self->episode_age);
     }
-    if ((self->mode == FDI_ISO_EXONERATION) && (self->episode_age >= self->iso_settle_steps))
+}
+
+/* The faults the exoneration clears this step (see "Isolation episodes" in fdi_diag.h): on line by the settled
+   quiet tests' fresh sensitivities (confirmed for clear_confirm steps), and by reaction sizes for the pairs
+   without an on-line sensitivity. */
+static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
+{
+    uint32_t settled = 0U;
+    uint32_t online = 0U;
+    uint32_t cleared = 0U;
+    uint32_t i;
+    for (i = 0U; i < (uint32_t)self->n_faults; ++i)
     {
-        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+        self->implied[i] *= self->implied_keep;
+    }
+    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+    {
+        const uint32_t bit = (uint32_t)1U << i;
+        const uint32_t resp = (uint32_t)self->table->tests[i].response_steps + (uint32_t)self->set_count;
+        if (((self->fresh & alarm & bit) != 0U) && ((uint32_t)self->alarm_run[i] >= resp))
         {
-            if (self->quiet_run[i] >= self->iso_settle_steps)
-            {
-                exonerate |= ((uint32_t)1U << i) & evaluable;
-            }
+            raise_implied(self, i);
+        }
+        if (((self->accused & bit) == 0U) && ((uint32_t)self->quiet_run[i] >= resp) &&
+            ((uint32_t)self->episode_age >= resp))
+        {
+            settled |= bit;
         }
     }
-    exonerate &= ~self->accused;
-    /* accused tests stay in the alarm set even while not evaluable now: they alarmed in this episode */
-    return fdi_iso_run(self->table, self->accused, self->accused | exonerate, self->mode, &self->iso);
+    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+    {
+        const uint32_t bit = (uint32_t)1U << i;
+        if ((settled & bit) == 0U)
+        {
+            self->clears[i] = 0U;
+        }
+        else if ((self->fresh & bit) != 0U)
+        {
+            self->clears[i] = quiet_clears(self, i);
+        }
+        else
+        {
+            /* keep the last decision until its sensitivities are computed again */
+        }
+        online |= self->clears[i];
+    }
+    for (i = 0U; i < (uint32_t)self->n_faults; ++i)
+    {
+        const uint32_t fbit = (uint32_t)1U << i;
+        self->cleared_run[i] = ((online & fbit) != 0U) ? sat_inc(self->cleared_run[i]) : 0U;
+        cleared |= (self->cleared_run[i] >= self->clear_confirm) ? fbit : 0U;
+    }
+    return cleared | fdi_iso_size_cleared(self->table, self->accused, settled);
+}
+
+/* The first class isolated in the episode is latched; an accused test it cannot explain contradicts it for the
+   rest of the episode (fdi_diag.h). */
+static void latch(fdi_diag_t *self)
+{
+    if ((self->latched != 0U) && ((self->iso.candidates & self->latched) == 0U))
+    {
+        self->latched = FDI_DIAG_CONTRADICTED;
+    }
+    if (self->latched == FDI_DIAG_CONTRADICTED)
+    {
+        self->iso.candidates = 0U;
+        self->iso.class_mask = 0U;
+        self->iso.n_classes = 0U;
+        self->iso.isolated = false;
+    }
+    else if ((self->latched == 0U) && self->iso.isolated)
+    {
+        self->latched = self->iso.candidates;
+    }
+    else
+    {
+        /* keep the latched class */
+    }
+}
+
+/* Episode bookkeeping and the isolation of this step (see "Isolation episodes" in fdi_diag.h). */
+static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable)
+{
+    uint32_t cleared = 0U;
+    fdi_status_t st;
+    uint32_t i;
+    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+    {
+        const uint32_t bit = (uint32_t)1U << i;
+        const bool quiet = ((evaluable & bit) != 0U) && ((alarm & bit) == 0U);
+        self->quiet_run[i] = quiet ? sat_inc(self->quiet_run[i]) : 0U;
+        self->alarm_run[i] = ((alarm & bit) != 0U) ? sat_inc(self->alarm_run[i]) : 0U;
+    }
+    track_episode(self, alarm);
+    if ((self->mode == FDI_ISO_EXONERATION) && (self->accused != 0U))
+    {
+        cleared = exonerated(self, alarm);
+    }
+    /* accused tests stay in the alarm set even while not evaluable now: they alarmed in this episode; the faults
+       isolated first in the episode are exonerated no more */
+    st = fdi_iso_match(self->table, self->accused, cleared & ~self->latched, &self->iso);
+    if (st == FDI_OK)
+    {
+        latch(self);
+    }
+    return st;
 }
 
 fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t validity)
@@ -489,14 +708,14 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
     else
     {
         uint32_t usable = fdi_frame_finite_mask(frame, validity & self->signals);
+        const bool want_sens = self->sensitivities || ((self->mode == FDI_ISO_EXONERATION) && (self->accused != 0U));
         uint32_t run = 0U;
         uint32_t alarm = 0U;
         uint32_t evaluable = 0U;
         uint32_t ok;
         uint32_t i;
         float r[FDI_DIAG_MAX_TESTS];
-        self->steps = (self->steps < 0xFFFFFFFFU) ? (self->steps + 1U) : self->steps;
-        self->sens_fresh = 0U;
+        self->fresh = 0U;
         if (self->set != NULL)
         {
             usable &= ~fdi_gen_bank_step(self->set, self->filt, &self->par.svf, frame, usable, self->bank_live);
@@ -509,6 +728,10 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
             r[i] = 0.0f;
             if ((d->gen == NULL) || ((usable & d->input_mask) != d->input_mask) || !fdi_gen_in_domain(d->gen, frame))
             {
+                if ((self->rearm & bit) == 0U)
+                {
+                    clear_sens(self, i);
+                }
                 self->rearm |= bit;
                 self->residual[i] = 0.0f;
                 self->ratio[i] = 0.0f;
@@ -518,7 +741,7 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
                 run |= bit;
             }
         }
-        ok = run_generators(self, frame, run, sens_pick(self, run), r);
+        ok = run_generators(self, frame, run, want_sens, r);
         for (i = 0U; i < (uint32_t)self->n_tests; ++i)
         {
             const uint32_t bit = (uint32_t)1U << i;
@@ -530,6 +753,7 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
             }
         }
         self->alarm = alarm;
+        track_residuals(self, evaluable, self->evaluable);
         self->evaluable = evaluable;
         st = isolate(self, alarm, evaluable);
     }
@@ -541,7 +765,6 @@ fdi_status_t fdi_diag_result(const fdi_diag_t *self, fdi_diag_result_t *out)
     fdi_status_t st = FDI_BAD_ARG;
     if ((self != NULL) && (out != NULL) && (self->table != NULL))
     {
-        const bool with_sens = self->sens_mode != FDI_DIAG_SENS_OFF;
         uint32_t i;
         out->n_tests = self->n_tests;
         out->alarm_mask = self->alarm;
@@ -560,63 +783,18 @@ fdi_status_t fdi_diag_result(const fdi_diag_t *self, fdi_diag_result_t *out)
             }
             out->residual[i] = used ? self->residual[i] : 0.0f;
             out->ratio[i] = used ? self->ratio[i] : 0.0f;
-            out->sens_step[i] = used ? self->sens_step[i] : 0U;
         }
         out->accused_mask = self->accused;
         out->iso = self->iso;
-        out->step = self->steps;
-        out->sens_fresh_mask = self->sens_fresh;
         for (i = 0U; i <= FDI_DIAG_MAX_TESTS; ++i)
         {
-            out->sens_offset[i] = with_sens ? self->sens_offset[i] : 0U;
+            out->sens_offset[i] = self->sensitivities ? self->sens_offset[i] : 0U;
         }
-        if (self->steps == 0U)
+        for (i = 0U; self->sensitivities && (i < (uint32_t)self->sens_offset[FDI_DIAG_MAX_TESTS]); ++i)
         {
-            for (i = 0U; i < FDI_DIAG_MAX_SENS; ++i)
-            {
-                out->sens[i] = 0.0f;
-            }
-        }
-        for (i = 0U; with_sens && (i < (uint32_t)self->n_tests); ++i)
-        {
-            if ((self->sens_fresh & ((uint32_t)1U << i)) != 0U)
-            {
-                uint32_t k;
-                for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
-                {
-                    out->sens[k] = self->sens[k - (uint32_t)self->sens_offset[i]];
-                }
-            }
+            out->sens[i] = self->sens[i];
         }
         st = FDI_OK;
     }
     return st;
-}
-
-uint32_t fdi_diag_sens_fresh(const fdi_diag_t *self)
-{
-    return ((self != NULL) && (self->table != NULL)) ? self->sens_fresh : 0U;
-}
-
-fdi_status_t fdi_diag_sens(const fdi_diag_t *self, uint32_t test, const float **values, uint32_t *n)
-{
-    fdi_status_t st = FDI_BAD_ARG;
-    if ((self != NULL) && (self->table != NULL) && (values != NULL) && (n != NULL) &&
-        (test < (uint32_t)self->n_tests) && ((self->sens_fresh & ((uint32_t)1U << test)) != 0U))
-    {
-        *values = self->sens;
-        *n = (uint32_t)self->sens_offset[test + 1U] - (uint32_t)self->sens_offset[test];
-        st = FDI_OK;
-    }
-    return st;
-}
-
-uint32_t fdi_diag_sens_step(const fdi_diag_t *self, uint32_t test)
-{
-    uint32_t step = 0U;
-    if ((self != NULL) && (self->table != NULL) && (test < (uint32_t)self->n_tests))
-    {
-        step = self->sens_step[test];
-    }
-    return step;
 }

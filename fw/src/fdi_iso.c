@@ -1,4 +1,4 @@
-/* fdi_iso.c - signature matching with and without exoneration (see fdi_iso.h). */
+/* fdi_iso.c - signature matching, the reaction-size rule of exoneration (see fdi_iso.h). */
 #include "fdi_iso.h"
 
 #include <stddef.h>
@@ -8,15 +8,23 @@ static uint32_t iso_low_bits(uint32_t n)
     return (n >= 32U) ? 0xFFFFFFFFU : (((uint32_t)1U << (n & 31U)) - 1U);
 }
 
+/* Faults of test i's generator with an on-line sensitivity (left to the diagnoser's rule). */
+static uint32_t iso_sens_mask(const fdi_table_t *table, uint32_t i)
+{
+    const fdi_gen_desc_t *g = table->tests[i].gen;
+    return (g != NULL) ? g->sens_mask : 0U;
+}
+
 /*
- * Whether a quiet test clears fault j: the alarms imply, were the fault j, a size of at least
- * implied = max over alarmed tests of their reaction size (any alarmed test that never reacts to j within
- * its limits implies a size beyond every stated one); a quiet test with reaction size s > 0 and
- * margin * s <= implied would have reacted.
+ * Whether a quiet test clears fault j by the reaction sizes: the alarms imply, were the fault j, a size of at
+ * least implied = max over alarmed tests of their reaction size (any alarmed test that never reacts to j
+ * within its limits implies a size beyond every stated one); a quiet test with reaction size s > 0 and
+ * margin * s <= implied would have reacted. Quiet tests that give j's sensitivity on line are skipped.
  */
 static bool iso_exonerated(const fdi_table_t *table, uint32_t j, uint32_t alarm_mask, uint32_t quiet)
 {
     const uint32_t nt = (uint32_t)table->n_tests;
+    const uint32_t fbit = (uint32_t)1U << j;
     const float *row = &table->test_size[(size_t)j * (size_t)nt];
     float implied = 0.0f;
     bool beyond = false;
@@ -42,7 +50,7 @@ static bool iso_exonerated(const fdi_table_t *table, uint32_t j, uint32_t alarm_
     }
     for (i = 0U; (i < nt) && !cleared; ++i)
     {
-        if (((quiet & ((uint32_t)1U << i)) != 0U) && (row[i] > 0.0f))
+        if (((quiet & ((uint32_t)1U << i)) != 0U) && (row[i] > 0.0f) && ((iso_sens_mask(table, i) & fbit) == 0U))
         {
             cleared = beyond || ((table->exoneration_margin * row[i]) <= implied);
         }
@@ -50,24 +58,46 @@ static bool iso_exonerated(const fdi_table_t *table, uint32_t j, uint32_t alarm_
     return cleared;
 }
 
-fdi_status_t fdi_iso_run(const fdi_table_t *table, uint32_t alarm_mask, uint32_t evaluable_mask,
-                         fdi_iso_mode_t mode, fdi_iso_result_t *out)
+static bool iso_table_usable(const fdi_table_t *table)
+{
+    return (table != NULL) && (table->fault_signature != NULL) && (table->iso_class != NULL) &&
+           (table->test_size != NULL) && (table->tests != NULL) && (table->n_faults <= FDI_TABLE_MAX_FAULTS) &&
+           (table->n_tests <= FDI_TABLE_MAX_TESTS);
+}
+
+uint32_t fdi_iso_size_cleared(const fdi_table_t *table, uint32_t alarm_mask, uint32_t quiet)
+{
+    uint32_t cleared = 0U;
+    if (iso_table_usable(table) && (alarm_mask != 0U) && ((alarm_mask & quiet) == 0U) &&
+        (((alarm_mask | quiet) & ~iso_low_bits(table->n_tests)) == 0U))
+    {
+        uint32_t j;
+        for (j = 0U; j < (uint32_t)table->n_faults; ++j)
+        {
+            const uint32_t sig = table->fault_signature[j];
+            if (((alarm_mask & ~sig) == 0U) && iso_exonerated(table, j, alarm_mask, quiet & sig))
+            {
+                cleared |= ((uint32_t)1U << j);
+            }
+        }
+    }
+    return cleared;
+}
+
+fdi_status_t fdi_iso_match(const fdi_table_t *table, uint32_t alarm_mask, uint32_t cleared, fdi_iso_result_t *out)
 {
     fdi_status_t st = FDI_OK;
-    if ((table == NULL) || (out == NULL) || (table->fault_signature == NULL) || (table->iso_class == NULL) ||
-        (table->test_size == NULL) ||
-        (table->n_faults > FDI_TABLE_MAX_FAULTS) || (table->n_tests > FDI_TABLE_MAX_TESTS))
+    if (!iso_table_usable(table) || (out == NULL))
     {
         st = FDI_BAD_ARG;
     }
-    else if (((alarm_mask & ~evaluable_mask) != 0U) || ((evaluable_mask & ~iso_low_bits(table->n_tests)) != 0U) ||
-             ((mode != FDI_ISO_NO_EXONERATION) && (mode != FDI_ISO_EXONERATION)))
+    else if (((alarm_mask & ~iso_low_bits(table->n_tests)) != 0U) ||
+             ((cleared & ~iso_low_bits(table->n_faults)) != 0U))
     {
         st = FDI_BAD_ARG;
     }
     else
     {
-        const uint32_t quiet = (mode == FDI_ISO_EXONERATION) ? (evaluable_mask & ~alarm_mask) : 0U;
         uint32_t cand = 0U;
         uint32_t classes = 0U;
         uint32_t left;
@@ -77,12 +107,12 @@ fdi_status_t fdi_iso_run(const fdi_table_t *table, uint32_t alarm_mask, uint32_t
         {
             for (j = 0U; j < (uint32_t)table->n_faults; ++j)
             {
-                const uint32_t sig = table->fault_signature[j];
-                if (((alarm_mask & ~sig) == 0U) && !iso_exonerated(table, j, alarm_mask, quiet & sig))
+                if ((alarm_mask & ~table->fault_signature[j]) == 0U)
                 {
                     cand |= ((uint32_t)1U << j);
                 }
             }
+            cand &= ~cleared;
         }
         /* Count the classes: take the lowest remaining candidate, remove its whole class. */
         left = cand;
@@ -100,6 +130,27 @@ fdi_status_t fdi_iso_run(const fdi_table_t *table, uint32_t alarm_mask, uint32_t
         out->n_classes = n_classes;
         out->detected = (alarm_mask != 0U);
         out->isolated = (n_classes == 1U);
+    }
+    return st;
+}
+
+fdi_status_t fdi_iso_run(const fdi_table_t *table, uint32_t alarm_mask, uint32_t evaluable_mask,
+                         fdi_iso_mode_t mode, fdi_iso_result_t *out)
+{
+    fdi_status_t st = FDI_OK;
+    if (!iso_table_usable(table) || (out == NULL))
+    {
+        st = FDI_BAD_ARG;
+    }
+    else if (((alarm_mask & ~evaluable_mask) != 0U) || ((evaluable_mask & ~iso_low_bits(table->n_tests)) != 0U) ||
+             ((mode != FDI_ISO_NO_EXONERATION) && (mode != FDI_ISO_EXONERATION)))
+    {
+        st = FDI_BAD_ARG;
+    }
+    else
+    {
+        const uint32_t quiet = (mode == FDI_ISO_EXONERATION) ? (evaluable_mask & ~alarm_mask) : 0U;
+        st = fdi_iso_match(table, alarm_mask, fdi_iso_size_cleared(table, alarm_mask, quiet), out);
     }
     return st;
 }

@@ -20,7 +20,8 @@ static bool header_ok(const fdi_table_t *t)
            (t->n_faults <= FDI_TABLE_MAX_FAULTS) && (t->n_tests >= 1U) && (t->n_tests <= FDI_TABLE_MAX_TESTS) &&
            (t->fault_names != NULL) && (t->tests != NULL) && (t->fault_signature != NULL) &&
            (t->iso_class != NULL) && (t->test_size != NULL) && fdi_float_is_finite(t->exoneration_margin) &&
-           (t->exoneration_margin >= 1.0f) && table_positive_finite(t->design.dt) &&
+           (t->exoneration_margin >= 1.0f) && fdi_float_is_finite(t->sensitivity_margin) &&
+           (t->sensitivity_margin >= 1.0f) && table_positive_finite(t->design.dt) &&
            table_positive_finite(t->design.cutoff_hz) &&
            table_positive_finite(t->design.zeta) && table_positive_finite(t->design.obs_gain);
 }
@@ -29,7 +30,7 @@ static bool test_ok(const fdi_test_desc_t *d, uint32_t fault_universe, uint32_t 
 {
     bool ok = (d->interpretation != NULL) && (d->fault_mask != 0U) && ((d->fault_mask & ~fault_universe) == 0U) &&
               ((d->input_mask & ~signal_universe) == 0U) && table_positive_finite(d->gate) &&
-              table_positive_finite(d->variance);
+              table_positive_finite(d->variance) && (d->response_steps >= 1U);
     if (ok && (d->gen != NULL))
     {
         const uint32_t need = d->gen->input_mask;

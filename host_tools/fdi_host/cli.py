@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from fdi_analysis.cli_common import add_version, run, use_file_backend
+from fdi_analysis.cli.common import add_version, run, use_file_backend
 from fdi_host.can import traffic
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.can.frame import Frame

@@ -15,11 +15,11 @@ from msos_bruteforce import all_msos
 
 import fdi_analysis as fa
 from fdi_analysis import mso
-from fdi_analysis.candidates import mso_candidates
 from fdi_analysis.dm import dulmage_mendelsohn
 from fdi_analysis.isolability import isolability
 from fdi_analysis.model_loader import export_fdt_json, load_model
 from fdi_analysis.selection import reaches_same_matrix
+from fdi_analysis.selection.candidates import mso_candidates
 
 REPO = Path(__file__).resolve().parents[2]
 CHAIN = {
@@ -151,7 +151,7 @@ def test_export_c_writes_what_the_export_generates(tmp_path: Path, models_dir: P
                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     """The wrapper around `fdi-analyze export-c`'s generation (tested in test_export_c.py): the model's file, the
     shipped thresholds file by name, every generated file written."""
-    from fdi_analysis import cli_export
+    from fdi_analysis.cli import export as cli_export
 
     calls = []
 

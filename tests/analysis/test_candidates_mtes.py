@@ -8,12 +8,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fdi_analysis.candidates import mso_candidates
-from fdi_analysis.candidates_mtes import full_isolability_reached, mtes_candidates
 from fdi_analysis.cli import main
 from fdi_analysis.fault_matrix import fault_matrix
 from fdi_analysis.random_structures import sparse_random_structure
 from fdi_analysis.selection import optimal, reaches_same_matrix
+from fdi_analysis.selection.candidates import full_isolability_reached, mso_candidates, mtes_candidates
 
 
 @pytest.mark.parametrize("seed", [3, 11, 23])

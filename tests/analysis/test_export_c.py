@@ -102,7 +102,7 @@ def test_generated_table_compiles_and_passes_the_firmware_check(
     status, n_tests, n_faults = compile_and_check(repo, tmp_path).split()
     assert status == "0" and int(n_faults) == 25 and 1 <= int(n_tests) <= 32
     # every selected test runs its generated generator, descriptors in test order (fdi_romo_generators[k])
-    kinds = re.findall(r"^    \{\d+U, (&?\w+(?:\[\d+\])?),", generated[1], flags=re.M)
+    kinds = re.findall(r"^    \{\.gen = (&?\w+(?:\[\d+\])?),", generated[1], flags=re.M)
     assert kinds == [f"&fdi_romo_generators[{k}]" for k in range(int(n_tests))]
     gens_c = generated_files[f"{GENERATORS}.c"]
     # one generator set: one step for all slots, one block per slot, one descriptor per slot pointing to the set

@@ -108,7 +108,7 @@ def test_selected_msos_keep_structural_isolability(st: Structure) -> None:
 @given(candidate_sets(), hst.sampled_from(["A", "B"]))
 def test_greedy_on_the_reduced_problem_is_the_papers_greedy(case: tuple[int, list[Candidate]], method: Method) -> None:
     from fdi_analysis.selection import _greedy_columns, cheapest_per_signature
-    from fdi_analysis.selection_exact import cover_matrix, reduce_problem
+    from fdi_analysis.selection.exact import cover_matrix, reduce_problem
 
     nf, tests = case
     cands = cheapest_per_signature(tests)
@@ -130,11 +130,11 @@ def test_fallback_without_sat_gives_the_same_optimum(case: tuple[int, list[Candi
     """Without python-sat the code search decides; count and cost must equal the SAT answer."""
     from unittest import mock
 
-    from fdi_analysis import selection_sat
+    from fdi_analysis.selection import sat
 
     nf, tests = case
     with_sat = optimal(tests, nf, method, time_limit_s=10.0)
-    with mock.patch.object(selection_sat, "HAVE_SAT", False):
+    with mock.patch.object(sat, "HAVE_SAT", False):
         without = optimal(tests, nf, method, time_limit_s=10.0)
     assert with_sat.proven and without.proven
     assert len(with_sat.tests) == len(without.tests)

@@ -1,4 +1,4 @@
-"""The SAT selection (`selection_sat`: count and cost) against brute force on random small problems, including
+"""The SAT selection (`selection.sat`: count and cost) against brute force on random small problems, including
 families closed under item permutations (interchangeable classes as count rows, lex-leader constraints):
 every "no selection with k tests" and every minimum cost must equal exhaustive enumeration."""
 
@@ -11,10 +11,10 @@ from hypothesis import event, given, settings
 from hypothesis import strategies as hst
 
 from fdi_analysis.fault_matrix import Method
-from fdi_analysis.selection_exact import Problem, cover_matrix, reduce_problem
+from fdi_analysis.selection.exact import Problem, cover_matrix, reduce_problem
 
 pytest.importorskip("pysat")
-from fdi_analysis.selection_sat import SatSelector, interchangeable_classes, prepare, separates
+from fdi_analysis.selection.sat import SatSelector, interchangeable_classes, sat_problem, separates
 
 DEADLINE_S = 30.0
 MAX_COLUMNS = 22  # brute force stays below ~30k combinations per k
@@ -98,8 +98,8 @@ def test_sat_count_and_cost_equal_brute_force(case: tuple[Problem, list[int]], m
     problem, _ = case
     if not problem.has_requirements:
         return
-    prep = prepare(problem, with_costs=False, min_class=min_class)
-    event(f"count rows: {len(prep.rows.classes)}, symmetry row permutations: {min(len(prep.row_perms), 2)}")
+    sp = sat_problem(problem, with_costs=False, min_class=min_class)
+    event(f"count rows: {len(sp.rows.classes)}, symmetry row permutations: {min(len(sp.row_perms), 2)}")
     k_min, cost_min = _brute_force(problem)
     if k_min > 1:  # "no selection with k_min - 1 tests" is a claim: it must be true
         assert _feasible_any_class_size(problem, k_min - 1, min_class) is None

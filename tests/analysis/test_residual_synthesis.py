@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 from residual_harness import ROMO_KIN, build_harness, run_harness
 
-from fdi_analysis.candidates import mso_candidates
 from fdi_analysis.fault_matrix import Candidate, fault_matrix
 from fdi_analysis.model import Model
 from fdi_analysis.model_loader import load_model
@@ -20,6 +19,7 @@ from fdi_analysis.residuals.generator import DOMAIN_FACTOR
 from fdi_analysis.residuals.realizability import realizable_candidates, why_not_realizable
 from fdi_analysis.residuals.reasons import NotRealizableError, Reason
 from fdi_analysis.residuals.solvability import Solution, Solver
+from fdi_analysis.selection.candidates import mso_candidates
 from fdi_host.tuning.drives import drive
 
 ARR3 = ["K1", "K2", "D1", "D2", "S1", "S2", "S3", "S4"]

@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 from msos_bruteforce import all_msos
 
-from fdi_analysis.candidates import mso_candidates
 from fdi_analysis.fault_matrix import Candidate, fault_matrix
 from fdi_analysis.isolability import isolability
 from fdi_analysis.model_loader import load_model
 from fdi_analysis.random_structures import random_structure
 from fdi_analysis.selection import cheapest_per_signature, greedy, optimal, reaches_same_matrix
-from fdi_analysis.selection_exact import (
+from fdi_analysis.selection.candidates import mso_candidates
+from fdi_analysis.selection.exact import (
     CodeSearch,
     Problem,
     automorphisms,
@@ -94,7 +94,7 @@ def test_greedy_keeps_cheapest_first() -> None:
 
 
 # ----------------------------------------------------------------------------------------------------
-# Exact machinery (selection_exact): the search itself against brute force, bounds, reduction, symmetry
+# Exact machinery (selection.exact): the search itself against brute force, bounds, reduction, symmetry
 
 
 def brute_force(tests: list[Candidate], nf: int, method: str) -> tuple[int, int]:
@@ -213,7 +213,7 @@ def test_grouped_romo_optimal_not_worse_than_greedy(models_dir: pathlib.Path) ->
 @pytest.mark.parametrize("method", ["A", "B"])
 @pytest.mark.parametrize("seed", range(4))
 def test_cover_greedy_covers_every_required_pair(method: str, seed: int) -> None:
-    from fdi_analysis.selection_exact import cover_greedy, cover_matrix
+    from fdi_analysis.selection.exact import cover_greedy, cover_matrix
 
     tests = random_tests(seed, n=60, nf=8)
     problem = reduce_problem([t.faults for t in tests], [t.cost for t in tests], 8, method)

@@ -1,4 +1,4 @@
-"""Selection by practical isolability (fdi_analysis.selection_practical): the requirements it builds, the
+"""Selection by practical isolability (fdi_analysis.selection.practical): the requirements it builds, the
 unmet ones and their reasons, optimality against brute force, and the two exact solvers agreeing."""
 
 from __future__ import annotations
@@ -8,11 +8,12 @@ import random
 
 import pytest
 
-from fdi_analysis.selection_practical import (
+from fdi_analysis.selection.practical import (
     CandidateScreen,
     FaultScreen,
     PracticalCandidate,
     Screening,
+    UnmetKind,
     isolable_pairs,
     practical_matrix,
     select_practical,
@@ -54,8 +55,9 @@ def test_unmet_requirements_carry_their_reason() -> None:
     cands = [cand("A", "f1 f2", 3, "f1@a f1@b f2@a"), cand("B", "f2 f3", 2, "f2@a f2@b f3@a"),
              cand("C", "f1 f2 f3", 1, "f1@a f2@a f3@a f1@b"), cand("D", "f4", 1, "f4@a f4@b")]
     sel = select_practical(cands, FAULTS, SCEN, "highs")
-    unmet = {(u.scenario, u.fault_a, u.fault_b): u.reason for u in sel.unmet}
-    assert ("b", "f3", "") in unmet and "reaches the required fault-to-noise ratio" in unmet[("b", "f3", "")]
+    unmet = {(u.scenario, u.fault_a, u.fault_b): u for u in sel.unmet}
+    f3 = unmet[("b", "f3", "")]
+    assert f3.kind is UnmetKind.WEAK and f3.tests == 2 and "2 realizable tests for f3" in f3.reason
     assert all(u.scenario == "b" for u in sel.unmet)  # every requirement of a is met
     assert meets(list(sel.tests), FAULTS, SCEN, list(sel.pairs), set(unmet))
     # f1/f2/f3 share no test that sees one without the other in a way that separates f1/f3 except A and B
@@ -108,3 +110,16 @@ def test_screening_file_round_trip(tmp_path) -> None:  # type: ignore[no-untyped
     assert len(pc) == 1 and pc[0].detects == frozenset({("f1", "a"), ("f2", "b")})
     with pytest.raises(ValueError):
         select_practical(pc, ["f1", "f2"], ["a", "b"], "nonsense")
+
+
+def test_unmet_kinds_name_why() -> None:
+    """No test with the fault at all; tests that could meet it but are outside their domain throughout the
+    manoeuvre; tests in their domain that are too weak (with the closest one and its share)."""
+    weak = PracticalCandidate("W", frozenset({"f1", "f2"}), 1, frozenset(), {("f1", "a"): 0.4}, {"a": 1.0, "b": 0.0})
+    sel = select_practical([weak], ["f1", "f2", "f3"], ["a", "b"], "highs")
+    kinds = {(u.scenario, u.fault_a, u.fault_b): u for u in sel.unmet}
+    assert kinds[("a", "f3", "")].kind is UnmetKind.NOT_IN_SIGNATURE
+    assert kinds[("b", "f1", "")].kind is UnmetKind.OUT_OF_DOMAIN and "outside their operating domain" in \
+        kinds[("b", "f1", "")].reason
+    w = kinds[("a", "f1", "")]
+    assert w.kind is UnmetKind.WEAK and (w.best_test, w.best_share) == ("W", 0.4) and "40%" in w.reason

@@ -104,6 +104,7 @@ static void build(table_buf_t *b, fuzz_in_t *in)
         b->tests[i].input_mask = 0U;
         b->tests[i].gate = 5.0f;
         b->tests[i].variance = 1.0f;
+        b->tests[i].response_steps = 1U;
         b->tests[i].interpretation = "fuzz";
     }
     for (j = 0U; j < nf; ++j)
@@ -115,6 +116,7 @@ static void build(table_buf_t *b, fuzz_in_t *in)
         const uint8_t how = fz_u8(in);
         const bool classic = (how & 1U) == 0U;
         b->t.exoneration_margin = classic ? 1.0f : margin_choice[(how >> 1) % 4U];
+        b->t.sensitivity_margin = 1.0f;
         for (j = 0U; j < nf; ++j)
         {
             for (i = 0U; i < nt; ++i)
@@ -143,7 +145,7 @@ static bool consistent(const table_buf_t *b)
     {
         ok = (b->tests[i].fault_mask != 0U) && ((b->tests[i].fault_mask & ~low_bits(b->t.n_faults)) == 0U) &&
              ((b->tests[i].input_mask & ~low_bits(b->t.n_signals)) == 0U) &&
-             (b->tests[i].gate > 0.0f) && (b->tests[i].variance > 0.0f);
+             (b->tests[i].gate > 0.0f) && (b->tests[i].variance > 0.0f) && (b->tests[i].response_steps >= 1U);
     }
     if (ok)
     {

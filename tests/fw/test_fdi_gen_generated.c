@@ -250,70 +250,6 @@ static void test_slots_run(void **state)
     assert_true(test_set_step(&ts, &p, &in, all, false, r, NULL) != 0U);
 }
 
-/* The test of the table whose MSO is Table II's MSO3 (equations K1 K2 D1 D2 S1 S2 S3 S4), -1 if none. */
-static int arr3_test(void)
-{
-    int found = -1;
-    uint32_t i;
-    for (i = 0U; i < (uint32_t)fdi_romo_table.n_tests; ++i)
-    {
-        if (strcmp(fdi_romo_table_equations[i], "K1 K2 D1 D2 S1 S2 S3 S4") == 0)
-        {
-            found = (int)i;
-        }
-    }
-    return found;
-}
-
-static void test_generated_mso3_equals_handwritten_arr3(void **state)
-{
-    static test_set_t ts;
-    fdi_gen_param_t p;
-    fdi_gen_t hand;
-    fdi_svf_t filt[FDI_GEN_MAX_FILTERS];
-    fdi_frame_t in;
-    float r[FDI_GEN_MAX_SLOTS];
-    veh_meas_cfg_t mc = {{0.0, 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0, 0.0}};
-    test_rng_t rng = {7ULL};
-    const int k = arr3_test();
-    double worst = 0.0;
-    double scale = 0.0;
-    float rh = 0.0f;
-    int n;
-    (void)state;
-    if (k < 0)
-    {
-        skip(); /* MSO3 not in the current selection */
-    }
-    params(&p);
-    test_set_init(&ts, &fdi_romo_gen_set, fdi_romo_generators);
-    assert_int_equal(fdi_gen_init(&hand, &fdi_romo_kin_arr3, filt, FDI_GEN_MAX_FILTERS, NULL), FDI_OK);
-    veh_measure(0.0, &mc, &rng, &in);
-    (void)test_set_step(&ts, &p, &in, (uint32_t)1U << (uint32_t)k, true, r, NULL);
-    assert_int_equal(fdi_gen_reset(&hand, &p, &in), FDI_OK);
-    for (n = 1; n < 3000; ++n)
-    {
-        veh_measure((double)n * DT, &mc, &rng, &in);
-        if (n == 1500)
-        {
-            mc.f[3] = 0.5; /* f4: vx sensor offset, the residuals must move together */
-        }
-        assert_int_equal(test_set_step(&ts, &p, &in, (uint32_t)1U << (uint32_t)k, false, r, NULL), 0U);
-        assert_int_equal(fdi_gen_step(&hand, &p, &in, &rh, NULL), FDI_OK);
-        if (fabs((double)rh) > scale)
-        {
-            scale = fabs((double)rh);
-        }
-        if (fabs((double)r[k] + (double)rh) > worst)
-        {
-            worst = fabs((double)r[k] + (double)rh);
-        }
-    }
-    print_message("generated MSO3 vs fdi_romo_kin_arr3: max |r_gen + r3| = %.3g, max |r3| = %.3g\n", worst, scale);
-    assert_true(scale > 0.0);
-    assert_true(worst < 1e-3 * scale);
-}
-
 static void frame(fdi_frame_t *in, float vx)
 {
     veh_meas_cfg_t mc = {{0.0, 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0, 0.0}};
@@ -357,8 +293,11 @@ static void test_operating_domain(void **state)
     fdi_frame_t in;
     fdi_diag_t d;
     fdi_diag_result_t res;
-    const fdi_diag_config_t cfg = {&fdi_romo_table, {(float)VEH_DX, (float)VEH_DY, 0.0f, 0.0f}, 1.5f, 150.0f, 1U, 1U,
-                                   300U, FDI_ISO_EXONERATION, 0U, 1U, FDI_DIAG_SENS_OFF};
+    const fdi_diag_config_t cfg = {.table = &fdi_romo_table,
+                                   .gen_param = {(float)VEH_DX, (float)VEH_DY, 0.0f, 0.0f},
+                                   .cusum_k = 1.5f, .cusum_h = 150.0f, .set_count = 1U, .clear_count = 1U,
+                                   .warmup_steps = 300U, .mode = FDI_ISO_EXONERATION, .episode_clear_steps = 1U,
+                                   .noise_allowance = 3.0f, .sensitivities = false};
     const uint32_t all = ((uint32_t)1U << fdi_romo_table.n_tests) - 1U;
     uint32_t low;
     int n;
@@ -451,12 +390,11 @@ static void test_sensitivities_leave_the_residual_alone(void **state)
 }
 
 /*
- * The diagnoser on the ROMO table with sensitivities at every step (FDI_DIAG_SENS_ALWAYS): its residuals are those
- * of the set run on its own, bit for bit (the bank restarted at the first step as the standalone run's); one test's
- * sensitivities per step in round robin, each equal to the standalone run's values at that step, listed through
- * fdi_diag_sens() and the result; with FDI_DIAG_SENS_EPISODE and no alarm none; bad arguments refused.
+ * The diagnoser on the ROMO table with sensitivities reported (cfg.sensitivities): its residuals are those of the
+ * set run on its own, bit for bit (the bank restarted at the first step as the standalone run's), and so are every
+ * evaluated test's sensitivities at every step, listed in the result by sens_offset.
  */
-static void test_diag_sensitivities_round_robin(void **state)
+static void test_diag_sensitivities(void **state)
 {
     static test_set_t ts;
     static fdi_diag_t d;
@@ -467,24 +405,14 @@ static void test_diag_sensitivities_round_robin(void **state)
     float r[FDI_GEN_MAX_SLOTS];
     float sens[FDI_DIAG_MAX_SENS];
     const uint32_t all = ((uint32_t)1U << FDI_ROMO_N_GENERATORS) - 1U;
-    uint32_t seen = 0U;
-    uint32_t last = FDI_ROMO_N_GENERATORS - 1U; /* the round robin starts at test 0 */
-    const float *v = NULL;
-    uint32_t nv = 0U;
     int n;
     (void)state;
     assert_int_equal(fdi_diag_config_default(&cfg, &fdi_romo_table), FDI_OK);
     cfg.gen_param[FDI_ROMO_KIN_PARAM_D_X] = (float)VEH_DX;
     cfg.gen_param[FDI_ROMO_KIN_PARAM_D_Y] = (float)VEH_DY;
     cfg.warmup_steps = 300U;
-    cfg.sensitivities = (fdi_diag_sens_mode_t)3;
-    assert_int_equal(fdi_diag_init(&d, &cfg), FDI_BAD_ARG);
-    cfg.sensitivities = FDI_DIAG_SENS_ALWAYS;
+    cfg.sensitivities = true;
     assert_int_equal(fdi_diag_init(&d, &cfg), FDI_OK);
-    assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
-    assert_int_equal(res.step, 0U);
-    assert_int_equal(fdi_diag_sens_fresh(&d), 0U);
-    assert_int_equal(fdi_diag_sens(&d, 0U, &v, &nv), FDI_BAD_ARG);
     params(&p);
     test_set_init(&ts, &fdi_romo_gen_set, fdi_romo_generators);
     for (n = 0; n < 400; ++n)
@@ -497,58 +425,17 @@ static void test_diag_sensitivities_round_robin(void **state)
         assert_int_equal(test_set_step(&ts, &p, &in, all, n == 0, r, sens), 0U);
         assert_int_equal(fdi_diag_step(&d, &in, ROMO_SIGM_ALL), FDI_OK);
         assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
-        assert_int_equal(res.step, (uint32_t)n + 1U);
         assert_true(memcmp(r, res.residual, sizeof(float) * FDI_ROMO_N_GENERATORS) == 0);
-        if (n < 300)
-        {
-            assert_int_equal(res.sens_fresh_mask, 0U); /* warming up: no test is evaluated */
-            continue;
-        }
-        assert_int_equal(res.evaluable_mask, all);
-        assert_true(res.sens_fresh_mask != 0U);
-        assert_int_equal(res.sens_fresh_mask & (res.sens_fresh_mask - 1U), 0U); /* one test per step */
-        assert_int_equal(res.sens_fresh_mask, fdi_diag_sens_fresh(&d));
         for (i = 0U; i < FDI_ROMO_N_GENERATORS; ++i)
         {
-            if (((res.sens_fresh_mask >> i) & 1U) != 0U)
+            uint32_t j;
+            assert_int_equal((uint32_t)res.sens_offset[i + 1U] - (uint32_t)res.sens_offset[i],
+                             fdi_gen_sens_count(&fdi_romo_generators[i]));
+            for (j = 0U; j < fdi_gen_sens_count(&fdi_romo_generators[i]); ++j)
             {
-                uint32_t j;
-                assert_int_equal(i, (last + 1U) % FDI_ROMO_N_GENERATORS); /* round robin */
-                last = i;
-                seen |= (uint32_t)1U << i;
-                assert_int_equal(fdi_diag_sens(&d, i, &v, &nv), FDI_OK);
-                assert_int_equal(nv, fdi_gen_sens_count(&fdi_romo_generators[i]));
-                assert_int_equal(fdi_diag_sens_step(&d, i), (uint32_t)n + 1U);
-                assert_int_equal(res.sens_step[i], (uint32_t)n + 1U);
-                for (j = 0U; j < nv; ++j)
-                {
-                    assert_true(memcmp(&v[j], &sens[ts.sens_at[i] + j], sizeof(float)) == 0);
-                    assert_true(memcmp(&res.sens[res.sens_offset[i] + j], &v[j], sizeof(float)) == 0);
-                }
-            }
-            else
-            {
-                assert_int_equal(fdi_diag_sens(&d, i, &v, &nv), FDI_BAD_ARG);
+                assert_true(memcmp(&res.sens[res.sens_offset[i] + j], &sens[ts.sens_at[i] + j], sizeof(float)) == 0);
             }
         }
-    }
-    assert_int_equal(seen, all);
-    assert_int_equal(fdi_diag_sens(NULL, 0U, &v, &nv), FDI_BAD_ARG);
-    assert_int_equal(fdi_diag_sens(&d, last, NULL, &nv), FDI_BAD_ARG);
-    assert_int_equal(fdi_diag_sens(&d, last, &v, NULL), FDI_BAD_ARG);
-    assert_int_equal(fdi_diag_sens(&d, 40U, &v, &nv), FDI_BAD_ARG);
-    assert_int_equal(fdi_diag_sens_step(NULL, 0U), 0U);
-    assert_int_equal(fdi_diag_sens_step(&d, 40U), 0U);
-    assert_int_equal(fdi_diag_sens_fresh(NULL), 0U);
-    /* during isolation episodes only: none while no test alarms */
-    cfg.sensitivities = FDI_DIAG_SENS_EPISODE;
-    assert_int_equal(fdi_diag_init(&d, &cfg), FDI_OK);
-    for (n = 0; n < 400; ++n)
-    {
-        frame(&in, 12.0f);
-        assert_int_equal(fdi_diag_step(&d, &in, ROMO_SIGM_ALL), FDI_OK);
-        assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
-        assert_true(res.iso.detected || (res.sens_fresh_mask == 0U));
     }
 }
 
@@ -606,10 +493,9 @@ int main(void)
         cmocka_unit_test(test_bad_descriptors_and_sets),
         cmocka_unit_test(test_bank),
         cmocka_unit_test(test_slots_run),
-        cmocka_unit_test(test_generated_mso3_equals_handwritten_arr3),
         cmocka_unit_test(test_operating_domain),
         cmocka_unit_test(test_sensitivities_leave_the_residual_alone),
-        cmocka_unit_test(test_diag_sensitivities_round_robin),
+        cmocka_unit_test(test_diag_sensitivities),
         cmocka_unit_test(test_observer_building_blocks),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -107,6 +107,8 @@ static void test_corruptions(void **state)
     EXPECT_BAD(size_copy[0] = NAN);
     EXPECT_BAD(t.exoneration_margin = 0.5f);           /* a margin below 1 would exonerate the true fault */
     EXPECT_BAD(t.exoneration_margin = INFINITY);
+    EXPECT_BAD(t.sensitivity_margin = 0.9f);
+    EXPECT_BAD(t.sensitivity_margin = NAN);
 }
 
 /* A test without a generator yet (gen NULL) is valid data. */

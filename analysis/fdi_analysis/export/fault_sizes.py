@@ -89,6 +89,15 @@ class FaultSizes:
 # The stated sizes are grid values above the first alarm of one scenario (cornering): a factor 2 covers the
 # grid step and a less exciting manoeuvre before a quiet test is taken as evidence.
 EXONERATION_MARGIN = 2.0
+# The on-line rule (fdi_diag.h): a settled quiet test clears a fault when its sensitivity times the size the alarms
+# imply reaches this many times its gate. It covers the linearisation where the quiet test sees the fault through a
+# nonlinearity the alarmed tests do not (the derivative overpredicts a saturating fault's effect by up to 1.6x,
+# tests/analysis/test_sensitivity.py; where both see it through the same slip law the errors cancel); the implied
+# size is a lower bound already (its noise allowance).
+SENSITIVITY_MARGIN = 1.5
+# A test reacts to a fault of a stated size when it raises a raw alarm within this time of a step (the sweep's
+# window): the response time of a quiet test under the reaction-size rule.
+REACTION_WINDOW_S = 3.0
 
 
 def test_size_rows(faults: Sequence[str], labels: Sequence[str], signatures: Sequence[int],

@@ -10,6 +10,7 @@ Output is deterministic: the same model and selection give byte-identical files.
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -19,7 +20,7 @@ from string import Template
 from fdi_analysis.export.c_expr import c_float
 from fdi_analysis.export.c_names import VehicleNames
 from fdi_analysis.export.c_text import banner, c_string, comment_text
-from fdi_analysis.export.fault_sizes import FaultSizes, test_size_rows
+from fdi_analysis.export.fault_sizes import REACTION_WINDOW_S, SENSITIVITY_MARGIN, FaultSizes, test_size_rows
 from fdi_analysis.export.generators import kind_name
 from fdi_analysis.export.thresholds import Thresholds
 from fdi_analysis.fault_matrix import Candidate
@@ -109,12 +110,14 @@ const fdi_table_t ${table} = {
     ${vehicle}_iso_class,
     ${vehicle}_test_size,
     ${margin},
+    ${sens_margin},
 };
 """)
 
 TEST_FMT = Template("""\
-    {${mso_id}U, ${generator}, 0x${fault_mask}U, ${inputs},
-     ${gate}, ${variance}, ${interpretation}},""")
+    {.gen = ${generator}, .interpretation = ${interpretation},
+     .mso_id = ${mso_id}U, .fault_mask = 0x${fault_mask}U, .input_mask = ${inputs},
+     .gate = ${gate}, .variance = ${variance}, .response_steps = ${response_steps}U},""")
 MASK_ROW_FMT = Template("    0x${mask}U, /* ${fault} */")
 SIZE_ROW_FMT = Template("    ${sizes}, /* ${fault} */")
 STRING_ROW_FMT = Template("    ${text},")
@@ -129,6 +132,7 @@ class TestRow:
     inputs: str  # C mask expression
     gate: float
     variance: float
+    response_steps: int
     interpretation: str
     equations: str
     unknowns: str
@@ -153,10 +157,13 @@ class TableFile:
 
 # ------------------------------------------------------------------------------------------ computing
 def table_file(model: Model, tests: Sequence[Candidate], thresholds: Thresholds, names: VehicleNames, banner: str,
-               generated: Sequence[bool] | None = None, sizes: FaultSizes | None = None) -> TableFile:
+               generated: Sequence[bool] | None = None, sizes: FaultSizes | None = None,
+               response_s: Sequence[float] | None = None) -> TableFile:
     """What goes into the table files. `generated[k]` true (the default for every test): test k runs the
     generated generator of slot (number of generated tests before it), with the variance of its equation set
-    from thresholds.generated; false: no on-board generator (NULL, always "not evaluable")."""
+    from thresholds.generated; false: no on-board generator (NULL, always "not evaluable"). `response_s[k]`: the
+    time test k's residual needs to show a fault (`residuals.evaluate.response_time` of its generator; default
+    REACTION_WINDOW_S, the window of the fault-size sweep), written as whole steps of the design point."""
     st = model.structure()
     if not 0 < len(tests) <= MAX_TESTS:
         raise ExportError(f"{len(tests)} tests selected; the firmware table holds 1..{MAX_TESTS}")
@@ -177,8 +184,11 @@ def table_file(model: Model, tests: Sequence[Candidate], thresholds: Thresholds,
         else:
             generator, variance = NO_GENERATOR, 1.0
         number = re.fullmatch(r"MSO(\d+)", t.label)
+        seconds = response_s[k] if response_s is not None else REACTION_WINDOW_S
+        steps = max(1, math.ceil(seconds / thresholds.design[0] - 1e-9))
         rows.append(TestRow(int(number.group(1)) if number else k + 1, generator, t.faults, names.mask_expr(knowns),
-                            thresholds.gate, variance, interpret(model, eqs), " ".join(eqs), " ".join(unknowns)))
+                            thresholds.gate, variance, steps, interpret(model, eqs), " ".join(eqs),
+                            " ".join(unknowns)))
     signatures = [sum(1 << i for i, t in enumerate(tests) if t.faults >> j & 1) for j in range(st.nf)]
     classes = [sum(1 << k for k in range(st.nf) if signatures[k] == signatures[j]) for j in range(st.nf)]
     size_rows, margin = test_size_rows(list(st.faults), [t.label for t in tests], signatures, sizes)
@@ -205,7 +215,8 @@ def render_file(f: TableFile) -> tuple[str, str]:
                                    guard=table.upper() + "_H")
     tests = "\n".join(TEST_FMT.substitute(
         mso_id=t.mso_id, generator=t.generator, fault_mask=f"{t.fault_mask:08X}", inputs=t.inputs,
-        gate=c_float(t.gate), variance=c_float(t.variance), interpretation=c_string(t.interpretation))
+        gate=c_float(t.gate), variance=c_float(t.variance), response_steps=t.response_steps,
+        interpretation=c_string(t.interpretation))
         for t in f.tests)
     source = SOURCE_FMT.substitute(
         banner=f.banner, table=table, vehicle=n.vehicle, generators=n.generators, signals=n.signals,
@@ -220,7 +231,7 @@ def render_file(f: TableFile) -> tuple[str, str]:
                         for row, x in zip(f.sizes, f.faults, strict=True)),
         equations=_strings([t.equations for t in f.tests]), unknowns=_strings([t.unknowns for t in f.tests]),
         design=", ".join(c_float(x) for x in f.design), sig_count=n.sig_count, signal_names=n.signal_names,
-        margin=c_float(f.margin))
+        margin=c_float(f.margin), sens_margin=c_float(SENSITIVITY_MARGIN))
     return header, source
 
 

@@ -132,12 +132,17 @@ def observer_run(g: Generator, signals: Mapping[str, FloatArray], values: Mappin
     xs[0] = xh
     dt = design.dt
     for k in range(1, n):
-        f, gain, a, c, e = fn(xh, *rows[k])
-        g1 = f + gain * e
-        jac = a + gain * c
-        phi = math.expm1(jac * dt) / jac if abs(jac * dt) > SMALL_JDT else dt
-        xh = xh + phi * 0.5 * (g_prev + g1)
-        g_prev, r[k] = fn_next(xh, *rows[k])
+        try:
+            f, gain, a, c, e = fn(xh, *rows[k])
+            g1 = f + gain * e
+            jac = a + gain * c
+            phi = math.expm1(jac * dt) / jac if abs(jac * dt) > SMALL_JDT else dt
+            xh = xh + phi * 0.5 * (g_prev + g1)
+            g_prev, r[k] = fn_next(xh, *rows[k])
+        except (OverflowError, ZeroDivisionError):  # the estimate has diverged (a large fault): alarm from here on
+            r[k:] = math.inf
+            xs[k:] = math.nan
+            break
         xs[k] = xh
     return r, xs
 
@@ -180,6 +185,22 @@ def evaluable_segments(g: Generator, signals: Mapping[str, FloatArray], warmup: 
         r = residual(g, {k: np.asarray(v)[a:b] for k, v in signals.items()}, design)
         out.append((a + warmup, r[warmup:]))
     return out
+
+
+def step_response(g: Generator, t: float, design: FilterDesign | None = None) -> float:
+    """The share of its final value that the generator's response to a step fault has reached `t` seconds after
+    the step: the step through its chain of `level` filters (each fdi_svf, the y output), times, for an observer
+    generator, the share its error pole has absorbed (1 - exp(-pole t))."""
+    design = design or FilterDesign()
+    n = max(2, math.ceil(t / design.dt) + 1)
+    y = np.ones(n)
+    y[0] = 0.0
+    for _ in range(g.level):
+        y = svf(y, design)[0]
+    share = float(y[min(n - 1, round(t / design.dt))])
+    if g.observer is not None and g.observer.pole > 0.0:
+        share *= 1.0 - math.exp(-g.observer.pole * t)
+    return share
 
 
 def response_time(g: Generator, design: FilterDesign | None = None, fraction: float = 0.9) -> float:

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from fdi_analysis.candidates import mso_candidates
 from fdi_analysis.fault_matrix import Candidate
 from fdi_analysis.model import Model
 from fdi_analysis.mso.results import bits
@@ -19,6 +18,7 @@ from fdi_analysis.residuals.realizability import realizable_candidates
 from fdi_analysis.residuals.sensitivity import with_sensitivities
 from fdi_analysis.residuals.solvability import Solver
 from fdi_analysis.selection import optimal
+from fdi_analysis.selection.candidates import mso_candidates
 
 SELECTION_TIME_LIMIT_S = 900.0
 

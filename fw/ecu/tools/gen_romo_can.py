@@ -4,8 +4,9 @@
     fdi_romo_bus.{h,c}   the bus of the ECU core: input messages, their frame signals and decoding, the
                          diagnosis frame
 
-The DBC signals carry the model's measured signals as the simulator maps them (fdi_host.can.dbc.SIGNAL_MAP, the
-one mapping of the project: DBC value = model value * factor); the frame's signals are the knowns of
+The DBC signals carry the model's measured signals as the DBC's signal attributes state them ("ModelSignal", the
+model's name; "ModelFactor", DBC value = model value * factor: the one mapping of the project, read by the host
+tools too); the frame's signals are the knowns of
 analysis/models/romo_grouped.toml (the model of the generated table, fdi_romo_signals.h).
 
 Usage: python fw/ecu/tools/gen_romo_can.py [--dbc dbc/romo.dbc] [--out fw/vehicles/romo/generated/can]
@@ -20,10 +21,10 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import cantools
 import gen_can
 
 from fdi_analysis.model_loader import load_model
-from fdi_host.can.dbc import SIGNAL_MAP
 
 REPO = Path(__file__).resolve().parents[3]
 DBC = REPO / "dbc" / "romo.dbc"
@@ -35,14 +36,23 @@ VEHICLE = "romo"
 CMD = "bash scripts/generate.sh"
 
 
-def roles() -> list[gen_can.SignalRole]:
-    return [gen_can.SignalRole(m.signal, m.sim, 1.0 / m.factor) for m in SIGNAL_MAP]
+def roles(dbc: Path = DBC) -> list[gen_can.SignalRole]:
+    """The DBC signals that carry a model signal (attribute "ModelSignal"), with model value = DBC value / factor."""
+    db = cantools.database.load_file(str(dbc))
+    out = []
+    for msg in db.messages:
+        for sig in msg.signals:
+            attrs = sig.dbc.attributes if sig.dbc is not None else {}
+            if "ModelSignal" in attrs and attrs["ModelSignal"].value:
+                factor = float(attrs["ModelFactor"].value) if "ModelFactor" in attrs else 1.0
+                out.append(gen_can.SignalRole(sig.name, str(attrs["ModelSignal"].value), 1.0 / factor))
+    return out
 
 
 def generate(dbc: Path = DBC) -> dict[str, str]:
     """Every file of fw/vehicles/romo/generated/can/ by name."""
     knowns = [k.name for k in load_model(MODEL).knowns]
-    return gen_can.generate(dbc, NODE, DB_NAME, VEHICLE, roles(), knowns, CMD)
+    return gen_can.generate(dbc, NODE, DB_NAME, VEHICLE, roles(dbc), knowns, CMD)
 
 
 def main(argv: list[str] | None = None) -> int:

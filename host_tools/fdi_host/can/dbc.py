@@ -31,31 +31,24 @@ class SignalMap:
     factor: float = 1.0
 
 
-def _wheel_maps() -> list[SignalMap]:
+def signal_map(path: Path) -> tuple[SignalMap, ...]:
+    """The DBC signals that carry a simulator (model) signal: the signal attributes "ModelSignal" (the model's
+    name) and "ModelFactor" (DBC value = model value * factor, default 1), in DBC order. The same attributes
+    give the firmware's frame signals (fw/ecu/tools/gen_romo_can.py): the DBC is the one source of the mapping."""
+    db = cantools.database.load_file(str(path))
+    if not isinstance(db, cantools.database.can.Database):
+        raise ValueError(f"{path} is not a DBC CAN database")
     out = []
-    for i in (1, 2, 3, 4):
-        msg = f"WheelRobot{i}"
-        out += [
-            SignalMap(f"delta{i}_m", msg, f"WR{i}_SteerAngle"),
-            SignalMap(f"iTM{i}_m", msg, f"WR{i}_MotorCurrent"),
-            SignalMap(f"omega{i}_m", msg, f"WR{i}_WheelSpeed"),
-        ]
-    return out
+    for msg in db.messages:
+        for sig in msg.signals:
+            attrs = sig.dbc.attributes if sig.dbc is not None else {}
+            if "ModelSignal" in attrs and attrs["ModelSignal"].value:
+                factor = float(attrs["ModelFactor"].value) if "ModelFactor" in attrs else 1.0
+                out.append(SignalMap(str(attrs["ModelSignal"].value), msg.name, sig.name, factor))
+    return tuple(out)
 
 
-SIGNAL_MAP: tuple[SignalMap, ...] = (
-    SignalMap("demand_speed", "MotionDemand", "MD_Speed"),
-    SignalMap("demand_sideslip", "MotionDemand", "MD_SideSlip"),
-    SignalMap("demand_yaw_rate", "MotionDemand", "MD_YawRate"),
-    SignalMap("ax_m", "IMU_Motion", "IMU_AccelX"),
-    SignalMap("ay_m", "IMU_Motion", "IMU_AccelY"),
-    SignalMap("psidot_m", "IMU_Motion", "IMU_YawRate"),
-    SignalMap("vx_m", "VelocitySensor", "VEL_VelX"),
-    SignalMap("vy_m", "VelocitySensor", "VEL_VelY"),
-    *_wheel_maps(),
-    SignalMap("P_f_m", "BrakeByWire", "BBW_PressureFront", 1e-5),
-    SignalMap("P_r_m", "BrakeByWire", "BBW_PressureRear", 1e-5),
-)
+SIGNAL_MAP: tuple[SignalMap, ...] = signal_map(DEFAULT_DBC)
 
 # Messages the simulator transmits (the diagnosis message is produced by the FDI unit, not simulated).
 SIMULATED_MESSAGES: tuple[str, ...] = tuple(dict.fromkeys(m.message for m in SIGNAL_MAP))

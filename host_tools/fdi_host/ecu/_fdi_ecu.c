@@ -231,47 +231,42 @@ long fdi_py_process(fdi_ecu_t *ecu, long n, const uint32_t *can_id, const uint8_
 /*
  * The diagnoser alone over n frames (values[n * n_signals], signal k of frame s at s * n_signals + k, validity
  * per frame): after each step its residuals (out_r[s * max_tests + i]) and, when out_sens is not NULL, its
- * sensitivities (out_sens[s * max_sens + j], the result's sens[] as listed by sens_offset: each test's last
- * refreshed values, kept in the caller's result `res` across steps and calls) and the tests refreshed at the step
- * (out_fresh[s], when not NULL). Returns the number of steps run, or -1 on a bad argument or a failing call.
+ * sensitivities (out_sens[s * max_sens + j], the result's sens[] as listed by sens_offset). Returns the number of
+ * steps run, or -1 on a bad argument or a failing call.
  */
 long fdi_py_diag_run(fdi_diag_t *d, long n, int n_signals, const float *values, const uint32_t *validity,
-                     float *out_r, float *out_sens, uint32_t *out_fresh, fdi_diag_result_t *res_io)
+                     float *out_r, float *out_sens)
 {
     long s;
     if ((d == NULL) || (n < 0) || (n_signals < 0) || (n_signals > (int)FDI_FRAME_MAX_SIGNALS) ||
-        (res_io == NULL) || ((n > 0) && ((values == NULL) || (validity == NULL) || (out_r == NULL))))
+        ((n > 0) && ((values == NULL) || (validity == NULL) || (out_r == NULL))))
     {
         return -1;
     }
     for (s = 0; s < n; ++s)
     {
         fdi_frame_t in;
-        fdi_diag_result_t *const res = res_io;
+        fdi_diag_result_t res;
         int k;
         unsigned i;
         for (k = 0; k < (int)FDI_FRAME_MAX_SIGNALS; ++k)
         {
             in.value[k] = (k < n_signals) ? values[(s * n_signals) + k] : 0.0f;
         }
-        if ((fdi_diag_step(d, &in, validity[s]) != FDI_OK) || (fdi_diag_result(d, res) != FDI_OK))
+        if ((fdi_diag_step(d, &in, validity[s]) != FDI_OK) || (fdi_diag_result(d, &res) != FDI_OK))
         {
             return -1;
         }
         for (i = 0U; i < FDI_DIAG_MAX_TESTS; ++i)
         {
-            out_r[(s * (long)FDI_DIAG_MAX_TESTS) + (long)i] = res->residual[i];
+            out_r[(s * (long)FDI_DIAG_MAX_TESTS) + (long)i] = res.residual[i];
         }
         if (out_sens != NULL)
         {
-            for (i = 0U; i < (unsigned)res->sens_offset[FDI_DIAG_MAX_TESTS]; ++i)
+            for (i = 0U; i < (unsigned)res.sens_offset[FDI_DIAG_MAX_TESTS]; ++i)
             {
-                out_sens[(s * (long)FDI_DIAG_MAX_SENS) + (long)i] = res->sens[i];
+                out_sens[(s * (long)FDI_DIAG_MAX_SENS) + (long)i] = res.sens[i];
             }
-        }
-        if (out_fresh != NULL)
-        {
-            out_fresh[s] = res->sens_fresh_mask;
         }
     }
     return n;

@@ -13,12 +13,8 @@ of ``fw/ecu/include/fdi_ecu.h`` and ``fw/include/fdi_diag.h``::
             bus.send(...)
     ecu.result().candidates, ecu.counters().rejected
 
-    diag = Diagnoser("three_tank", sensitivities="always")   # no bus: frames of the table's signals
+    diag = Diagnoser("three_tank", sensitivities=True)   # no bus: frames of the table's signals
     runs = diag.run({"u": u, "y1": y1, "y2": y2, "y3": y3})   # residuals, sensitivities, results per step
-
-Sensitivities (fdi_diag.h): ``sensitivities=True`` (or ``"episode"``) computes them during isolation episodes,
-``"always"`` at every step, one test per step in round robin either way; a result lists each test's last refreshed
-values, `EcuResult.sens_fresh_mask` the tests refreshed at its step.
 
 Semantics (frame checks, timeouts, fixed steps at the table's dt, the diagnosis frame) are those of the C core:
 a step at T_k sees exactly the frames with t <= T_k, whatever the poll pattern. Times are converted to wrapping
@@ -56,7 +52,6 @@ BUSES = ("romo",)
 TABLE_BUS = {"kin": "romo", "romo": "romo"}  # the bus an ECU of a table listens to (three_tank: none)
 _N_REASONS = len(REASONS)
 _MODES = {"no_exoneration": 0, "exoneration": 1}
-_SENS_MODES = {"off": 0, "episode": 1, "always": 2}  # fdi_diag_sens_mode_t
 
 
 class EcuError(RuntimeError):
@@ -87,8 +82,8 @@ def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
             ("table", ctypes.c_void_p), ("gen_param", ctypes.c_float * c.n_params),
             ("cusum_k", ctypes.c_float), ("cusum_h", ctypes.c_float), ("set_count", ctypes.c_uint16),
             ("clear_count", ctypes.c_uint16), ("warmup_steps", ctypes.c_uint16), ("mode", ctypes.c_int),
-            ("iso_settle_steps", ctypes.c_uint16), ("episode_clear_steps", ctypes.c_uint16),
-            ("sensitivities", ctypes.c_int),
+            ("episode_clear_steps", ctypes.c_uint16), ("noise_allowance", ctypes.c_float),
+            ("sensitivities", ctypes.c_bool),
         ]
 
     class Config(ctypes.Structure):
@@ -121,8 +116,6 @@ def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
             ("n_tests", ctypes.c_uint8), ("alarm_mask", ctypes.c_uint32), ("evaluable_mask", ctypes.c_uint32),
             ("status", ctypes.c_int * c.max_tests), ("residual", ctypes.c_float * c.max_tests),
             ("ratio", ctypes.c_float * c.max_tests), ("accused_mask", ctypes.c_uint32), ("iso", IsoResult),
-            ("step", ctypes.c_uint32), ("sens_fresh_mask", ctypes.c_uint32),
-            ("sens_step", ctypes.c_uint32 * c.max_tests),
             ("sens_offset", ctypes.c_uint8 * (c.max_tests + 1)), ("sens", ctypes.c_float * c.max_sens),
         ]
 
@@ -199,7 +192,7 @@ def _lib() -> _Lib:
         "fdi_diag_init": (st, [vp, vp]),
         "fdi_diag_step": (st, [vp, vp, ctypes.c_uint32]),
         "fdi_diag_result": (st, [vp, vp]),
-        "fdi_py_diag_run": (ctypes.c_long, [vp, ctypes.c_long, ctypes.c_int, vp, vp, vp, vp, vp, vp]),
+        "fdi_py_diag_run": (ctypes.c_long, [vp, ctypes.c_long, ctypes.c_int, vp, vp, vp, vp]),
     }
     for name, (res, args) in sigs.items():
         fn = getattr(dll, name)
@@ -320,10 +313,10 @@ def _apply_diag(d: Any, ov: dict[str, Any]) -> None:
             k = int(dll.fdi_py_param_index(key.encode()))
             assert k >= 0, key
             d.gen_param[k] = float(ov.pop(key))
-    for key in ("cusum_k", "cusum_h"):
+    for key in ("cusum_k", "cusum_h", "noise_allowance"):
         if key in ov:
             setattr(d, key, float(ov.pop(key)))
-    for key in ("set_count", "clear_count", "warmup_steps", "iso_settle_steps", "episode_clear_steps"):
+    for key in ("set_count", "clear_count", "warmup_steps", "episode_clear_steps"):
         if key in ov:
             v = int(ov.pop(key))
             if not 0 <= v <= 0xFFFF:
@@ -335,11 +328,7 @@ def _apply_diag(d: Any, ov: dict[str, Any]) -> None:
             raise ValueError(f"mode {mode!r}: use one of {tuple(_MODES)}")
         d.mode = _MODES[mode]
     if "sensitivities" in ov:
-        sens = ov.pop("sensitivities")
-        mode = ("episode" if sens else "off") if isinstance(sens, bool) else sens
-        if mode not in _SENS_MODES:
-            raise ValueError(f"sensitivities {sens!r}: use True, False or one of {tuple(_SENS_MODES)}")
-        d.sensitivities = _SENS_MODES[mode]
+        d.sensitivities = bool(ov.pop("sensitivities"))
 
 
 def _sensitivities(d: Any, n_tests: int) -> tuple[tuple[float, ...], ...]:
@@ -391,9 +380,7 @@ class EcuResult:
     residuals: tuple[float, ...]
     ratios: tuple[float, ...]
     test_names: tuple[str, ...]
-    sensitivities: tuple[tuple[float, ...], ...] = ()  # per test: d r / d f of its sens faults, last refreshed
-    sens_fresh_mask: int = 0  # tests whose sensitivities were refreshed at this step (at most one)
-    sens_steps: tuple[int, ...] = ()  # per test: the step of its last refresh (0: never)
+    sensitivities: tuple[tuple[float, ...], ...] = ()  # per test: d r / d f of its sens faults (with sensitivities)
 
     @property
     def status_name(self) -> str:
@@ -414,7 +401,7 @@ class Ecu:
 
     Overrides: ``d_x``, ``d_y`` (the ROMO kinematic generators' parameters), ``cusum_k``, ``cusum_h``,
     ``set_count``, ``clear_count``, ``warmup_steps``, ``mode`` ("exoneration" | "no_exoneration"),
-    ``iso_settle_steps``, ``episode_clear_steps``, ``sensitivities`` (fdi_diag.h), ``timeout_s`` (one value for all
+    ``episode_clear_steps``, ``noise_allowance``, ``sensitivities`` (fdi_diag.h), ``timeout_s`` (one value for all
     messages or a mapping message name -> seconds), ``max_delta_counter``, ``max_catchup_steps``.
     """
 
@@ -561,8 +548,7 @@ class Ecu:
             residuals=tuple(float(d.residual[i]) for i in range(n)),
             ratios=tuple(float(d.ratio[i]) for i in range(n)),
             test_names=self.table.test_names,
-            sensitivities=_sensitivities(d, n), sens_fresh_mask=int(d.sens_fresh_mask),
-            sens_steps=tuple(int(d.sens_step[i]) for i in range(n)),
+            sensitivities=_sensitivities(d, n),
         )
 
 
@@ -573,13 +559,11 @@ FloatArray = NDArray[np.float64]
 @dataclass(frozen=True)
 class DiagRun:
     """The diagnoser over a sequence of frames: per step and test the residual, per test its sensitivities
-    (columns in `TableInfo.sens_faults` order, the last refreshed values at every step, 0 before the first refresh;
-    empty without sensitivities), per step the tests refreshed at it, and the result after every step."""
+    (columns in `TableInfo.sens_faults` order; empty without sensitivities), and the result after every step."""
 
     residuals: FloatArray  # [step, test]
     sensitivities: tuple[FloatArray, ...]  # per test: [step, sensitivity]
     results: tuple[EcuResult, ...]
-    sens_fresh: NDArray[np.uint32]  # [step]: bit i = test i refreshed at the step
 
 
 class Diagnoser:
@@ -604,8 +588,6 @@ class Diagnoser:
         self._self = ctypes.cast(self._buf, ctypes.c_void_p)
         _check(self._dll.fdi_diag_init(self._self, ctypes.byref(cfg)), "fdi_diag_init")
         self._steps = 0
-        self._res = lib.types["DiagResult"]()  # kept across steps: it holds each test's last sensitivities
-        _check(self._dll.fdi_diag_result(self._self, ctypes.byref(self._res)), "fdi_diag_result")
 
     def _frames(self, signals: Mapping[str, Any]) -> NDArray[np.float32]:
         names = self.table.signal_names
@@ -618,7 +600,7 @@ class Diagnoser:
         return np.ascontiguousarray(np.column_stack(cols), dtype=np.float32)
 
     def _result(self) -> EcuResult:
-        r = self._res
+        r = self._types["DiagResult"]()
         _check(self._dll.fdi_diag_result(self._self, ctypes.byref(r)), "fdi_diag_result")
         n = self.table.n_tests
         return EcuResult(
@@ -628,8 +610,7 @@ class Diagnoser:
             detected=bool(r.iso.detected), isolated=bool(r.iso.isolated), iso_class=0,
             test_status=tuple(TEST_STATUS_NAMES[int(r.status[i])] for i in range(n)),
             residuals=tuple(float(r.residual[i]) for i in range(n)), ratios=tuple(float(r.ratio[i]) for i in range(n)),
-            test_names=self.table.test_names, sensitivities=_sensitivities(r, n),
-            sens_fresh_mask=int(r.sens_fresh_mask), sens_steps=tuple(int(r.sens_step[i]) for i in range(n)))
+            test_names=self.table.test_names, sensitivities=_sensitivities(r, n))
 
     def step(self, values: Mapping[str, float], validity: int | None = None) -> EcuResult:
         """One step with one frame (signals by name; a missing one is invalid); validity default: every signal
@@ -655,21 +636,20 @@ class Diagnoser:
         caps = self._caps
         out_r = np.zeros((n, caps.max_tests), dtype=np.float32)
         out_s = np.zeros((n, caps.max_sens), dtype=np.float32)
-        out_f = np.zeros(n, dtype=np.uint32)
         res: list[EcuResult] = []
         chunk = 1 if results else max(n, 1)
         for a in range(0, n, chunk):
             b = min(n, a + chunk)
             m = int(self._dll.fdi_py_diag_run(
                 self._self, b - a, ns, frames[a:b].ctypes.data, validity[a:b].ctypes.data,
-                out_r[a:b].ctypes.data, out_s[a:b].ctypes.data, out_f[a:b].ctypes.data, ctypes.byref(self._res)))
+                out_r[a:b].ctypes.data, out_s[a:b].ctypes.data))
             if m != b - a:
                 raise EcuError("fdi_diag_step failed during run()")
             self._steps += m
             if results:
                 res.append(self._result())
         nt = self.table.n_tests
-        counts = [len(self.table.sens_faults(i)) if int(self.config.sensitivities) else 0 for i in range(nt)]
+        counts = [len(self.table.sens_faults(i)) if bool(self.config.sensitivities) else 0 for i in range(nt)]
         starts = np.cumsum([0, *counts])
         sens = tuple(out_s[:, starts[i]:starts[i + 1]].astype(np.float64) for i in range(nt))
-        return DiagRun(out_r[:, :nt].astype(np.float64), sens, tuple(res), out_f)
+        return DiagRun(out_r[:, :nt].astype(np.float64), sens, tuple(res))

@@ -5,11 +5,24 @@ diagnosis; see `fdi_host.ecu.session` for the time base and call order), sends a
 diagnosis step, and polls on a timer so that silent messages time out. Stops on SIGINT/SIGTERM (or after
 ``--duration`` / ``--idle-exit``), prints the ECU's frame counters and writes the ECU log (every step's
 masks, candidates, residuals and test ratios) if ``--log`` is given.
+
+Every frame goes to the C core, whatever its ID: other ECUs' frames (a real bus carries up to ~4,000
+frames/s) are counted there as unknown IDs and ignored, as in the SocketCAN program and in an offline replay
+(the same calls); a 29-bit ID carries SocketCAN's EFF flag, so it never matches a subscribed 11-bit ID.
+The per-frame path is kept short (`fdi_host.live.bus.frame_reader`: udp_multicast datagrams straight from
+the socket, all queued ones per wake-up) and nothing but the C calls runs between the frame that completes
+a step and its diagnosis frame: the frame is handed to the bus as soon as the C core returns it, before the
+step is recorded (`SendFirst`). The garbage collector runs only right after a diagnosis frame was sent (the
+quiet part of a step), never between a frame and its diagnosis: its full collections over the recorded
+steps took milliseconds. A larger socket receive buffer (``--rcvbuf``) rides out pauses of the process
+without losing frames; ``--realtime`` (SCHED_FIFO, root) keeps it scheduled, ``--cpu-latency 0`` (PM QoS) keeps
+idle CPUs awake for it (`fdi_host.live.bus.CpuLatencyRequest`), ``--cpu`` pins it.
 """
 
 from __future__ import annotations
 
 import argparse
+import gc
 import sys
 import time
 from collections.abc import Sequence
@@ -18,12 +31,30 @@ from typing import Any
 
 import can
 
-from fdi_analysis.cli_common import EXIT_ERROR, add_version
-from fdi_analysis.cli_common import run as run_main
+from fdi_analysis.cli.common import EXIT_ERROR, add_version
+from fdi_analysis.cli.common import run as run_main
 from fdi_host.can.frame import Frame
 from fdi_host.can.logs import write_log
 from fdi_host.ecu.session import DIAG_ID, EcuSession
-from fdi_host.live.bus import StopFlag, add_bus_arguments, open_bus, signal_ready, try_realtime
+from fdi_host.live.bus import (
+    CAN_EFF_FLAG,
+    CAN_EFF_MASK,
+    CAN_ERR_FLAG,
+    CAN_RTR_FLAG,
+    BusReader,
+    CpuLatencyRequest,
+    StopFlag,
+    UdpMulticastReader,
+    add_bus_arguments,
+    frame_reader,
+    open_bus,
+    set_affinity,
+    set_receive_buffer,
+    signal_ready,
+    try_realtime,
+)
+
+DEFAULT_RCVBUF = 4 * 1024 * 1024  # bytes: ~1 s of a full bus in python-can's udp_multicast datagrams
 
 EPILOG = """\
 examples:
@@ -46,6 +77,16 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--origin-file", type=Path, help="wall-clock time of the drive's t = 0 (written by fdi-sim "
                     "live --origin-file): steps are aligned to it instead of to the first frame")
     ap.add_argument("--realtime", action="store_true", help="SCHED_FIFO priority (root)")
+    ap.add_argument("--cpu-latency", type=int, metavar="US",
+                    help="hold a PM QoS request for this CPU wake-up latency while running (root; 0: idle CPUs "
+                    "poll, no wake-up delay from sleep states or, in a VM, from a halted vCPU)")
+    ap.add_argument("--cpu", type=int, action="append", metavar="N",
+                    help="run on CPU N only (repeatable; default: any)")
+    ap.add_argument("--rcvbuf", type=int, default=DEFAULT_RCVBUF, metavar="BYTES",
+                    help=f"socket receive buffer (default {DEFAULT_RCVBUF}; 0: the kernel's default)")
+    ap.add_argument("--rx", choices=("auto", "recv"), default="auto",
+                    help="auto: udp_multicast datagrams straight from the socket (python-can's wire format), "
+                    "bus.recv on other interfaces; recv: python-can's bus.recv everywhere")
     ap.add_argument("--ready-file", type=Path, help="file created once the bus is open (for orchestration)")
     ap.add_argument("--quiet", action="store_true", help="print only the final counters")
     return add_version(ap)
@@ -59,39 +100,86 @@ def counter_summary(c: Any) -> str:
             f"message timeouts {sum(tmo.values())} {tmo or ''}").replace("  ", " ").strip()
 
 
+class SendFirst:
+    """The bindings' `Ecu` whose ``poll`` hands the diagnosis frame to the bus as soon as the C core returns it,
+    before `EcuSession` reads the step's result and records it (~20 us the frame no longer waits for);
+    everything else is the wrapped ECU's. `last_tx_wall`: wall-clock time just before the last send."""
+
+    def __init__(self, ecu: Any, bus: can.BusABC) -> None:
+        self._ecu = ecu
+        self._bus = bus
+        self.last_tx_wall = 0.0
+        self.sent = 0
+
+    def poll(self, t: float) -> list[tuple[int, bytes]]:
+        frames: list[tuple[int, bytes]] = self._ecu.poll(t)
+        for fid, data in frames:
+            self.last_tx_wall = time.time()
+            self._bus.send(can.Message(arbitration_id=fid, data=data, is_extended_id=fid > 0x7FF, dlc=len(data)))
+            self.sent += 1
+        return frames
+
+    @property
+    def wrapped(self) -> Any:
+        return self._ecu
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._ecu, name)
+
+
+def _log_frame(can_id: int, data: bytes, ts: float, rx_log: list[tuple[float, int, bytes]]) -> None:
+    """A received data frame for the --rx-log file (IDs above 0x7FF are extended there: `Frame`)."""
+    if can_id & (CAN_RTR_FLAG | CAN_ERR_FLAG) or can_id == DIAG_ID:
+        return
+    rx_log.append((ts, can_id & CAN_EFF_MASK if can_id & CAN_EFF_FLAG else can_id, data))
+
+
 def run(bus: can.BusABC, session: EcuSession, stop: StopFlag, duration: float | None, idle_exit: float | None,
         rx_log: list[tuple[float, int, bytes]] | None = None, origin_file: Path | None = None,
-        period: float = 0.005) -> None:
+        period: float = 0.005, reader: BusReader | UdpMulticastReader | None = None) -> None:
     """The receive / poll / send loop until `stop` (or the duration / idle limit).
 
     Timer polls run the steps due two steps before now: they only matter when traffic stops (timeouts), and
     they must not overtake a frame that was received but not yet read by this process.
     """
     grace = 2.0 * session.dt
+    rd = reader if reader is not None else frame_reader(bus)
+    tx = SendFirst(session.ecu, bus)
+    session.ecu = tx
     t_start = time.monotonic()
     last_rx = t_start
-    while not stop():
-        now_m = time.monotonic()
-        if duration is not None and now_m - t_start >= duration:
-            break
-        if idle_exit is not None and session.origin is not None and now_m - last_rx >= idle_exit:
-            break
-        msg = bus.recv(timeout=period)
-        if msg is not None and not (msg.is_error_frame or msg.is_remote_frame):
-            last_rx = time.monotonic()
-            fid, data, ts = int(msg.arbitration_id), bytes(msg.data), float(msg.timestamp)
-            out_anchor: list[tuple[int, bytes]] = []
-            if session.origin is None and fid != DIAG_ID and origin_file is not None and origin_file.exists():
-                out_anchor = session.anchor(float(origin_file.read_text(encoding="utf-8")), 0.0, ts)
-            out = out_anchor + session.feed(fid, data, ts, 0.0)
-            if rx_log is not None and fid != DIAG_ID:
-                rx_log.append((ts, fid, data))
-        else:
-            out = session.tick(time.time(), grace)
-        for fid, data in out:
-            if session.steps:
-                session.steps[-1].tx_wall = time.time()
-            bus.send(can.Message(arbitration_id=fid, data=data, is_extended_id=False, dlc=len(data)))
+    gc.collect()
+    gc.freeze()  # what exists now (modules, tables) is never scanned again
+    gc_was_on = gc.isenabled()
+    gc.disable()
+    try:
+        while not stop():
+            now_m = time.monotonic()
+            if duration is not None and now_m - t_start >= duration:
+                break
+            if idle_exit is not None and session.origin is not None and now_m - last_rx >= idle_exit:
+                break
+            sent = tx.sent
+            frames = rd.read(period)
+            if frames:
+                last_rx = time.monotonic()
+                for fid, data, ts in frames:
+                    if session.origin is None and fid != DIAG_ID and origin_file is not None and origin_file.exists() \
+                            and session.anchor(float(origin_file.read_text(encoding="utf-8")), 0.0, ts):
+                        session.steps[-1].tx_wall = tx.last_tx_wall
+                    if session.feed(fid, data, ts, 0.0):
+                        session.steps[-1].tx_wall = tx.last_tx_wall
+                    if rx_log is not None:
+                        _log_frame(fid, data, ts, rx_log)
+            elif session.tick(time.time(), grace):
+                session.steps[-1].tx_wall = tx.last_tx_wall
+            if tx.sent != sent:  # a diagnosis frame went out: the quiet part of the step
+                gc.collect(1)
+    finally:
+        gc.unfreeze()
+        if gc_was_on:
+            gc.enable()
+        session.ecu = tx.wrapped
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -112,15 +200,32 @@ def serve(args: argparse.Namespace) -> int:
     except (OSError, ValueError, ImportError, can.CanError) as exc:
         print(f"fdi-ecu: cannot open {args.interface} bus: {exc}", file=sys.stderr)
         return EXIT_ERROR
-    signal_ready(args.ready_file)
-    if not args.quiet:
-        print(f"fdi-ecu: table {args.table} on {args.interface}; Ctrl-C to stop", flush=True)
+    reader: BusReader | UdpMulticastReader | None = None
+    qos: CpuLatencyRequest | None = None
     try:
-        rx_log: list[tuple[float, int, bytes]] | None = [] if args.rx_log is not None else None
+        rcvbuf = set_receive_buffer(bus, args.rcvbuf) if args.rcvbuf > 0 else 0
+        reader = BusReader(bus) if args.rx == "recv" else frame_reader(bus)
+        setup = [f"receive {'bus.recv' if isinstance(reader, BusReader) else 'socket'}"]
+        if rcvbuf:
+            setup.append(f"socket buffer {rcvbuf // 1024} KiB")
+        if args.cpu:
+            setup.append(set_affinity(args.cpu))
         if args.realtime:
-            print(f"fdi-ecu: {try_realtime()}", flush=True)
-        run(bus, session, stop, args.duration, args.idle_exit, rx_log, args.origin_file)
+            setup.append(try_realtime())
+        if args.cpu_latency is not None:
+            qos = CpuLatencyRequest(args.cpu_latency)
+            setup.append(qos.note)
+        signal_ready(args.ready_file)
+        if not args.quiet:
+            print(f"fdi-ecu: table {args.table} on {args.interface}; Ctrl-C to stop", flush=True)
+        print(f"fdi-ecu: {', '.join(setup)}", flush=True)
+        rx_log: list[tuple[float, int, bytes]] | None = [] if args.rx_log is not None else None
+        run(bus, session, stop, args.duration, args.idle_exit, rx_log, args.origin_file, reader=reader)
     finally:
+        if isinstance(reader, UdpMulticastReader):
+            reader.close()
+        if qos is not None:
+            qos.close()
         bus.shutdown()
     print(f"fdi-ecu: {session.frames_in} frames in, {len(session.steps)} diagnosis frames out; "
           f"{counter_summary(session.ecu.counters())}", flush=True)

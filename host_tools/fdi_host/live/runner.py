@@ -28,7 +28,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from fdi_analysis.cli_common import EXIT_ERROR, EXIT_USAGE, add_version, run
+from fdi_analysis.cli.common import EXIT_ERROR, EXIT_USAGE, add_version, run
 from fdi_host.live.netns import check_unshare, inside_private_netns, netns_command, vcan_available
 from fdi_host.live.restart import Managed, RestartEvent, restart_schedule
 from fdi_host.live.sender import SendLog
@@ -39,6 +39,8 @@ examples:
   fdi-live --scenario fig6 --fault f4@5s:0.5 --table kin --out-dir out/live
   fdi-live --scenario straight --duration 12 --no-scenario-faults --fault f4@4s:0.5:end=8s --table kin
   fdi-live --transport current ...     (udp_multicast in this network namespace, no unshare)
+  fdi-live --scenario cornering --fault f4@5s:0.5 --table kin --bus-load 4000
+                                       (other ECUs' frames up to 4,000 frames/s: counted and ignored by the ECU)
   fdi-live --scenario fig6 --duration 21.5 --no-scenario-faults --fault f4@16s:0.5 --table kin
            --restart-ecu-at 1.5 --restart-sim-at 8.5 --sim-counter-start 9
                                        (ECU and simulator killed and restarted; the monitor reports both gaps)
@@ -75,6 +77,9 @@ def build_parser() -> argparse.ArgumentParser:
                     "needs about a second more before it sends)")
     ap.add_argument("--sim-counter-start", type=int, default=0, metavar="N",
                     help="alive counter of each message's first frame from a restarted simulator (0..14)")
+    ap.add_argument("--bus-load", type=float, default=0.0, metavar="HZ",
+                    help="other ECUs' frames (IDs not in the DBC) up to HZ frames/s in total, sent with the drive's "
+                    "(default 0: none; a full 500 kbit/s bus carries about 4,000)")
     ap.add_argument("--gap-threshold", type=float, default=0.25,
                     help="the monitor reports silences longer than this as gaps [s] (default 0.25)")
     return add_version(ap)
@@ -97,11 +102,20 @@ def _wait_ready(files: Sequence[Path], procs: Sequence[subprocess.Popen[bytes]],
 
 
 def sent_vs_received(send_log: Path, report: dict[str, Any]) -> list[tuple[int, int, int]]:
-    """(frame id, sent, received by the monitor) per simulated message."""
+    """(frame id, sent, received by the monitor) per simulated message (the DBC's messages: the monitor
+    counts other ECUs' frames only in total, see `other_ecus_sent_vs_received`)."""
     sent = Counter(SendLog.load(send_log).frame_id)
     msgs = (report.get("frames") or {}).get("messages", {})
     rec = {int(k, 16): int(v["received"]) for k, v in msgs.items()}
-    return [(fid, n, rec.get(fid, 0)) for fid, n in sorted(sent.items())]
+    return [(fid, n, rec.get(fid, 0)) for fid, n in sorted(sent.items()) if fid in rec]
+
+
+def other_ecus_sent_vs_received(send_log: Path, report: dict[str, Any]) -> tuple[int, int]:
+    """(other ECUs' frames sent, frames of unknown IDs the monitor received)."""
+    msgs = (report.get("frames") or {}).get("messages", {})
+    known = {int(k, 16) for k in msgs}
+    sent = sum(1 for fid in SendLog.load(send_log).frame_id if fid not in known)
+    return sent, int((report.get("frames") or {}).get("unknown_ids", 0))
 
 
 def _wait_origin(path: Path, sim: subprocess.Popen[bytes], timeout: float) -> float | None:
@@ -193,7 +207,7 @@ def run_here(args: argparse.Namespace, interface: str, channel: str) -> int:
     bus = ["--interface", interface, "--channel", channel]
     ecu_cmd = _py("fdi_host.live.ecu", *bus, "--table", args.table, "--log", str(out / "ecu.json"),
                   "--rx-log", str(out / "ecu_rx.log"), "--ready-file", str(out / "ecu.ready"), "--quiet",
-                  "--origin-file", str(out / "origin.txt"), "--realtime")
+                  "--origin-file", str(out / "origin.txt"), "--realtime", "--cpu-latency", "0")
     mon_cmd = _py("fdi_host.monitor.cli", *bus, "--table", args.table, "--truth", str(out / "truth.json"),
                   "--ecu-log", str(out / "ecu.json"), "--out-dir", str(out), "--grace", str(args.grace),
                   "--ready-file", str(out / "monitor.ready"), "--quiet",
@@ -208,7 +222,8 @@ def run_here(args: argparse.Namespace, interface: str, channel: str) -> int:
     if args.seed is not None:
         drive += ["--seed", str(args.seed)]
     sim_cmd = _py("fdi_host.cli", "live", *drive, "--out", str(out / "drive.blf"), "--truth",
-                  str(out / "truth.json"), "--send-log", str(out / "send.npz"))
+                  str(out / "truth.json"), "--send-log", str(out / "send.npz"),
+                  *(["--bus-load", str(args.bus_load)] if args.bus_load > 0.0 else []))
     # The restarted simulator sends the drive the first one recorded (drive.blf): the vehicle drove on, only
     # the sending process restarted; live_sim directly, without the simulator's imports, is back in ~1 s.
     sim_resume_cmd = _py("fdi_host.live.sim", *drive, "--resume", "--counter-start", str(args.sim_counter_start),
@@ -247,9 +262,13 @@ def run_here(args: argparse.Namespace, interface: str, channel: str) -> int:
         print("frames sent / received: not compared (a killed simulator writes no send log); see the monitor's "
               "frame table and gaps above")
     elif rp.exists() and (out / "send.npz").exists():
-        rows = sent_vs_received(out / "send.npz", json.loads(rp.read_text(encoding="utf-8")))
+        doc = json.loads(rp.read_text(encoding="utf-8"))
+        rows = sent_vs_received(out / "send.npz", doc)
         print("frames sent / received by the monitor: " + ", ".join(f"0x{i:03X} {s}/{r}" for i, s, r in rows))
-        print(f"lost in total: {sum(s - r for _, s, r in rows)}")
+        other_sent, other_rx = other_ecus_sent_vs_received(out / "send.npz", doc)
+        if other_sent:
+            print(f"other ECUs' frames sent / received by the monitor: {other_sent}/{other_rx}")
+        print(f"lost in total: {sum(s - r for _, s, r in rows) + other_sent - other_rx}")
     rc = max(sim_rc, ecu_rc, mon_rc)
     if rc != 0:
         print(f"fdi-live: exit codes sim {sim_rc}, ecu {ecu_rc}, monitor {mon_rc}", file=sys.stderr)

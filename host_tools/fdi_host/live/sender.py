@@ -110,7 +110,7 @@ def _send_loop(bus: can.BusABC, frames: Sequence[Frame], speed: float | None, st
                 time.sleep(wait)
             else:
                 log.max_behind = max(log.max_behind, -wait)
-        msg = can.Message(arbitration_id=f.frame_id, data=f.data, is_extended_id=False, dlc=len(f.data))
+        msg = can.Message(arbitration_id=f.frame_id, data=f.data, is_extended_id=f.frame_id > 0x7FF, dlc=len(f.data))
         log.wall.append(time.time())
         bus.send(msg)
         log.sim_t.append(rel)
@@ -121,7 +121,8 @@ def _send_loop(bus: can.BusABC, frames: Sequence[Frame], speed: float | None, st
 def resume_frames(frames: Sequence[Frame], t_from: float, counter_start: int,
                   db: RomoDatabase | None = None) -> list[Frame]:
     """The frames of a drive from drive time `t_from` on, each message's alive counter restarted at
-    `counter_start` (0..14) and its E2E CRC recomputed, as a restarted sender would send them."""
+    `counter_start` (0..14) and its E2E CRC recomputed, as a restarted sender would send them (frames of IDs
+    not in the DBC, other ECUs' traffic, as they are)."""
     if not 0 <= counter_start <= e2e.COUNTER_MAX:
         raise ValueError(f"counter start {counter_start} outside 0..{e2e.COUNTER_MAX}")
     db = db or RomoDatabase()
@@ -132,7 +133,10 @@ def resume_frames(frames: Sequence[Frame], t_from: float, counter_start: int,
         if f.timestamp < t_from:
             continue
         if f.frame_id not in data_ids:
-            data_ids[f.frame_id] = db.data_id(db.message_by_id(f.frame_id).name)
+            try:
+                data_ids[f.frame_id] = db.data_id(db.message_by_id(f.frame_id).name)
+            except KeyError:  # another ECU's frame (not in the DBC): sent as recorded
+                data_ids[f.frame_id] = None
         did = data_ids[f.frame_id]
         data = f.data
         if did is not None and len(data) >= 2:

@@ -7,6 +7,11 @@ offline replay of the same drive uses), the ground truth (``--truth``) and the s
 ``.npz``: per frame its time on the drive, wall-clock send time, ID and E2E counter, for latency
 measurements).
 
+Other ECUs' traffic (``--bus-load HZ``): frames of IDs the diagnosis does not subscribe to
+(`fdi_host.can.background`: a deterministic mix of cycle times, payload lengths 0..8, standard and extended
+IDs), sent by the same process in time order with the drive's, up to HZ frames/s in total (a full 500 kbit/s
+bus carries about 4,000); ``--out`` and ``--send-log`` then hold them too.
+
 Restart (``--resume``, used by ``fdi-live --restart-sim-at``): a simulator started while the drive is under
 way reads the drive's t = 0 from ``--origin-file`` (instead of writing it), simulates the same drive (same
 scenario, faults and seed: the same frames), and sends only the frames not yet due, at their times on the
@@ -25,7 +30,8 @@ from pathlib import Path
 
 import can
 
-from fdi_analysis.cli_common import EXIT_ERROR
+from fdi_analysis.cli.common import EXIT_ERROR
+from fdi_host.can import background
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.can.frame import Frame
 from fdi_host.can.logs import LOG_SUFFIXES, read_log, write_log
@@ -38,6 +44,7 @@ examples:
   fdi-sim live --scenario fig6 --fault f4@5s:0.5 --interface udp_multicast --channel 239.74.163.2
   fdi-sim live --scenario straight --duration 10 --speed 10 --out sent.blf --truth sent.truth.json
   fdi-sim live --scenario fig6 --interface socketcan --channel vcan0
+  fdi-sim live --scenario slalom --bus-load 4000     (other ECUs' frames up to 4,000 frames/s in total)
   fdi-sim live --scenario fig6 --resume --origin-file out/live/origin.txt --counter-start 9
       (a restarted simulator: joins the drive whose t = 0 is in origin.txt, counters restart at 9)
 
@@ -64,6 +71,10 @@ def build_parser() -> argparse.ArgumentParser:
                     "vehicle drove on, only the sender restarted) instead of simulating it again (seconds)")
     ap.add_argument("--counter-start", type=int, default=0, metavar="N",
                     help="with --resume: alive counter of every message's first frame (0..14, default 0)")
+    ap.add_argument("--bus-load", type=float, default=0.0, metavar="HZ",
+                    help="add other ECUs' frames (IDs not in the DBC) up to HZ frames/s in total (default 0: none)")
+    ap.add_argument("--bus-load-seed", type=int, default=background.DEFAULT_SEED,
+                    help="seed of the other ECUs' traffic")
     ap.add_argument("--realtime", action="store_true", help="SCHED_FIFO priority while sending (root)")
     ap.add_argument("--quiet", action="store_true", help="no progress bar")
     return ap
@@ -103,6 +114,11 @@ def _drive_frames(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Sequ
     drive = simulate_from_args(ap, args)
     result, plant, duration = drive.result, drive.plant, drive.duration
     frames = traffic.build_frames(result, RomoDatabase())
+    if args.bus_load > 0.0:
+        bg = background.for_drive(frames, args.bus_load, duration, args.bus_load_seed)
+        print(f"other ECUs' traffic: {len(bg)} frames ({len(bg) / duration:.0f}/s, "
+              f"{len({f.frame_id for f in bg})} IDs), {(len(frames) + len(bg)) / duration:.0f} frames/s in total")
+        frames = background.merge_frames(frames, bg)
     truth = args.truth or (args.out.with_suffix(".truth.json") if args.out else None)
     if truth is not None:
         print(f"wrote {write_truth(result, plant, duration, 0.0, not args.no_noise, truth)}")
@@ -124,6 +140,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         ap.error("--frames-from is for --resume (a restarted simulator joining a drive under way)")
     if args.frames_from is not None and (args.out is not None or args.truth is not None):
         ap.error("--frames-from sends a recorded drive: --out and --truth belong to the simulating run")
+    if args.frames_from is not None and args.bus_load > 0.0:
+        ap.error("--frames-from sends a recorded drive as it is (with its other ECUs' frames): no --bus-load")
+    if args.bus_load < 0.0:
+        ap.error("--bus-load must be >= 0 frames/s")
     if not 0 <= args.counter_start <= 14:
         ap.error("--counter-start must be in 0..14 (E2E profile 11 alive counter)")
     stop = StopFlag()

@@ -27,7 +27,7 @@ from typing import Any
 
 import can
 
-from fdi_analysis.cli_common import EXIT_ERROR, add_version, run, use_file_backend
+from fdi_analysis.cli.common import EXIT_ERROR, add_version, run, use_file_backend
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.ecu.records import DiagRecord, TableClasses
 from fdi_host.ecu.session import DIAG_ID, ORIGIN_LEAD, load_steps

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from fdi_analysis.cli_common import add_version, fail
+from fdi_analysis.cli.common import add_version, fail
 from fdi_host.ecu.bindings import TABLES
 from fdi_host.quality.report import markdown, write_json, write_markdown
 from fdi_host.quality.suite import CASE_SEEDS, DEFAULT_SIZES, QualityError, SuiteConfig, run_suite

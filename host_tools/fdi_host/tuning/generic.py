@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from fdi_analysis.export.fault_sizes import FaultSizes
+from fdi_analysis.export.fault_sizes import REACTION_WINDOW_S, FaultSizes
 from fdi_analysis.export.thresholds import Thresholds, with_generated
 from fdi_analysis.model import Model
 from fdi_analysis.model_loader import load_model
@@ -41,7 +41,7 @@ from fdi_host.sim.generic import GenericPlant, StepFault
 from fdi_host.tuning.calibrate import MARGIN, calibrate, first_alarm
 from fdi_host.tuning.sweep import grid, next_grid
 
-RESPONSE_S = 3.0  # a test reacts to a step fault when it raises a raw alarm within this time (as fault-sizes)
+RESPONSE_S = REACTION_WINDOW_S  # a test reacts to a step fault when it raises a raw alarm within this time
 SWEEP_LEAD_S = 12.0  # fault-free seconds of each sweep drive before the step (the warm-up, the filters settle)
 SWEEP_DECADES = 2.0  # the sweep starts at the fault's limit / 10^SWEEP_DECADES
 SIZES_MARKER = ("# ---- per-test sizes: written by `python -m fdi_host.tuning.generic fault-sizes`, "

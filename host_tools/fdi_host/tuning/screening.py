@@ -16,8 +16,10 @@ velocity offset in the tyre law's slip) the derivative at f = 0 overpredicts the
 required size by up to 1.6x, while the secant matches simulated step faults within 5 %
 (tests/analysis/test_sensitivity.py). The analytic derivative is what runs on board.
 
-A test practically detects fault j in a manoeuvre when FNR_j >= gate * MARGIN at a share of at least SHARE of
-the manoeuvre's operating points after its first WARMUP_S seconds (operating points where the test is not
+A test practically detects fault j in a manoeuvre when FNR_j >= gate * its margin at a share of at least SHARE of
+the manoeuvre's operating points, its margin being MARGIN or, for a slow generator, the factor it needs to cross
+the gate within DETECT_S of a step (1 / `residuals.evaluate.step_response` at DETECT_S: 1.67 for one filter
+stage, 8.5 for two), after its first WARMUP_S seconds (operating points where the test is not
 evaluable, outside its domain, count as not detecting). The result is the quantitative counterpart of the
 structural fault signature that the practical selection works on (`fdi_analysis.selection.practical`).
 """
@@ -44,6 +46,7 @@ from fdi_analysis.residuals.evaluate import (
     in_domain,
     initial_values,
     node_signals,
+    step_response,
 )
 from fdi_analysis.residuals.generator import XHAT, Generator
 from fdi_analysis.residuals.observer import ObserverReference
@@ -51,7 +54,7 @@ from fdi_analysis.residuals.reasons import NotRealizableError
 from fdi_analysis.residuals.sensitivity import J_FLOOR, faulty_residual
 from fdi_analysis.residuals.signals import Node
 from fdi_analysis.residuals.solvability import Solver
-from fdi_analysis.selection_practical import MARGIN, CandidateScreen, FaultScreen
+from fdi_analysis.selection.practical import DETECT_S, MARGIN, CandidateScreen, FaultScreen
 from fdi_host.tuning.calibrate import calibrate
 
 FloatArray = NDArray[np.float64]
@@ -247,6 +250,7 @@ def screen_candidate(setup: ScreenSetup, c: Candidate, solver: Solver, solver_f:
         return CandidateScreen(c.label, " ".join(eqs), g.faults, math.nan, g.min_speed, 0, {},
                                "never evaluable on the calibration drives")
     sigma = calibrate(segs, setup.gate).sigma
+    margin = max(setup.margin, 1.0 / max(step_response(g, DETECT_S, setup.design), 1e-6))
     sens_fn = _sensitivity_fn(model, g, solver_f)
     steps = {f: setup.sizes.get(f, 1.0) for f in g.faults}
     per: dict[str, dict[str, tuple[float, float]]] = {f: {} for f in g.faults}
@@ -267,7 +271,7 @@ def screen_candidate(setup: ScreenSetup, c: Candidate, solver: Solver, solver_f:
             for f in up:
                 effect = np.minimum(np.abs(up[f][keep]), np.abs(down[f][keep])) * setup.sizes.get(f, 0.0)
                 fnr = np.where(np.isfinite(effect), effect / sigma, 0.0)
-                hits[f] += int(np.count_nonzero(fnr >= setup.gate * setup.margin))
+                hits[f] += int(np.count_nonzero(fnr >= setup.gate * margin))
                 fnrs[f].append(fnr)
         for f in g.faults:
             allf = np.concatenate(fnrs[f]) if fnrs[f] else np.zeros(0)
@@ -275,7 +279,7 @@ def screen_candidate(setup: ScreenSetup, c: Candidate, solver: Solver, solver_f:
     per_fault = {f: FaultScreen({s: v[0] for s, v in d.items()}, {s: v[1] for s, v in d.items()})
                  for f, d in per.items()}
     return CandidateScreen(c.label, " ".join(eqs), g.faults, sigma, g.min_speed, operation_count(g), per_fault,
-                           evaluable=evaluable)
+                           evaluable=evaluable, margin=round(margin, 3))
 
 
 # ------------------------------------------------------------------------------------------ the whole pool

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from fdi_analysis.export.fault_sizes import FaultSizes
+from fdi_analysis.export.fault_sizes import REACTION_WINDOW_S, FaultSizes
 from fdi_analysis.residuals.evaluate import FilterDesign, evaluable_segments
 from fdi_analysis.residuals.generator import Generator
 from fdi_host.tuning.calibrate import first_alarm
@@ -35,7 +35,7 @@ FloatArray = NDArray[np.float64]
 
 MANTISSAS = (1.0, 1.5, 2.0, 3.0, 5.0, 7.0)
 START = 6.0  # s, first fault onset (cornering is in steady state from 5 s)
-ON, OFF = 3.0, 2.0  # s per window
+ON, OFF = REACTION_WINDOW_S, 2.0  # s per window
 CHUNK = 6  # windows per simulated drive
 MAX_DOWN = 3  # chunks swept below the smallest size at most (3 decades)
 CONFIRM_SEED_OFFSETS = (100, 200, 300)  # the confirmation also uses seed + each of these for every sweep seed

@@ -30,7 +30,7 @@ int main(void)
     c.clear_count = 100U;
     c.warmup_steps = 320U;
     c.mode = FDI_ISO_EXONERATION;
-    c.iso_settle_steps = 300U;
+    c.noise_allowance = 3.0f;
     c.episode_clear_steps = 300U;
     if ((fdi_table_check(&fdi_kin_table) == FDI_OK) && (fdi_diag_init(&d, &c) == FDI_OK) &&
         (fdi_diag_step(&d, &in, ROMO_SIGM_ALL) == FDI_OK) &&

@@ -71,14 +71,14 @@ static fdi_diag_config_t config(const fdi_table_t *table, uint16_t warmup)
     c.gen_param[FDI_ROMO_KIN_PARAM_D_Y] = (float)VEH_DY;
     c.gen_param[2] = 0.0f;
     c.gen_param[3] = 0.0f;
-    c.sensitivities = FDI_DIAG_SENS_OFF;
+    c.sensitivities = false;
     c.cusum_k = 1.5f; /* the values of tests/fw/test_fdi_diag.c */
     c.cusum_h = 150.0f;
     c.set_count = 10U;
     c.clear_count = 100U;
     c.warmup_steps = warmup;
     c.mode = FDI_ISO_EXONERATION;
-    c.iso_settle_steps = 300U;
+    c.noise_allowance = 3.0f;
     c.episode_clear_steps = 300U;
     return c;
 }

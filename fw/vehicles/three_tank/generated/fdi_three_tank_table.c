@@ -20,16 +20,21 @@ static const char *const three_tank_fault_names[10] = {
 };
 
 static const fdi_test_desc_t three_tank_tests[5] = {
-    {1U, &fdi_three_tank_generators[0], 0x00000193U, THREE_TANK_SIGM_U | THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2,
-     5.0f, 8.468e-12f, "T1; V12; P; S1; S2; D1; measured u, y1, y2"},
-    {2U, &fdi_three_tank_generators[1], 0x00000368U, THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
-     5.0f, 1.069e-11f, "T3; V23; V3; S2; S3; D3; measured y2, y3"},
-    {3U, &fdi_three_tank_generators[2], 0x000003B4U, THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
-     5.0f, 8.352e-12f, "T2; V12; V23; S1; S2; S3; D2; measured y1, y2, y3"},
-    {6U, &fdi_three_tank_generators[3], 0x000003A7U, THREE_TANK_SIGM_U | THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
-     5.0f, 1.815e-11f, "T1; T2; V23; P; S1; S2; S3; D1; D2; measured u, y1, y2, y3"},
-    {9U, &fdi_three_tank_generators[4], 0x000003DCU, THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
-     5.0f, 1.781e-11f, "T2; T3; V12; V3; S1; S2; S3; D2; D3; measured y1, y2, y3"},
+    {.gen = &fdi_three_tank_generators[0], .interpretation = "T1; V12; P; S1; S2; D1; measured u, y1, y2",
+     .mso_id = 1U, .fault_mask = 0x00000193U, .input_mask = THREE_TANK_SIGM_U | THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2,
+     .gate = 5.0f, .variance = 8.468e-12f, .response_steps = 43U},
+    {.gen = &fdi_three_tank_generators[1], .interpretation = "T3; V23; V3; S2; S3; D3; measured y2, y3",
+     .mso_id = 2U, .fault_mask = 0x00000368U, .input_mask = THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
+     .gate = 5.0f, .variance = 1.069e-11f, .response_steps = 43U},
+    {.gen = &fdi_three_tank_generators[2], .interpretation = "T2; V12; V23; S1; S2; S3; D2; measured y1, y2, y3",
+     .mso_id = 3U, .fault_mask = 0x000003B4U, .input_mask = THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
+     .gate = 5.0f, .variance = 8.352e-12f, .response_steps = 43U},
+    {.gen = &fdi_three_tank_generators[3], .interpretation = "T1; T2; V23; P; S1; S2; S3; D1; D2; measured u, y1, y2, y3",
+     .mso_id = 6U, .fault_mask = 0x000003A7U, .input_mask = THREE_TANK_SIGM_U | THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
+     .gate = 5.0f, .variance = 1.815e-11f, .response_steps = 43U},
+    {.gen = &fdi_three_tank_generators[4], .interpretation = "T2; T3; V12; V3; S1; S2; S3; D2; D3; measured y1, y2, y3",
+     .mso_id = 9U, .fault_mask = 0x000003DCU, .input_mask = THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
+     .gate = 5.0f, .variance = 1.781e-11f, .response_steps = 43U},
 };
 
 /* Row j: bit i set when test i is sensitive to fault j. */
@@ -103,4 +108,5 @@ const fdi_table_t fdi_three_tank_table = {
     three_tank_iso_class,
     three_tank_test_size,
     2.0f,
+    1.5f,
 };

@@ -9,7 +9,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from fdi_analysis.cli_common import add_version, run, use_file_backend
+from fdi_analysis.cli.common import add_version, run, use_file_backend
 from fdi_analysis.export.fault_sizes import FaultSizesError
 from fdi_analysis.export.table import ExportError
 from fdi_analysis.model import ModelError

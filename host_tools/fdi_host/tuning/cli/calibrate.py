@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from fdi_analysis.cli_common import EXIT_ERROR
+from fdi_analysis.cli.common import EXIT_ERROR
 
 EXAMPLE = ("example: fdi-tune calibrate analysis/models/romo_grouped.toml "
            "--thresholds analysis/models/romo_thresholds.toml --scenarios cornering slalom straight")
@@ -56,7 +56,7 @@ def register(sub: Any) -> None:
         "grid at which the test raises a raw alarm (gate or CUSUM, inside its operating domain) within 3 s of "
         "the step (the drive as the ECU sees it, as for calibrate); the stated size is the next grid value. "
         "Written below a marker line of the fault-size file as [per_test.<fault>] tables (the hand-written "
-        "[sizes] and [limits] above are kept). Pairs that "
+        "[requirement] and [limits] above are kept). Pairs that "
         "the sweep leaves without a stated size are then swept in the other scenarios, each driven whole with the "
         "fault from 4 s on, one drive per size (up to the fault's [limits] value, the limit included), and "
         "written as [per_test_scenario.<fault>] tables (scenario, size); pairs no scenario detects within the "
@@ -66,7 +66,7 @@ def register(sub: Any) -> None:
     )
     q.add_argument("model", type=Path, help="model file (.toml)")
     q.add_argument("--thresholds", type=Path, required=True, help="thresholds file (gate, sigmas)")
-    q.add_argument("--sizes", type=Path, required=True, help="fault-size file with [sizes] and [limits]")
+    q.add_argument("--sizes", type=Path, required=True, help="fault-size file with [requirement] and [limits]")
     q.add_argument("--scenario", default=SWEEP_SCENARIO, help="fault-free scenario the faults are injected in")
     q.add_argument("--seeds", type=int, nargs="+", default=list(SWEEP_SEEDS),
                    help="noise seeds of the sweep drives; an alarm counts when every seed alarms (default 777 778)")
@@ -175,7 +175,7 @@ def run_sizes(args: argparse.Namespace) -> int:
                   f"--seeds {' '.join(map(str, args.seeds))} (CAN frames as the ECU's steps see them)\n"
                   f"steps of {sweep.ON:g} s (then {sweep.OFF:g} s off) "
                   f"from {sweep.START:g} s, "
-                  "sizes from [sizes] / 10 up to [limits] on the grid 1, 1.5, 2, 3, 5, 7 x 10^k;\n"
+                  "sizes from [requirement] / 10 up to [limits] on the grid 1, 1.5, 2, 3, 5, 7 x 10^k;\n"
                   "raw alarm of the diagnoser with every seed (|r| > gate sigma or CUSUM k = 1.5, h = 150 from the "
                   "onset, sigma of "
                   f"{args.thresholds.as_posix()}) inside the test's operating domain;\n"

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from fdi_analysis.cli_common import EXIT_ERROR
+from fdi_analysis.cli.common import EXIT_ERROR
 
 if TYPE_CHECKING:
     from fdi_host.can.frame import Frame

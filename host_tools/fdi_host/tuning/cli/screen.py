@@ -44,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
     from fdi_analysis.model_loader import load_model
     from fdi_analysis.residuals.evaluate import FilterDesign
     from fdi_analysis.residuals.selected import realizable
-    from fdi_analysis.selection_practical import MARGIN, SHARE, Screening
+    from fdi_analysis.selection.practical import MARGIN, SHARE, Screening
     from fdi_host.tuning.drives import fault_free_drives, observer_reference
     from fdi_host.tuning.screening import ScreenSetup, screen
 

@@ -1,6 +1,6 @@
 """Exact minimum test selection as SAT (count) and incremental SAT (cost) on a symmetry-reduced code model.
 
-The model is the code assignment of `selection_exact` (k selected tests; every item gets the k-bit code of
+The model is the code assignment of `selection.exact` (k selected tests; every item gets the k-bit code of
 the tests sensitive to it; required pairs must be separated), written as CNF and given to CaDiCaL
 (PyPI `python-sat`):
 
@@ -50,7 +50,7 @@ from typing import cast
 import numpy as np
 import numpy.typing as npt
 
-from fdi_analysis.selection_exact import Problem, automorphisms, search_order
+from fdi_analysis.selection.exact import Problem, automorphisms, search_order
 
 try:  # optional: without python-sat the exact stages fall back to the code search (and may stay unproven)
     from pysat.solvers import Solver
@@ -309,9 +309,10 @@ def _code_literals(model_bits: list[int], code: int, k: int) -> list[int]:
 
 
 @dataclass(frozen=True)
-class Prepared:
-    """What does not depend on k: the classes, the rows, the diagram and the row permutations of the
-    family automorphisms used for lex-leader constraints."""
+class SatProblem:
+    """A reduced problem with the part of its SAT encoding that does not depend on k: the interchangeable
+    classes, the rows, the diagram and the row permutations of the family automorphisms used for lex-leader
+    constraints (`build_model` adds the k test slots)."""
 
     problem: Problem
     with_costs: bool
@@ -321,20 +322,20 @@ class Prepared:
     row_perms: tuple[tuple[int, ...], ...]
 
 
-def prepare(problem: Problem, with_costs: bool, min_class: int = MIN_CLASS) -> Prepared:
+def sat_problem(problem: Problem, with_costs: bool, min_class: int = MIN_CLASS) -> SatProblem:
     classes = tuple(tuple(c) for c in interchangeable_classes(problem, with_costs))
     rows = make_rows(problem, classes, min_class)
     values = problem.costs if with_costs else [0] * len(problem.columns)
     diagram = build_diagram(rows, problem.columns, values)
-    return Prepared(problem, with_costs, classes, rows, diagram, _row_permutations(problem, rows, classes,
-                                                                                   with_costs))
+    return SatProblem(problem, with_costs, classes, rows, diagram, _row_permutations(problem, rows, classes,
+                                                                                     with_costs))
 
 
-def build_model(prep: Prepared, k: int) -> CodeModel:
+def build_model(sp: SatProblem, k: int) -> CodeModel:
     """The CNF for "at most k tests" (exactly k test slots; a column may repeat). ValueError if k < 1."""
     if k < 1:
         raise ValueError("k must be at least 1")
-    problem, rows = prep.problem, prep.rows
+    problem, rows = sp.problem, sp.rows
     cnf = _Cnf()
     ns = len(rows.singles)
     single_bits = [[cnf.var() for _ in range(ns)] for _ in range(k)]
@@ -357,9 +358,9 @@ def build_model(prep: Prepared, k: int) -> CodeModel:
         total = cnf.counter(list(class_codes[c].values()), len(cls) + 1)
         cnf.add([total[len(cls) - 1]])
         cnf.add([-total[len(cls)]])
-    leaf_lits = [_diagram_clauses(cnf, prep.diagram, rows, row_lits[t]) for t in range(k)]
+    leaf_lits = [_diagram_clauses(cnf, sp.diagram, rows, row_lits[t]) for t in range(k)]
     _pair_clauses(cnf, problem, rows, k, single_bits, class_codes, method_a)
-    _symmetry_clauses(cnf, rows, k, row_lits, prep.row_perms)
+    _symmetry_clauses(cnf, rows, k, row_lits, sp.row_perms)
     return CodeModel(problem, k, rows, cnf, single_bits, class_codes, leaf_lits)
 
 
@@ -674,28 +675,29 @@ class PendingCost:
 
 
 class SatSelector:
-    """Exact decisions on one reduced problem; the k-independent preparation is cached."""
+    """Exact decisions on one reduced problem; its k-independent `SatProblem`s are cached."""
 
     def __init__(self, problem: Problem, min_class: int = MIN_CLASS) -> None:
         if not HAVE_SAT:
             raise SatUnavailableError("python-sat is not installed")
         self.problem = problem
         self.min_class = min_class
-        self._prepared: dict[tuple[bool, bool], Prepared] = {}
+        self._sat_problems: dict[tuple[bool, bool], SatProblem] = {}
         self._cost_of = dict(zip(problem.columns, problem.costs, strict=True))
 
-    def _prep(self, with_costs: bool, k: int) -> Prepared:
-        """Preparation for k tests: count rows only while 2^k codes per class stay small."""
+    def _sat_problem(self, with_costs: bool, k: int) -> SatProblem:
+        """The encoding's k-independent part for k tests: count rows only while 2^k codes per class stay
+        small."""
         key = (with_costs, k <= MAX_CLASS_K)
-        if key not in self._prepared:
+        if key not in self._sat_problems:
             min_class = self.min_class if key[1] else self.problem.n_items + 1
-            self._prepared[key] = prepare(self.problem, with_costs, min_class)
-        return self._prepared[key]
+            self._sat_problems[key] = sat_problem(self.problem, with_costs, min_class)
+        return self._sat_problems[key]
 
     def feasible(self, k: int, deadline: float) -> list[int] | None:
         """Indices of distinct columns of a selection with at most k columns, or None when none exists.
         SatTimeoutError at the deadline."""
-        model = build_model(self._prep(False, k), k)
+        model = build_model(self._sat_problem(False, k), k)
         clauses = model.cnf.clauses
         result = _in_child(lambda _report: _solve_cnf(clauses), deadline)
         if not result.finished:
@@ -713,13 +715,13 @@ class SatSelector:
 
     def cheapest_start(self, k: int, upper: int) -> PendingCost:
         """`cheapest` started in the background (model built in the child); `collect` or `cancel` it."""
-        prepared = self._prepared.get((True, k <= MAX_CLASS_K))
+        cached = self._sat_problems.get((True, k <= MAX_CLASS_K))
         cost_of = self._cost_of
         problem = self.problem
         min_class = self.min_class if k <= MAX_CLASS_K else problem.n_items + 1
 
         def work(report: Callable[[object], None]) -> object:
-            model = build_model(prepared or prepare(problem, True, min_class), k)
+            model = build_model(cached or sat_problem(problem, True, min_class), k)
             bound = _cost_bound(model, upper)
             limit = upper - 1
             with Solver(name=SAT_SOLVER, bootstrap_with=model.cnf.clauses) as solver:

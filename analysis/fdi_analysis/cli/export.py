@@ -67,6 +67,7 @@ def generate_all(model_path: Path, thresholds_path: Path, out: Path, name: str, 
                  report_dir: Path | None = None) -> dict[str, str]:
     """The table and the generated residual generators of the optimal selection among realizable MSOs (and the
     generator report in `report_dir`)."""
+    from fdi_analysis.residuals.evaluate import FilterDesign, response_time
     from fdi_analysis.residuals.selected import selected_generators
 
     model = load_model(model_path)
@@ -77,7 +78,10 @@ def generate_all(model_path: Path, thresholds_path: Path, out: Path, name: str, 
                                       selection=thresholds.selection, sensitivities=True)
     names = VehicleNames.of_table(name)
     top = banner(command)
-    header, source = emit_table.render_file(emit_table.table_file(model, tests, thresholds, names, top, sizes=sizes))
+    design = FilterDesign(*thresholds.design[:3])
+    response = [response_time(g, design) for g in gens]
+    header, source = emit_table.render_file(emit_table.table_file(model, tests, thresholds, names, top, sizes=sizes,
+                                                                  response_s=response))
     if report_dir is not None:
         sigmas = [math.sqrt(thresholds.generated[" ".join(g.equations)]) for g in gens]
         rows = report.rows(gens, sigmas, thresholds.gate, sizes, sizes.limits if sizes is not None else {})

@@ -12,7 +12,7 @@ from typing import Any
 from fdi_analysis.export.thresholds import with_selection
 from fdi_analysis.model_loader import load_model
 from fdi_analysis.plots import plot_practical_isolability, save
-from fdi_analysis.selection_practical import (
+from fdi_analysis.selection.practical import (
     PracticalSelection,
     Screening,
     Unmet,
@@ -57,7 +57,8 @@ def run(args: argparse.Namespace) -> int:
     cands = scr.practical_candidates()
     rejected = [c for c in scr.candidates if c.rejected]
     print(f"{model.name}: {len(cands)} screened candidates ({len(rejected)} without a generator), required sizes "
-          f"of {args.screening}, FNR >= {scr.gate:g} x {scr.margin:g} at {scr.share:.0%} of the operating points")
+          f"of {args.screening}, FNR >= {scr.gate:g} x {scr.margin:g} (more where a slow generator needs it to alarm "
+          f"in time) at {scr.share:.0%} of the operating points")
     sel = select_practical(cands, faults, scr.scenarios, args.solver)
     print(f"selected {len(sel.tests)} tests, cost {sel.cost} (optimal, {sel.solver}):")
     by_label = {c.label: c for c in scr.candidates}

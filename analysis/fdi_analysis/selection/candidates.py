@@ -1,11 +1,16 @@
-"""Candidate tests for models too large to enumerate: one MTES per distinct fault support.
+"""Candidate tests for the selection, numbered in order of cost (unknowns), then size, then equations.
 
-The MTES search (`fdi_analysis.mso.mtes`) visits a number of nodes that grows with the number of distinct
-fault supports, not with the number of MSO sets (the full vertical ROMO model has about 1.6e9 MSO sets and
-215,186 MTES). Each distinct fault support is represented by its cheapest MTES (fewest unknowns, then
-fewest equations); candidates are numbered MTES1, MTES2, ... in that order. `full_isolability_reached`
-tells whether these candidates isolate every pair that the whole model isolates (structural isolability
-by DM decompositions, no enumeration).
+- MSO candidates (`mso_candidates`): one MSO set per distinct fault signature, the smallest. The MSO search
+  aggregates every MSO set into its fault-signature table without storing the sets; the cheapest MSO of each
+  signature represents it (tests with one fault set clear the same fault-matrix elements). Numbered MSO1,
+  MSO2, ...
+- MTES candidates (`mtes_candidates`), for models too large to enumerate: one MTES per distinct fault
+  support. The MTES search (`fdi_analysis.mso.mtes`) visits a number of nodes that grows with the number of
+  distinct fault supports, not with the number of MSO sets (the full vertical ROMO model has about 1.6e9 MSO
+  sets and 215,186 MTES). Each distinct fault support is represented by its cheapest MTES (fewest unknowns,
+  then fewest equations); numbered MTES1, MTES2, ... `full_isolability_reached` tells whether these
+  candidates isolate every pair that the whole model isolates (structural isolability by DM decompositions,
+  no enumeration).
 """
 
 from __future__ import annotations
@@ -13,10 +18,24 @@ from __future__ import annotations
 import numpy as np
 
 from fdi_analysis.fault_matrix import Candidate
-from fdi_analysis.mso import bits, isolability, isolability_from_signatures, mtes
+from fdi_analysis.mso import MsoSummary, bits, find_msos, isolability, isolability_from_signatures, mtes
 from fdi_analysis.mso.results import MtesResult
 from fdi_analysis.structure import Structure
 from fdi_analysis.summary import require_redundancy
+
+
+def candidates_from_summary(summary: MsoSummary) -> list[Candidate]:
+    raw = [Candidate(equations=e.smallest, faults=e.faults, cost=e.smallest_unknowns) for e in summary.signatures]
+    raw.sort(key=lambda t: (t.cost, t.equations.bit_count(), t.equations))
+    return [Candidate(t.equations, t.faults, t.cost, label=f"MSO{k + 1}") for k, t in enumerate(raw)]
+
+
+def mso_candidates(st: Structure, workers: int = 2, progress: bool = True) -> tuple[MsoSummary, list[Candidate]]:
+    require_redundancy(st)
+    summary = find_msos(st, workers=workers, progress=progress)
+    if not summary.complete:
+        raise KeyboardInterrupt
+    return summary, candidates_from_summary(summary)
 
 
 def candidates_from_mtes(st: Structure, result: MtesResult) -> list[Candidate]:

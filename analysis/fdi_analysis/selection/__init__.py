@@ -5,8 +5,8 @@
 - `optimal`: the fewest tests that reach the same fault matrix as all candidates together, ties broken by
   the smallest total cost, solved exactly in two stages (minimum count, then minimum cost at that count)
   by bounds, local-search incumbents and an exact decision: SAT (count) and incremental SAT (cost) on a
-  symmetry-reduced code model (`selection_sat`, needs python-sat), or without python-sat the
-  code-assignment search of `selection_exact` (slower; more often "not proven" at the time limit).
+  symmetry-reduced code model (`selection.sat`, needs python-sat), or without python-sat the
+  code-assignment search of `selection.exact` (slower; more often "not proven" at the time limit).
 
 Both only need one candidate per distinct fault set: tests with the same fault set clear the same fault
 matrix elements, so the cheapest represents them all (`cheapest_per_signature`).
@@ -21,9 +21,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from fdi_analysis import selection_sat
 from fdi_analysis.fault_matrix import Candidate, Method, distinguished_pairs, fault_matrix
-from fdi_analysis.selection_exact import (
+from fdi_analysis.selection import sat
+from fdi_analysis.selection.exact import (
     BoolMatrix,
     CodeSearch,
     IntArray,
@@ -101,7 +101,7 @@ def optimal(tests: Sequence[Candidate], nf: int, method: Method, time_limit_s: f
     Stage 1 (count): lower bound from `root_lower_bound`, incumbents from greedy and a weighted local
     search, then the exact code search decides k = LB, LB+1, ... until one is feasible; each infeasible k
     raises the proven bound. Stage 2 (cost): branch and bound at the optimal count. See
-    `selection_exact` for the algorithm and why it is exact. If `time_limit_s` runs out the best
+    `selection.exact` for the algorithm and why it is exact. If `time_limit_s` runs out the best
     selection found is returned with `proven=False` and the proven `lower_bound` on the count.
     """
     deadline = time.monotonic() + time_limit_s
@@ -186,7 +186,7 @@ def _count_stage(problem: Problem, cover: BoolMatrix, costs: IntArray, best: lis
         try:
             if found is None:
                 found = exact.feasible(lb, deadline)
-        except (SearchTimeoutError, selection_sat.SatTimeoutError):
+        except (SearchTimeoutError, sat.SatTimeoutError):
             break
         if found is None:
             lb += 1
@@ -227,13 +227,13 @@ def _cost_stage(problem: Problem, cover: BoolMatrix, costs: IntArray, best: list
 
 
 class _ExactSolver:
-    """The exact decisions: SAT (`selection_sat`) when python-sat is installed, else the code search."""
+    """The exact decisions: SAT (`selection.sat`) when python-sat is installed, else the code search."""
 
     def __init__(self, problem: Problem) -> None:
         self.problem = problem
-        self.sat = selection_sat.SatSelector(problem) if selection_sat.HAVE_SAT else None
+        self.sat = sat.SatSelector(problem) if sat.HAVE_SAT else None
         self.search: CodeSearch | None = None
-        self.pending: selection_sat.PendingCost | None = None
+        self.pending: sat.PendingCost | None = None
 
     def feasible(self, k: int, deadline: float) -> list[int] | None:
         """A selection with at most k columns, or None when none exists (time-outs raise)."""

@@ -1,6 +1,6 @@
 """Exact minimum test selection: reduction, bounds, symmetry and a code-assignment search.
 
-(`selection_sat` decides the same questions with a SAT solver on the same code model and is used when
+(`selection.sat` decides the same questions with a SAT solver on the same code model and is used when
 python-sat is installed; the search here is the pure-Python fallback and the reference it is tested
 against.)
 

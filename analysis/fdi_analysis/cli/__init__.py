@@ -1,23 +1,20 @@
-"""`fdi-analyze`: the command line of the offline analysis. One module per subcommand (cli_*.py)."""
+"""`fdi-analyze`: the command line of the offline analysis. One module per subcommand (report, mso, select,
+practical, export, convert); `common` is what every command line of the project shares (the `fdi_host` programs
+import it too).
+
+The subcommands are imported when `main` builds the parser, not with this package: importing
+`fdi_analysis.cli.common` runs this file first, and a host program's start must not load the analysis (sympy,
+the residual synthesis, the C export: about a second).
+"""
 
 from __future__ import annotations
 
 import argparse
-import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from fdi_analysis import cli_convert, cli_export, cli_mso, cli_practical, cli_report, cli_select
-from fdi_analysis.cli_common import add_version, run, use_file_backend
-from fdi_analysis.export.fault_sizes import FaultSizesError
-from fdi_analysis.export.table import ExportError
-from fdi_analysis.model import ModelError
-from fdi_analysis.residuals.reasons import NotRealizableError
-from fdi_analysis.residuals.selected import SelectionError
+from fdi_analysis.cli.common import add_version, run, use_file_backend
 from fdi_analysis.resources import model_file, shipped_models
-from fdi_analysis.structure import StructureError
-
-SUBCOMMANDS = (cli_report, cli_mso, cli_select, cli_practical, cli_export, cli_convert)
 
 EPILOG = """examples:
   fdi-analyze report analysis/models/romo_quasistatic.toml -o out/romo
@@ -39,13 +36,22 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     add_version(parser)
+    from fdi_analysis.cli import convert, export, mso, practical, report, select
+
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for mod in SUBCOMMANDS:
+    for mod in (report, mso, select, practical, export, convert):
         mod.register(sub)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    from fdi_analysis.export.fault_sizes import FaultSizesError
+    from fdi_analysis.export.table import ExportError
+    from fdi_analysis.model import ModelError
+    from fdi_analysis.residuals.reasons import NotRealizableError
+    from fdi_analysis.residuals.selected import SelectionError
+    from fdi_analysis.structure import StructureError
+
     parser = build_parser()
     args = parser.parse_args(argv)
     if isinstance(getattr(args, "model", None), Path):
@@ -54,6 +60,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     return run("fdi-analyze", lambda: int(args.func(args)),
                (ModelError, StructureError, ExportError, FaultSizesError, SelectionError, NotRealizableError))
 
-
-if __name__ == "__main__":
-    sys.exit(main())

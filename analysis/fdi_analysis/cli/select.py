@@ -10,8 +10,6 @@ from typing import Any
 
 import numpy as np
 
-from fdi_analysis.candidates import mso_candidates
-from fdi_analysis.candidates_mtes import full_isolability_reached, mtes_candidates
 from fdi_analysis.fault_matrix import Method, fault_matrix, signature_matrix
 from fdi_analysis.interpretation import interpret
 from fdi_analysis.model import Model
@@ -20,6 +18,7 @@ from fdi_analysis.mso import bits
 from fdi_analysis.plots import plot_fault_matrix, plot_selected_faults, save
 from fdi_analysis.residuals.reasons import Reason
 from fdi_analysis.selection import Selection, greedy, optimal
+from fdi_analysis.selection.candidates import full_isolability_reached, mso_candidates, mtes_candidates
 
 EXAMPLE = (
     "examples:\n  fdi-analyze select analysis/models/romo_grouped.toml -o out/grouped\n"

@@ -1,0 +1,249 @@
+/*
+ * test_fdi_exoneration.c - the diagnoser's on-line exoneration rule (fw/include/fdi_diag.h) on a hand-made
+ * table whose two generators output their residual and sensitivities straight from the frame, so every quantity
+ * of the rule is set by the test:
+ *   test 0 sees faults a (bit 0) and b (bit 1), r0 = frame[0], d r0 / d a = frame[1], d r0 / d b = frame[2];
+ *   test 1 sees fault b only,                   r1 = frame[3], d r1 / d b = frame[4];
+ *   test 2 sees fault a only,                   r2 = frame[5], d r2 / d a = frame[6].
+ * All have sigma 1 and gate 5; the table's sensitivity margin is 1.5 and the response time 20 steps (+ the
+ * evaluators' set count of 2). With test 0 in alarm at a settled residual R and test 1 quiet, the alarms imply
+ * b >= (R - 3) / |d r0 / d b| (noise allowance 3 sigma), and test 1 clears b when |d r1 / d b| times that size
+ * reaches 1.5 * 5 = 7.5 for 10 steps (0.1 s) in a row. Test 2 stays quiet and weak (d r2 / d a = 0.1) unless a
+ * case says otherwise.
+ */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cmocka.h>
+
+#include "fdi_diag.h"
+
+#define RESP 20U
+#define SET 2U
+
+static fdi_status_t gen0_step(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
+                              float *sens)
+{
+    (void)g;
+    (void)par;
+    *r = reset ? 0.0f : in->value[0];
+    if (sens != NULL)
+    {
+        sens[0] = in->value[1];
+        sens[1] = in->value[2];
+    }
+    return FDI_OK;
+}
+
+static fdi_status_t gen1_step(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
+                              float *sens)
+{
+    (void)g;
+    (void)par;
+    *r = reset ? 0.0f : in->value[3];
+    if (sens != NULL)
+    {
+        sens[0] = in->value[4];
+    }
+    return FDI_OK;
+}
+
+static fdi_status_t gen2_step(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
+                              float *sens)
+{
+    (void)g;
+    (void)par;
+    *r = reset ? 0.0f : in->value[5];
+    if (sens != NULL)
+    {
+        sens[0] = in->value[6];
+    }
+    return FDI_OK;
+}
+
+static const fdi_gen_desc_t gen0 = {"t0", gen0_step, NULL, 0x07U, 0x3U, 0U, 0U};
+static const fdi_gen_desc_t gen1 = {"t1", gen1_step, NULL, 0x18U, 0x2U, 0U, 0U};
+static const fdi_gen_desc_t gen2 = {"t2", gen2_step, NULL, 0x60U, 0x1U, 0U, 0U};
+static const fdi_test_desc_t tests[3] = {
+    {&gen0, "t0", 1U, 0x3U, 0x07U, 5.0f, 1.0f, RESP},
+    {&gen1, "t1", 2U, 0x2U, 0x18U, 5.0f, 1.0f, RESP},
+    {&gen2, "t2", 3U, 0x1U, 0x60U, 5.0f, 1.0f, RESP},
+};
+static const char *const signal_names[7] = {"r0", "s0a", "s0b", "r1", "s1b", "r2", "s2a"};
+static const char *const fault_names[2] = {"a", "b"};
+static const uint32_t signature[2] = {0x5U, 0x3U};
+static const uint32_t iso_class[2] = {0x1U, 0x2U};
+static const float test_size[2 * 3] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f}; /* no reaction sizes: on-line rule */
+static const fdi_table_t table = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f, 0.7071f, 2.0f}, 7U, 2U, 3U, signal_names,
+                                  fault_names, tests, signature, iso_class, test_size, 2.0f, 1.5f};
+static float s2a = 0.1f; /* test 2's sensitivity to a (weak unless a case raises it) */
+static float r1_now = 0.0f; /* test 1's residual (quiet unless a case raises it) */
+
+static void init(fdi_diag_t *d, fdi_iso_mode_t mode)
+{
+    fdi_diag_config_t c;
+    assert_int_equal(fdi_diag_config_default(&c, &table), FDI_OK);
+    c.set_count = (uint16_t)SET;
+    c.clear_count = 1U;
+    c.mode = mode;
+    c.episode_clear_steps = 5U;
+    assert_int_equal(c.noise_allowance, 3.0f);
+    assert_int_equal(fdi_diag_init(d, &c), FDI_OK);
+}
+
+/* Steps with the frame {r0, s0a, s0b, r1, s1b, 0, s2a}; returns the candidates of the last one. */
+static uint32_t run(fdi_diag_t *d, uint32_t steps, float r0, float s0a, float s0b, float r1, float s1b)
+{
+    fdi_frame_t in;
+    fdi_diag_result_t res;
+    uint32_t k;
+    uint32_t i;
+    for (i = 0U; i < FDI_FRAME_MAX_SIGNALS; ++i)
+    {
+        in.value[i] = 0.0f;
+    }
+    in.value[0] = r0;
+    in.value[1] = s0a;
+    in.value[2] = s0b;
+    in.value[3] = r1 + r1_now;
+    in.value[4] = s1b;
+    in.value[5] = 0.0f;
+    in.value[6] = s2a;
+    for (k = 0U; k < steps; ++k)
+    {
+        assert_int_equal(fdi_diag_step(d, &in, 0x7FU), FDI_OK);
+    }
+    assert_int_equal(fdi_diag_result(d, &res), FDI_OK);
+    return res.iso.candidates;
+}
+
+/* Warm up fault-free, then the alarm: test 0 at r0 = 20 (b implied >= (20 - 3) / 1 = 17), test 1 quiet. */
+static void warm(fdi_diag_t *d, fdi_iso_mode_t mode)
+{
+    s2a = 0.1f;
+    r1_now = 0.0f;
+    init(d, mode);
+    assert_int_equal(run(d, 400U, 0.0f, 1.0f, 1.0f, 0.0f, 1.0f), 0U);
+}
+
+static void test_quiet_test_clears_where_it_would_have_seen_the_fault(void **state)
+{
+    fdi_diag_t d;
+    uint32_t k;
+    uint32_t first = 0U;
+    (void)state;
+    warm(&d, FDI_ISO_EXONERATION);
+    /* |d r1 / d b| = 0.5: at b = 17 test 1 would show 8.5 >= 7.5: b is cleared, once the alarm has settled and
+       the quiet test has been quiet (and the episode old) for RESP + SET steps; before, both explain it */
+    for (k = 1U; (k <= 200U) && (first == 0U); ++k)
+    {
+        const uint32_t c = run(&d, 1U, 20.0f, 1.0f, 1.0f, 0.0f, 0.5f);
+        assert_true((c == 0U) || ((c & 0x1U) != 0U)); /* a is never cleared: test 1 does not see it */
+        first = (c == 0x1U) ? k : 0U;
+    }
+    /* the response time, or the 0.3 s average coming within a fifth of the residual (~41 steps after the step) */
+    assert_true(first >= (RESP + SET));
+    assert_true(first <= 50U);
+}
+
+static void test_weak_quiet_test_does_not_clear(void **state)
+{
+    fdi_diag_t d;
+    (void)state;
+    warm(&d, FDI_ISO_EXONERATION);
+    /* |d r1 / d b| = 0.4: 0.4 * 17 = 6.8 < 7.5 (it would cross its gate, but not with the margin) */
+    assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 0.4f), 0x3U);
+    /* the sensitivity grows at another operating point: now it clears, once it has for 10 steps in a row */
+    assert_int_equal(run(&d, 5U, 20.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0x3U);
+    assert_int_equal(run(&d, 6U, 20.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0x1U);
+}
+
+static void test_a_weak_spell_resets_the_confirmation(void **state)
+{
+    fdi_diag_t d;
+    (void)state;
+    warm(&d, FDI_ISO_EXONERATION);
+    assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 0.4f), 0x3U);
+    assert_int_equal(run(&d, 8U, 20.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0x3U);
+    assert_int_equal(run(&d, 1U, 20.0f, 1.0f, 1.0f, 0.0f, 0.1f), 0x3U); /* the count starts again */
+    assert_int_equal(run(&d, 8U, 20.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0x3U);
+    assert_int_equal(run(&d, 3U, 20.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0x1U);
+}
+
+static void test_implied_size_needs_a_settled_residual(void **state)
+{
+    fdi_diag_t d;
+    uint32_t k;
+    (void)state;
+    warm(&d, FDI_ISO_EXONERATION);
+    /* a decaying kick (a step through a filtered derivative): r0 falls from 400 by 5 % per step, never settled
+       against its 0.2 s average, so it implies nothing however large it is */
+    for (k = 0U; k < 60U; ++k)
+    {
+        const float r0 = (400.0f * powf(0.95f, (float)k)) + 6.0f;
+        const uint32_t c = run(&d, 1U, r0, 1.0f, 1.0f, 0.0f, 0.5f);
+        assert_true((c == 0U) || (c == 0x3U)); /* 0 until the alarm is confirmed */
+    }
+    /* it settles at 8: implies b >= 5, test 1 would see 2.5 < 7.5: b stays a candidate */
+    assert_int_equal(run(&d, 200U, 8.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0x3U);
+}
+
+static void test_no_exoneration_mode_never_clears(void **state)
+{
+    fdi_diag_t d;
+    (void)state;
+    warm(&d, FDI_ISO_NO_EXONERATION);
+    assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 5.0f), 0x3U);
+}
+
+static void test_implied_size_follows_recent_evidence(void **state)
+{
+    fdi_diag_t d;
+    (void)state;
+    warm(&d, FDI_ISO_EXONERATION);
+    assert_int_equal(run(&d, 100U, 20.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0x1U);
+    /* the alarmed residual falls back to 9 (still in alarm): the implied size of b (17) is forgotten with a 1 s
+       time constant, and b is a candidate again once 0.5 * F_b < 7.5 (after ~12 steps), with a */
+    assert_int_equal(run(&d, 5U, 9.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0x1U);
+    assert_int_equal(run(&d, 100U, 9.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0x3U);
+    /* the episode ends (no alarm for 5 steps, once the CUSUM has drained) and a new one starts at 9: b implied
+       >= 6, 0.5 * 6 < 7.5 */
+    assert_int_equal(run(&d, 400U, 0.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0U);
+    assert_int_equal(run(&d, 200U, 9.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0x3U);
+}
+
+static void test_the_first_isolation_is_latched(void **state)
+{
+    fdi_diag_t d;
+    (void)state;
+    warm(&d, FDI_ISO_EXONERATION);
+    assert_int_equal(run(&d, 100U, 20.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0x1U); /* {a}: isolated */
+    /* test 2 now looks as if it should have seen a (1.0 * 17 >= 7.5): a was isolated, it stays */
+    s2a = 1.0f;
+    assert_int_equal(run(&d, 100U, 20.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0x1U);
+    /* test 1 alarms: a does not explain it; b would, but the episode's isolation is contradicted: "detected,
+       not isolated" (no candidate) until the episode ends */
+    r1_now = 20.0f;
+    assert_int_equal(run(&d, 100U, 20.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0U);
+    r1_now = 0.0f;
+    assert_int_equal(run(&d, 400U, 0.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0U); /* the episode ends */
+    s2a = 0.1f;
+    assert_int_equal(run(&d, 200U, 9.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0x3U); /* a new one starts afresh */
+}
+
+int main(void)
+{
+    const struct CMUnitTest list[] = {
+        cmocka_unit_test(test_quiet_test_clears_where_it_would_have_seen_the_fault),
+        cmocka_unit_test(test_weak_quiet_test_does_not_clear),
+        cmocka_unit_test(test_implied_size_needs_a_settled_residual),
+        cmocka_unit_test(test_no_exoneration_mode_never_clears),
+        cmocka_unit_test(test_implied_size_follows_recent_evidence),
+        cmocka_unit_test(test_a_weak_spell_resets_the_confirmation),
+        cmocka_unit_test(test_the_first_isolation_is_latched),
+    };
+    return cmocka_run_group_tests(list, NULL, NULL);
+}
