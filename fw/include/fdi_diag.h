@@ -180,7 +180,7 @@ FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (152U + (sizeof(void *) * 2U) +
                                          (sizeof(fdi_svf_t) * FDI_DIAG_MAX_FILTERS) +
                                          (sizeof(float) * FDI_DIAG_MAX_SENS) +
                                          ((sizeof(float) + sizeof(uint16_t)) * FDI_TABLE_MAX_FAULTS) +
-                                         (2U * FDI_GEN_MAX_SLOTS)),
+                                         (sizeof(uint16_t) * FDI_GEN_MAX_SLOTS)),
                   fdi_sa_diag_size);
 
 typedef struct

@@ -67,6 +67,8 @@
 #define FDI_GEN_MAX_SLOTS 32U   /* generators of one set (slot bitmasks are uint32_t) */
 #define FDI_GEN_MAX_BANK 255U   /* filters of one bank (indices are uint8_t) */
 #define FDI_GEN_BANK_RAW 0xFFU  /* fdi_gen_bank_filter_t.source of a filter fed with the raw signal */
+/* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
+FDI_STATIC_ASSERT(FDI_GEN_MAX_BANK <= (FDI_GEN_BANK_RAW + 1U), fdi_sa_gen_bank_index);
 
 #define FDI_GEN_N_PARAMS 4U /* run-time parameters of hand-written generators (fdi_gen_param_t.param) */
 

@@ -355,7 +355,7 @@ static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t
             }
         }
     }
-    if ((run & self->set_tests) != 0U)
+    if (((run & self->set_tests) != 0U) && (self->set != NULL))
     {
         fdi_gen_io_t io;
         io.par = &self->par;

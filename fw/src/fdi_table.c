@@ -115,7 +115,7 @@ static bool set_ok(const fdi_table_t *t, uint32_t signals)
     }
     if (ok && (set != NULL))
     {
-        ok = (fdi_gen_bank_signals(set) & ~signals) == 0U;
+        ok = (fdi_gen_set_check(set) == FDI_OK) && ((fdi_gen_bank_signals(set) & ~signals) == 0U);
     }
     return ok;
 }

@@ -14,7 +14,8 @@ computed first (`generators_file`), then rendered from the named templates below
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+import re
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from string import Template
 
@@ -445,16 +446,27 @@ def _slot_body(k: int, g: Generator, p: _Pass, name: _Names, faults: Sequence[st
                                    sens=_sens_block(k, g, name, faults, scope, "            "))
 
 
-def _shared_text(p: _Pass, name: _Names, all_slots: int) -> str:
+def _shared_text(p: _Pass, name: _Names, all_slots: int, slots_text: str) -> str:
     """The shared temporaries: those of every slot computed unconditionally (the set's step runs only for some
-    slot), the others declared first and computed under the gate of the slots that use them."""
+    slot), the others computed under the gate of the slots that use them: declared first when read outside their
+    gate's block (`slots_text`: the slots' code), else local constants of the block."""
     groups = _ordered_shared(p)
     always = [t for grp in groups for t in grp if p.mask[t.symbol] == all_slots]
     gated = [grp for grp in groups if p.mask[grp[0].symbol] != all_slots]
-    decls = "".join(f"    float {t.symbol} = 0.0f;\n" for grp in gated for t in grp)
+    lines = [[f"{t.symbol} = {to_c(t.expr, name)};" for t in grp] for grp in gated]
+
+    def outside(sym: str, g: int) -> bool:
+        pat = re.compile(rf"\b{re.escape(sym)}\b")
+        return bool(pat.search(slots_text)) or any(pat.search(ln) for h, grp in enumerate(lines) if h != g
+                                                   for ln in grp)
+
+    wide = [[outside(str(t.symbol), g) for t in grp] for g, grp in enumerate(gated)]
+    decls = "".join(f"    float {t.symbol} = 0.0f;\n" for g, grp in enumerate(gated)
+                    for t, w in zip(grp, wide[g], strict=True) if w)
     blocks = [GATED_FMT.substitute(mask=f"{p.mask[grp[0].symbol]:08X}",
-                                   lines="\n".join(f"        {t.symbol} = {to_c(t.expr, name)};" for t in grp))
-              for grp in gated]
+                                   lines="\n".join(f"        {'' if w else 'const float '}{ln}"
+                                                   for ln, w in zip(lines[g], wide[g], strict=True)))
+              for g, grp in enumerate(gated)]
     return (decls + _const_lines(always, name, "    ") + "\n".join(blocks)).rstrip("\n")
 
 
@@ -490,8 +502,9 @@ def generators_file(generators: Sequence[Generator], names: VehicleNames, faults
     p = _global_pass(generators)
     name = _Names(names, {n: k for k, n in enumerate(nodes)}, frozenset(str(t.symbol) for t in p.temps))
     all_slots = (1 << len(generators)) - 1
-    return GeneratorsFile(banner, names, bank_of(nodes), _shared_text(p, name, all_slots),
-                          tuple(_slot_code(k, g, p, name, names, faults) for k, g in enumerate(generators)))
+    slots = tuple(_slot_code(k, g, p, name, names, faults) for k, g in enumerate(generators))
+    return GeneratorsFile(banner, names, bank_of(nodes), _shared_text(p, name, all_slots,
+                                                                      "\n".join(c.body for c in slots)), slots)
 
 
 # ------------------------------------------------------------------------------------------ rendering

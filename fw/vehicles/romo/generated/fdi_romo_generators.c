@@ -177,7 +177,6 @@ static void romo_gen_step(fdi_gen_io_t *io)
     float t87 = 0.0f;
     float t84 = 0.0f;
     float t88 = 0.0f;
-    float t89 = 0.0f;
     float t90 = 0.0f;
     float t91 = 0.0f;
     float t92 = 0.0f;
@@ -197,7 +196,6 @@ static void romo_gen_step(fdi_gen_io_t *io)
     float t102 = 0.0f;
     float t109 = 0.0f;
     float t107 = 0.0f;
-    float t108 = 0.0f;
     float t110 = 0.0f;
     float t111 = 0.0f;
     float t112 = 0.0f;
@@ -228,7 +226,6 @@ static void romo_gen_step(fdi_gen_io_t *io)
     float t138 = 0.0f;
     float t132 = 0.0f;
     float t139 = 0.0f;
-    float t140 = 0.0f;
     float t141 = 0.0f;
     float t142 = 0.0f;
     float t143 = 0.0f;
@@ -244,7 +241,6 @@ static void romo_gen_step(fdi_gen_io_t *io)
     float t151 = 0.0f;
     float t186 = 0.0f;
     float t189 = 0.0f;
-    float t152 = 0.0f;
     float t153 = 0.0f;
     float t190 = 0.0f;
     float t193 = 0.0f;
@@ -271,7 +267,6 @@ static void romo_gen_step(fdi_gen_io_t *io)
     float t200 = 0.0f;
     float t205 = 0.0f;
     float t203 = 0.0f;
-    float t204 = 0.0f;
     float t208 = 0.0f;
     float t209 = 0.0f;
     float t210 = 0.0f;
@@ -399,7 +394,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
     {
         t84 = ((-t29) + (-t83));
         t88 = fdi_gen_max(0.5f, fdi_gen_max(t23, t87));
-        t89 = (380.25f * (1.0f / (t88 * t88)));
+        const float t89 = (380.25f * (1.0f / (t88 * t88)));
         t90 = (1.0f / (sqrtf((1.0f + ((t84 * t84) * t89) + (t86 * t89)))));
         t91 = (1.0f / (t88));
         t92 = (t90 * t91);
@@ -440,7 +435,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
     if ((run & 0x00000CD0U) != 0U)
     {
         t107 = fdi_gen_max(0.5f, fdi_gen_max(t102, t106));
-        t108 = (380.25f * (1.0f / (t107 * t107)));
+        const float t108 = (380.25f * (1.0f / (t107 * t107)));
         t110 = ((-t105) + (-t109));
         t111 = (1.0f / (sqrtf((1.0f + (t101 * t108) + (t108 * (t110 * t110))))));
         t112 = (1.0f / (t107));
@@ -516,7 +511,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
     {
         t132 = ((-t124) + (-t131));
         t139 = fdi_gen_max(0.5f, fdi_gen_max(t136, t138));
-        t140 = (380.25f * (1.0f / (t139 * t139)));
+        const float t140 = (380.25f * (1.0f / (t139 * t139)));
         t141 = (1.0f / (sqrtf((1.0f + ((t132 * t132) * t140) + (t135 * t140)))));
         t142 = (1.0f / (t139));
         t143 = (t141 * t142);
@@ -550,7 +545,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
     }
     if ((run & 0x00000240U) != 0U)
     {
-        t152 = (t149 + t151);
+        const float t152 = (t149 + t151);
         t153 = ((-t13) + (-t152));
         t190 = (t152 + t189);
         t193 = (t125 * t190);
@@ -607,7 +602,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
     if ((run & 0x00000C40U) != 0U)
     {
         t203 = fdi_gen_max(0.5f, fdi_gen_max(t200, t202));
-        t204 = (380.25f * (1.0f / (t203 * t203)));
+        const float t204 = (380.25f * (1.0f / (t203 * t203)));
         t208 = ((-t205) + (-t207));
         t209 = (1.0f / (sqrtf((1.0f + (t199 * t204) + (t204 * (t208 * t208))))));
         t210 = (1.0f / (t203));
