@@ -1,15 +1,23 @@
 /*
  * fdi_diag.h - the diagnoser: residual generation, evaluation and isolation for a whole table.
  *
- * One fdi_diag_t owns, per test of the table, a generator (fdi_gen), an evaluator (fdi_eval) and a warm-up
- * counter, and runs the isolation (fdi_iso) after every step. Per step k, for each test i:
+ * One fdi_diag_t owns the generator state of a table (the filter bank of its generator set, the instance filters of
+ * its hand-written generators, one observer state per test), per test an evaluator (fdi_eval) and a warm-up
+ * counter, and runs the isolation (fdi_iso) after every step. Per step k:
  *   usable  = validity & finite(frame)                       (stale, invalid or NaN/Inf signals drop out)
+ *   the bank of the table's generator set (fdi_gen.h) advances once for all tests: a filter runs while its signal is
+ *      usable, restarts in steady state when the signal becomes usable again, holds otherwise (a filter that
+ *      would overflow holds and makes its signal unusable for the step);
+ *   for each test i:
  *   if gen == NULL or (usable & input_mask_i) != input_mask_i
  *      or the frame is outside the generator's operating domain (fdi_gen_in_domain, e.g. a tyre-law
  *      residual near standstill):  status_i = NOT_EVALUABLE, re-arm warm-up
- *   else if first usable step since then: reset the generator at the current inputs, restart the evaluator
- *        and count warmup_steps steps with status NOT_EVALUABLE (the filters settle), then
+ *   else if first usable step since then: restart the test (a hand-written generator resets its filters, a slot of
+ *        the set restarts its observer; the bank is shared and keeps running), restart the evaluator and count
+ *        warmup_steps steps with status NOT_EVALUABLE (the filters settle), then
  *   status_i = fdi_eval(r_i)  (OK or ALARM); a non-finite residual is rejected (NOT_EVALUABLE, re-arm)
+ *   the set's residuals (and, when asked for, all its sensitivities) are computed in one call of its step (shared
+ *   terms once), then
  *   isolation on the alarm / evaluable masks in the configured mode (below).
  *
  * Isolation episodes. An episode starts at the first alarm; the tests in alarm at any step of the episode
@@ -50,12 +58,15 @@
  * (no cost). They are 0 while a test lacks its inputs or its domain; a non-finite sensitivity makes the step
  * fail like a non-finite residual (the test is "not evaluable" and restarts).
  *
- * Cost per step: sum of the generators + ~25 operations per test for evaluation + n_faults iterations of
- * isolation + one finiteness compare pair per signal. Measured by scripts/bench_fw.sh (instructions per step
- * of a table on x86-64 with callgrind and on Cortex-M4F under qemu -icount; it prints the numbers).
- * Memory: sizeof(fdi_diag_t) ~ 152 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_gen_t) + sizeof(fdi_eval_t) + 27) +
- * 4 * FDI_DIAG_MAX_SENS + 6 * FDI_TABLE_MAX_FAULTS bytes (bound asserted below; scripts/bench_fw.sh prints the value), caller-owned
- * (static or stack); the library itself has no .data/.bss.
+ * Cost per step: the bank (~20 flops per filter) + the set's step (the shared terms once, each evaluated test's own
+ * terms, all sensitivities during an episode) + the hand-written generators + ~25 operations per test for
+ * evaluation + n_faults iterations of isolation + one finiteness compare pair per signal. Measured by
+ * scripts/bench_fw.sh (instructions per step of the vehicle tables it benchmarks over a simulated drive on x86-64
+ * with callgrind and on Cortex-M4F under qemu -icount: fault-free, in an episode, largest step).
+ * Memory: sizeof(fdi_diag_t) ~ 152 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28) +
+ * 12 * FDI_DIAG_MAX_FILTERS + 4 * FDI_DIAG_MAX_SENS + 6 * FDI_TABLE_MAX_FAULTS + FDI_GEN_MAX_SLOTS bytes (bound
+ * asserted below; scripts/bench_fw.sh prints the value), caller-owned (static or stack); the library itself has no
+ * .data/.bss.
  */
 #ifndef FDI_DIAG_H
 #define FDI_DIAG_H
@@ -87,6 +98,15 @@
 #error "FDI_DIAG_MAX_SENS must be in 1..255 (offsets are uint8_t)"
 #endif
 
+#ifndef FDI_DIAG_MAX_FILTERS
+#define FDI_DIAG_MAX_FILTERS 48U /* filter states: the set's bank + the hand-written generators' instance filters;
+                                    override with -DFDI_DIAG_MAX_FILTERS=n (1..255) */
+#endif
+
+#if (FDI_DIAG_MAX_FILTERS < 1) || (FDI_DIAG_MAX_FILTERS > 255)
+#error "FDI_DIAG_MAX_FILTERS must be in 1..255"
+#endif
+
 #define FDI_DIAG_SETTLE_TAUS 6.0f
 #define FDI_DIAG_CONTRADICTED 0xFFFFFFFFU /* latched: the isolated class was contradicted in this episode */
 
@@ -108,6 +128,7 @@ typedef struct
 typedef struct
 {
     const fdi_table_t *table;
+    const fdi_gen_set_t *set; /* the generator set of the table's generated generators; NULL if none */
     fdi_gen_param_t par;
     fdi_iso_mode_t mode;
     uint16_t warmup_steps;
@@ -128,9 +149,15 @@ typedef struct
     uint32_t rearm;     /* tests whose generator must be reset at the next usable step */
     uint32_t alarm;     /* tests in alarm (last step) */
     uint32_t evaluable; /* tests evaluable (last step) */
+    uint32_t set_tests; /* tests whose generator is a slot of the set */
+    uint32_t bank_live; /* signals whose bank filters ran at the last step */
     fdi_iso_result_t iso;
-    fdi_gen_t gen[FDI_DIAG_MAX_TESTS];
     fdi_eval_t eval[FDI_DIAG_MAX_TESTS];
+    fdi_obs_t obs[FDI_DIAG_MAX_TESTS];     /* observer state of test i's generator */
+    fdi_svf_t filt[FDI_DIAG_MAX_FILTERS];  /* the set's bank, then the hand-written generators' filters */
+    uint8_t filt_base[FDI_DIAG_MAX_TESTS]; /* hand-written test i: its filters at filt[filt_base[i]] */
+    uint8_t slot_test[FDI_GEN_MAX_SLOTS];  /* slot k of the set -> its test */
+    uint8_t slot_sens[FDI_GEN_MAX_SLOTS];  /* slot k of the set -> its test's first sensitivity in sens[] */
     float residual[FDI_DIAG_MAX_TESTS];
     float ratio[FDI_DIAG_MAX_TESTS];
     uint16_t warm[FDI_DIAG_MAX_TESTS];
@@ -148,9 +175,12 @@ typedef struct
 } fdi_diag_t; /* opaque by convention */
 
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
-FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (152U + (FDI_DIAG_MAX_TESTS * (sizeof(fdi_gen_t) + sizeof(fdi_eval_t) + 27U)) +
+FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (152U + (sizeof(void *) * 2U) +
+                                         (FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28U)) +
+                                         (sizeof(fdi_svf_t) * FDI_DIAG_MAX_FILTERS) +
                                          (sizeof(float) * FDI_DIAG_MAX_SENS) +
-                                         ((sizeof(float) + sizeof(uint16_t)) * FDI_TABLE_MAX_FAULTS)),
+                                         ((sizeof(float) + sizeof(uint16_t)) * FDI_TABLE_MAX_FAULTS) +
+                                         (sizeof(uint16_t) * FDI_GEN_MAX_SLOTS)),
                   fdi_sa_diag_size);
 
 typedef struct
@@ -176,7 +206,8 @@ typedef struct
 fdi_status_t fdi_diag_config_default(fdi_diag_config_t *cfg, const fdi_table_t *table);
 
 /* BAD_ARG: NULL or bad config (also: the table's generators output more sensitivities than FDI_DIAG_MAX_SENS
-   while they are needed: reported, or exoneration); BAD_TABLE: table fails fdi_table_check(); NOT_FINITE:
+   while they are needed: reported, or exoneration; the set's bank and the hand-written generators' filters need
+   more than FDI_DIAG_MAX_FILTERS states); BAD_TABLE: table fails fdi_table_check(); NOT_FINITE:
    NaN/Inf in cfg. */
 fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg);
 

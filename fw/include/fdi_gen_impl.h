@@ -2,19 +2,22 @@
  * fdi_gen_impl.h - building blocks for generator implementations (generated vehicle code and hand-written
  * generators); applications use fdi_gen.h.
  *
- * fdi_gen_filter_step: one step of filter idx of the instance (idx < FDI_GEN_MAX_FILTERS), or its reset to
+ * Hand-written generators (instance filters, fdi_gen_t):
+ * fdi_gen_filter_step: one step of filter idx of the instance (idx < desc->n_filters), or its reset to
  *   steady state at u (then out = {u, 0}). fdi_gen_status_worst: the first non-OK of two statuses.
  * fdi_gen_finish: *r = value (0 while resetting) when st is OK and value is finite, else the failing status
  *   (NOT_FINITE for value). fdi_gen_sens_finish: st, or NOT_FINITE when one of the n sensitivities written
  *   is not finite.
  * Observer generators (integral causality for one state, fdi_analysis/residuals/observer.py): the estimate
- *   lives in g->obs (xh = estimate, g_prev = observer input G of the previous step).
+ *   lives in an fdi_obs_t (xh = estimate, g_prev = observer input G of the previous step).
  *   fdi_gen_obs_predict: xh[k] = xh[k-1] + phi * (g_prev + g1) / 2 with phi = expm1(jac dt) / jac (dt when
- *   |jac dt| < 1e-6), the exponential of the error pole jac = a + L c; stable for every jac < 0. g NULL or
- *   par NULL give 0 (callers pass their checked instance).
+ *   |jac dt| < 1e-6), the exponential of the error pole jac = a + L c; stable for every jac < 0. obs NULL or
+ *   par NULL give 0 (callers pass their checked state).
  *   fdi_gen_obs_store: keep xh and g_prev for the next step; NOT_FINITE (nothing stored) on NaN/Inf, BAD_ARG
  *   on NULL.
- * fdi_gen_heaviside(x): 1 for x > 0, else 0; fdi_gen_sign(x): -1, 0, 1 (derivatives of Max and Abs).
+ * Inline helpers of generated expressions (no call, no library): fdi_gen_heaviside(x): 1 for x > 0, else 0;
+ *   fdi_gen_sign(x): -1, 0, 1 (derivatives of Max and Abs); fdi_gen_max / fdi_gen_min: the larger / smaller of two
+ *   values (a NaN operand may propagate, where fmaxf would drop it: the caller's finiteness check then sees it).
  * Cost: a few flops each (fdi_gen_obs_predict: one expm1f). Memory: none.
  */
 #ifndef FDI_GEN_IMPL_H
@@ -31,9 +34,40 @@ fdi_status_t fdi_gen_status_worst(fdi_status_t a, fdi_status_t b);
 fdi_status_t fdi_gen_finish(fdi_status_t st, float value, bool reset, float *r);
 fdi_status_t fdi_gen_sens_finish(fdi_status_t st, const float *sens, uint32_t n);
 
-float fdi_gen_obs_predict(const fdi_gen_t *g, const fdi_gen_param_t *par, float g1, float jac);
-fdi_status_t fdi_gen_obs_store(fdi_gen_t *g, float xh, float g_next);
-float fdi_gen_heaviside(float x);
-float fdi_gen_sign(float x);
+float fdi_gen_obs_predict(const fdi_obs_t *obs, const fdi_gen_param_t *par, float g1, float jac);
+fdi_status_t fdi_gen_obs_store(fdi_obs_t *obs, float xh, float g_next);
+
+static inline float fdi_gen_heaviside(float x)
+{
+    return (x > 0.0f) ? 1.0f : 0.0f;
+}
+
+static inline float fdi_gen_sign(float x)
+{
+    float s = 0.0f;
+    if (x > 0.0f)
+    {
+        s = 1.0f;
+    }
+    else if (x < 0.0f)
+    {
+        s = -1.0f;
+    }
+    else
+    {
+        /* 0 (and NaN, caught by the caller's finiteness check) */
+    }
+    return s;
+}
+
+static inline float fdi_gen_max(float a, float b)
+{
+    return (a > b) ? a : b;
+}
+
+static inline float fdi_gen_min(float a, float b)
+{
+    return (a < b) ? a : b;
+}
 
 #endif /* FDI_GEN_IMPL_H */

@@ -119,6 +119,58 @@ fdi_status_t fdi_diag_config_default(fdi_diag_config_t *cfg, const fdi_table_t *
     return st;
 }
 
+/* The generator state of the table: the set (the bank first in filt[]), the instance filters of the hand-written
+   generators after it, the slot maps, every state zeroed. false when the filters do not fit FDI_DIAG_MAX_FILTERS. */
+static bool gen_layout(fdi_diag_t *self, const fdi_table_t *t)
+{
+    uint32_t used = 0U;
+    uint32_t i;
+    self->set = NULL;
+    self->set_tests = 0U;
+    for (i = 0U; i < FDI_GEN_MAX_SLOTS; ++i)
+    {
+        self->slot_test[i] = 0U;
+        self->slot_sens[i] = 0U;
+    }
+    for (i = 0U; i < (uint32_t)t->n_tests; ++i)
+    {
+        const fdi_gen_desc_t *g = t->tests[i].gen;
+        self->filt_base[i] = 0U;
+        if ((g != NULL) && (g->set != NULL)) /* one set per table, each slot once: fdi_table_check */
+        {
+            self->set = g->set;
+            self->set_tests |= (uint32_t)1U << i;
+            self->slot_test[g->slot & 31U] = (uint8_t)i;
+            self->slot_sens[g->slot & 31U] = self->sens_offset[i];
+        }
+    }
+    if (self->set != NULL)
+    {
+        used = (uint32_t)self->set->n_bank;
+    }
+    for (i = 0U; i < (uint32_t)t->n_tests; ++i)
+    {
+        const fdi_gen_desc_t *g = t->tests[i].gen;
+        if ((g != NULL) && (g->set == NULL))
+        {
+            self->filt_base[i] = (uint8_t)((used < FDI_DIAG_MAX_FILTERS) ? used : 0U);
+            used += (uint32_t)g->n_filters;
+        }
+    }
+    for (i = 0U; i < FDI_DIAG_MAX_FILTERS; ++i)
+    {
+        self->filt[i].x1 = 0.0f;
+        self->filt[i].x2 = 0.0f;
+        self->filt[i].u_prev = 0.0f;
+    }
+    for (i = 0U; i < FDI_DIAG_MAX_TESTS; ++i)
+    {
+        self->obs[i].xh = 0.0f;
+        self->obs[i].g_prev = 0.0f;
+    }
+    return used <= FDI_DIAG_MAX_FILTERS;
+}
+
 static fdi_status_t check_config(const fdi_diag_config_t *cfg)
 {
     fdi_status_t st = fdi_table_check(cfg->table);
@@ -171,6 +223,10 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
         {
             st = FDI_BAD_ARG;
         }
+        if ((st == FDI_OK) && !gen_layout(self, t))
+        {
+            st = FDI_BAD_ARG;
+        }
         for (i = 0U; i < FDI_DIAG_MAX_SENS; ++i)
         {
             self->sens[i] = 0.0f;
@@ -183,10 +239,6 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
                                             cfg->cusum_h,   cfg->set_count, cfg->clear_count};
             self->signals |= d->input_mask;
             st = fdi_eval_init(&self->eval[i], &ecfg);
-            if ((st == FDI_OK) && (d->gen != NULL))
-            {
-                st = fdi_gen_init(&self->gen[i], d->gen);
-            }
             self->residual[i] = 0.0f;
             self->ratio[i] = 0.0f;
             self->warm[i] = cfg->warmup_steps;
@@ -224,6 +276,7 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             self->rearm = 0xFFFFFFFFU;
             self->alarm = 0U;
             self->evaluable = 0U;
+            self->bank_live = 0U;
             self->iso.candidates = 0U;
             self->iso.class_mask = 0U;
             self->iso.n_classes = 0U;
@@ -248,49 +301,136 @@ static void clear_sens(fdi_diag_t *self, uint32_t i)
     }
 }
 
-/* Run test i on a usable frame; returns true if it is evaluable this step (then *alarm is set). With want_sens
-   its sensitivities are computed into self->sens (and the test marked fresh). */
-static bool run_test(fdi_diag_t *self, uint32_t i, const fdi_frame_t *in, bool want_sens, bool *alarm)
+/* Run hand-written test i on a usable frame (restarting it first when re-armed): *r, sens when non-NULL. */
+static fdi_status_t run_hand_written(fdi_diag_t *self, uint32_t i, const fdi_frame_t *in, float *r, float *sens)
 {
-    const uint32_t bit = (uint32_t)1U << i;
-    float *sens = (want_sens && (self->sens_offset[i + 1U] > self->sens_offset[i])) ? &self->sens[self->sens_offset[i]]
-                                                                                   : NULL;
-    bool evaluable = false;
+    fdi_gen_t g;
     fdi_status_t st = FDI_OK;
-    float r = 0.0f;
-    if ((self->rearm & bit) != 0U)
+    g.desc = self->table->tests[i].gen;
+    g.filt = &self->filt[self->filt_base[i]];
+    g.obs = &self->obs[i];
+    if ((self->rearm & ((uint32_t)1U << i)) != 0U)
     {
         float r0 = 0.0f;
-        st = fdi_gen_run_checked(&self->gen[i], &self->par, in, true, &r0, sens);
-        if (st == FDI_OK)
-        {
-            st = fdi_eval_reset(&self->eval[i]);
-            self->warm[i] = self->warmup_steps;
-            self->rearm &= ~bit;
-        }
+        st = fdi_gen_run_checked(&g, &self->par, in, true, &r0, NULL);
     }
     if (st == FDI_OK)
     {
-        st = fdi_gen_run_checked(&self->gen[i], &self->par, in, false, &r, sens); /* inputs checked by the caller */
+        st = fdi_gen_run_checked(&g, &self->par, in, false, r, sens); /* inputs checked by the caller */
+    }
+    return st;
+}
+
+/* Whether test i's sensitivities in self->sens are all finite. */
+static bool sens_finite(const fdi_diag_t *self, uint32_t i)
+{
+    bool finite = true;
+    uint32_t k;
+    for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
+    {
+        finite = finite && fdi_float_is_finite(self->sens[k]);
+    }
+    return finite;
+}
+
+/* The generators of the tests of `run` (inputs usable, in their domain): the set's slots in one call, the
+   hand-written ones one by one; r[i] and the returned mask (bit i: finite residual and sensitivities). With
+   want_sens every test's sensitivities are computed into self->sens (and the test marked fresh). */
+static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t run, bool want_sens, float *r)
+{
+    uint32_t ok = 0U;
+    uint32_t i;
+    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+    {
+        const uint32_t bit = (uint32_t)1U << i;
+        if ((run & ~self->set_tests & bit) != 0U)
+        {
+            float *sens = (want_sens && (self->sens_offset[i + 1U] > self->sens_offset[i]))
+                              ? &self->sens[self->sens_offset[i]]
+                              : NULL;
+            if (run_hand_written(self, i, in, &r[i], sens) == FDI_OK)
+            {
+                ok |= bit;
+                self->fresh |= (sens != NULL) ? bit : 0U;
+            }
+        }
+    }
+    if (((run & self->set_tests) != 0U) && (self->set != NULL))
+    {
+        fdi_gen_io_t io;
+        io.par = &self->par;
+        io.in = in;
+        io.bank = self->filt;
+        io.obs = self->obs;
+        io.r = r;
+        io.at = self->slot_test;
+        io.sens = self->sens;
+        io.sens_at = self->slot_sens;
+        io.run = 0U;
+        io.restart = 0U;
+        io.sens_mask = 0U;
+        io.failed = 0U;
+        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+        {
+            const uint32_t bit = (uint32_t)1U << i;
+            if ((run & self->set_tests & bit) != 0U)
+            {
+                const uint32_t slot = (uint32_t)1U << (self->table->tests[i].gen->slot & 31U);
+                io.run |= slot;
+                io.restart |= ((self->rearm & bit) != 0U) ? slot : 0U;
+                io.sens_mask |= (want_sens && (self->sens_offset[i + 1U] > self->sens_offset[i])) ? slot : 0U;
+            }
+        }
+        self->set->step(&io);
+        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+        {
+            const uint32_t bit = (uint32_t)1U << i;
+            if ((run & self->set_tests & bit) != 0U)
+            {
+                const uint32_t slot = (uint32_t)1U << (self->table->tests[i].gen->slot & 31U);
+                if ((io.failed & slot) != 0U)
+                {
+                    /* not finite: rejected by the evaluation */
+                }
+                else if ((io.sens_mask & slot) == 0U)
+                {
+                    ok |= bit;
+                }
+                else if (sens_finite(self, i))
+                {
+                    ok |= bit;
+                    self->fresh |= bit;
+                }
+                else
+                {
+                    /* a non-finite sensitivity fails the step like a non-finite residual */
+                }
+            }
+        }
+    }
+    return ok;
+}
+
+/* Evaluation of test i after its generator ran (ok: a finite residual r); true if it is evaluable this step (then
+   *alarm is set). */
+static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r, bool *alarm)
+{
+    const uint32_t bit = (uint32_t)1U << i;
+    bool evaluable = false;
+    fdi_status_t st = ok ? FDI_OK : FDI_NOT_FINITE;
+    if ((st == FDI_OK) && ((self->rearm & bit) != 0U))
+    {
+        st = fdi_eval_reset(&self->eval[i]);
+        self->warm[i] = self->warmup_steps;
+        self->rearm &= ~bit;
     }
     if (st != FDI_OK)
     {
         self->rearm |= bit;
         self->residual[i] = 0.0f;
         self->ratio[i] = 0.0f;
+        self->fresh &= ~bit;
         clear_sens(self, i);
-    }
-    else if (sens != NULL)
-    {
-        self->fresh |= bit;
-    }
-    else
-    {
-        /* no sensitivities asked for */
-    }
-    if (st != FDI_OK)
-    {
-        /* rejected above */
     }
     else if (self->warm[i] > 0U)
     {
@@ -567,17 +707,25 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
     }
     else
     {
-        const uint32_t usable = fdi_frame_finite_mask(frame, validity & self->signals);
+        uint32_t usable = fdi_frame_finite_mask(frame, validity & self->signals);
         const bool want_sens = self->sensitivities || ((self->mode == FDI_ISO_EXONERATION) && (self->accused != 0U));
+        uint32_t run = 0U;
         uint32_t alarm = 0U;
         uint32_t evaluable = 0U;
+        uint32_t ok;
         uint32_t i;
+        float r[FDI_DIAG_MAX_TESTS];
         self->fresh = 0U;
+        if (self->set != NULL)
+        {
+            usable &= ~fdi_gen_bank_step(self->set, self->filt, &self->par.svf, frame, usable, self->bank_live);
+            self->bank_live = usable;
+        }
         for (i = 0U; i < (uint32_t)self->n_tests; ++i)
         {
             const fdi_test_desc_t *d = &self->table->tests[i];
             const uint32_t bit = (uint32_t)1U << i;
-            bool test_alarm = false;
+            r[i] = 0.0f;
             if ((d->gen == NULL) || ((usable & d->input_mask) != d->input_mask) || !fdi_gen_in_domain(d->gen, frame))
             {
                 if ((self->rearm & bit) == 0U)
@@ -588,14 +736,20 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
                 self->residual[i] = 0.0f;
                 self->ratio[i] = 0.0f;
             }
-            else if (run_test(self, i, frame, want_sens, &test_alarm))
+            else
+            {
+                run |= bit;
+            }
+        }
+        ok = run_generators(self, frame, run, want_sens, r);
+        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+        {
+            const uint32_t bit = (uint32_t)1U << i;
+            bool test_alarm = false;
+            if (((run & bit) != 0U) && evaluate(self, i, (ok & bit) != 0U, r[i], &test_alarm))
             {
                 evaluable |= bit;
                 alarm |= test_alarm ? bit : 0U;
-            }
-            else
-            {
-                /* warming up or rejected: not evaluable */
             }
         }
         self->alarm = alarm;

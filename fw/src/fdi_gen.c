@@ -44,15 +44,119 @@ fdi_status_t fdi_gen_param_init(fdi_gen_param_t *par, const fdi_gen_config_t *cf
     return st;
 }
 
+fdi_status_t fdi_gen_set_check(const fdi_gen_set_t *set)
+{
+    bool ok = (set != NULL) && (set->name != NULL) && (set->step != NULL) && (set->n_slots >= 1U) &&
+              ((uint32_t)set->n_slots <= FDI_GEN_MAX_SLOTS) && ((set->bank != NULL) || (set->n_bank == 0U));
+    uint32_t k;
+    for (k = 0U; ok && (k < (uint32_t)set->n_bank); ++k)
+    {
+        const fdi_gen_bank_filter_t *f = &set->bank[k];
+        if ((uint32_t)f->signal >= FDI_FRAME_MAX_SIGNALS)
+        {
+            ok = false;
+        }
+        else if (f->source == FDI_GEN_BANK_RAW)
+        {
+            ok = f->order == 0U;
+        }
+        else
+        {
+            ok = ((uint32_t)f->source < k) && (set->bank[f->source].signal == f->signal) && (f->order <= 1U);
+        }
+    }
+    return ok ? FDI_OK : FDI_BAD_ARG;
+}
+
 fdi_status_t fdi_gen_desc_check(const fdi_gen_desc_t *desc)
 {
     fdi_status_t st = FDI_BAD_ARG;
-    if ((desc != NULL) && (desc->name != NULL) && (desc->step != NULL) && (desc->input_mask != 0U) &&
-        ((uint32_t)desc->n_filters <= FDI_GEN_MAX_FILTERS) && (desc->n_obs <= 1U))
+    if ((desc != NULL) && (desc->name != NULL) && (desc->input_mask != 0U) && (desc->n_obs <= 1U))
     {
-        st = FDI_OK;
+        if ((desc->step != NULL) && (desc->set == NULL))
+        {
+            st = ((uint32_t)desc->n_filters <= FDI_GEN_MAX_FILTERS) ? FDI_OK : FDI_BAD_ARG;
+        }
+        else if ((desc->step == NULL) && (fdi_gen_set_check(desc->set) == FDI_OK))
+        {
+            st = ((desc->n_filters == 0U) && (desc->slot < desc->set->n_slots)) ? FDI_OK : FDI_BAD_ARG;
+        }
+        else
+        {
+            /* neither a hand-written generator nor a slot of a usable set */
+        }
     }
     return st;
+}
+
+uint32_t fdi_gen_bank_signals(const fdi_gen_set_t *set)
+{
+    uint32_t m = 0U;
+    if (set != NULL)
+    {
+        uint32_t k;
+        for (k = 0U; k < (uint32_t)set->n_bank; ++k)
+        {
+            m |= (uint32_t)1U << (set->bank[k].signal & 31U);
+        }
+    }
+    return m;
+}
+
+uint32_t fdi_gen_bank_step(const fdi_gen_set_t *set, fdi_svf_t *bank, const fdi_svf_coef_t *coef,
+                           const fdi_frame_t *in, uint32_t usable, uint32_t live)
+{
+    uint32_t failed = 0U;
+    if ((set != NULL) && (bank != NULL) && (coef != NULL) && (in != NULL))
+    {
+        const float h = coef->h;
+        const float c1 = coef->c1;
+        const float c2 = coef->c2;
+        uint32_t k;
+        for (k = 0U; k < (uint32_t)set->n_bank; ++k)
+        {
+            const fdi_gen_bank_filter_t *f = &set->bank[k];
+            const uint32_t bit = (uint32_t)1U << (f->signal & 31U);
+            fdi_svf_t *x = &bank[k];
+            if ((usable & bit & ~failed) != 0U)
+            {
+                float u;
+                if (f->source == FDI_GEN_BANK_RAW)
+                {
+                    u = in->value[f->signal & 31U];
+                }
+                else
+                {
+                    const fdi_svf_t *src = &bank[f->source];
+                    u = (f->order == 0U) ? src->x1 : src->x2;
+                }
+                if ((live & bit) == 0U)
+                {
+                    x->x1 = u; /* restart in steady state at the input (the source restarted in this step too) */
+                    x->x2 = 0.0f;
+                    x->u_prev = u;
+                }
+                else
+                {
+                    /* fdi_svf_step() inline: one bank, one set of coefficients (fdi_svf.h) */
+                    const float e_sum = (x->u_prev - x->x1) + (u - x->x1);
+                    const float x2 = (c1 * x->x2) + (c2 * (e_sum - (h * x->x2)));
+                    const float x1 = x->x1 + (h * (x->x2 + x2));
+                    if (fdi_float_is_finite(x1) && fdi_float_is_finite(x2))
+                    {
+                        x->x1 = x1;
+                        x->x2 = x2;
+                        x->u_prev = u;
+                    }
+                    else
+                    {
+                        failed |= bit; /* holds; the signal's later filters hold too, all restart when usable */
+                    }
+                }
+            }
+        }
+    }
+    return failed;
 }
 
 uint32_t fdi_gen_sens_count(const fdi_gen_desc_t *desc)
@@ -80,21 +184,29 @@ bool fdi_gen_in_domain(const fdi_gen_desc_t *desc, const fdi_frame_t *in)
     return ok;
 }
 
-fdi_status_t fdi_gen_init(fdi_gen_t *self, const fdi_gen_desc_t *desc)
+fdi_status_t fdi_gen_init(fdi_gen_t *self, const fdi_gen_desc_t *desc, fdi_svf_t *filt, uint32_t n_filt,
+                          fdi_obs_t *obs)
 {
     fdi_status_t st = FDI_BAD_ARG;
-    if ((self != NULL) && (fdi_gen_desc_check(desc) == FDI_OK))
+    if ((self != NULL) && (fdi_gen_desc_check(desc) == FDI_OK) && (desc->step != NULL) &&
+        ((uint32_t)desc->n_filters <= n_filt) && ((filt != NULL) || (desc->n_filters == 0U)) &&
+        ((obs != NULL) || (desc->n_obs == 0U)))
     {
         uint32_t i;
         self->desc = desc;
-        for (i = 0U; i < FDI_GEN_MAX_FILTERS; ++i)
+        self->filt = filt;
+        self->obs = obs;
+        for (i = 0U; i < (uint32_t)desc->n_filters; ++i)
         {
-            self->filt[i].x1 = 0.0f;
-            self->filt[i].x2 = 0.0f;
-            self->filt[i].u_prev = 0.0f;
+            filt[i].x1 = 0.0f;
+            filt[i].x2 = 0.0f;
+            filt[i].u_prev = 0.0f;
         }
-        self->obs.xh = 0.0f;
-        self->obs.g_prev = 0.0f;
+        if (obs != NULL)
+        {
+            obs->xh = 0.0f;
+            obs->g_prev = 0.0f;
+        }
         st = FDI_OK;
     }
     return st;
@@ -110,7 +222,8 @@ static fdi_status_t run(fdi_gen_t *self, const fdi_gen_param_t *par, const fdi_f
                         float *sens)
 {
     fdi_status_t st;
-    if ((self == NULL) || (par == NULL) || (in == NULL) || (r == NULL) || (self->desc == NULL))
+    if ((self == NULL) || (par == NULL) || (in == NULL) || (r == NULL) || (self->desc == NULL) ||
+        (self->desc->step == NULL))
     {
         st = FDI_BAD_ARG;
     }
@@ -145,7 +258,8 @@ fdi_status_t fdi_gen_filter_step(fdi_gen_t *g, const fdi_gen_param_t *par, uint3
                                  fdi_svf_out_t *out)
 {
     fdi_status_t st;
-    if ((g == NULL) || (par == NULL) || (out == NULL) || (idx >= FDI_GEN_MAX_FILTERS))
+    if ((g == NULL) || (par == NULL) || (out == NULL) || (g->desc == NULL) || (g->filt == NULL) ||
+        (idx >= (uint32_t)g->desc->n_filters))
     {
         st = FDI_BAD_ARG;
     }
@@ -210,23 +324,23 @@ fdi_status_t fdi_gen_sens_finish(fdi_status_t st, const float *sens, uint32_t n)
     return res;
 }
 
-float fdi_gen_obs_predict(const fdi_gen_t *g, const fdi_gen_param_t *par, float g1, float jac)
+float fdi_gen_obs_predict(const fdi_obs_t *obs, const fdi_gen_param_t *par, float g1, float jac)
 {
     float xh = 0.0f;
-    if ((g != NULL) && (par != NULL))
+    if ((obs != NULL) && (par != NULL))
     {
         const float dt = 2.0f * par->svf.h;
         const float jdt = jac * dt;
         const float phi = (fabsf(jdt) > 1.0e-6f) ? (expm1f(jdt) / jac) : dt;
-        xh = g->obs.xh + (phi * (0.5f * (g->obs.g_prev + g1)));
+        xh = obs->xh + (phi * (0.5f * (obs->g_prev + g1)));
     }
     return xh;
 }
 
-fdi_status_t fdi_gen_obs_store(fdi_gen_t *g, float xh, float g_next)
+fdi_status_t fdi_gen_obs_store(fdi_obs_t *obs, float xh, float g_next)
 {
     fdi_status_t st = FDI_OK;
-    if (g == NULL)
+    if (obs == NULL)
     {
         st = FDI_BAD_ARG;
     }
@@ -236,31 +350,8 @@ fdi_status_t fdi_gen_obs_store(fdi_gen_t *g, float xh, float g_next)
     }
     else
     {
-        g->obs.xh = xh;
-        g->obs.g_prev = g_next;
+        obs->xh = xh;
+        obs->g_prev = g_next;
     }
     return st;
-}
-
-float fdi_gen_heaviside(float x)
-{
-    return (x > 0.0f) ? 1.0f : 0.0f;
-}
-
-float fdi_gen_sign(float x)
-{
-    float s = 0.0f;
-    if (x > 0.0f)
-    {
-        s = 1.0f;
-    }
-    else if (x < 0.0f)
-    {
-        s = -1.0f;
-    }
-    else
-    {
-        /* 0 (and NaN, caught by the caller's finiteness check) */
-    }
-    return s;
 }

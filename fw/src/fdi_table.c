@@ -94,6 +94,32 @@ static bool faults_ok(const fdi_table_t *t)
     return ok;
 }
 
+/* The generated generators of the tests: slots of one set, each slot at most once, the set's bank within the
+   vehicle's signals (the descriptors themselves are checked by test_ok). */
+static bool set_ok(const fdi_table_t *t, uint32_t signals)
+{
+    const fdi_gen_set_t *set = NULL;
+    uint32_t slots = 0U;
+    bool ok = true;
+    uint32_t i;
+    for (i = 0U; ok && (i < (uint32_t)t->n_tests); ++i)
+    {
+        const fdi_gen_desc_t *g = t->tests[i].gen;
+        if ((g != NULL) && (g->set != NULL))
+        {
+            const uint32_t bit = (uint32_t)1U << (g->slot & 31U);
+            ok = ((set == NULL) || (set == g->set)) && ((slots & bit) == 0U);
+            set = g->set;
+            slots |= bit;
+        }
+    }
+    if (ok && (set != NULL))
+    {
+        ok = (fdi_gen_set_check(set) == FDI_OK) && ((fdi_gen_bank_signals(set) & ~signals) == 0U);
+    }
+    return ok;
+}
+
 fdi_status_t fdi_table_check(const fdi_table_t *table)
 {
     fdi_status_t st = FDI_OK;
@@ -120,6 +146,10 @@ fdi_status_t fdi_table_check(const fdi_table_t *table)
             {
                 st = FDI_BAD_TABLE;
             }
+        }
+        if ((st == FDI_OK) && !set_ok(table, signals))
+        {
+            st = FDI_BAD_TABLE;
         }
         if ((st == FDI_OK) && !faults_ok(table))
         {

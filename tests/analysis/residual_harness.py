@@ -32,10 +32,22 @@ HARNESS = r"""
 extern const fdi_gen_desc_t *const harness_gens[];
 extern const int harness_n_gens;
 /* argv: n_signals, sensitivities (0/1), 4 generator parameters; stdin: n_signals values per line;
-   stdout per line: for each generator its residual, then (with sensitivities) its sensitivities */
+   stdout per line: for each generator its residual, then (with sensitivities) its sensitivities.
+   Hand-written generators run on their own instance; the slots of a generator set run through the set's bank and
+   step (every signal usable, all restarted at the first frame); residual and sensitivities 0 at the first frame. */
 int main(int argc, char **argv) {
+    static fdi_svf_t filt[32][FDI_GEN_MAX_FILTERS];
+    static fdi_obs_t obs[32];
+    static fdi_svf_t bank[FDI_GEN_MAX_BANK];
+    static fdi_obs_t set_obs[FDI_GEN_MAX_SLOTS];
+    static float set_r[FDI_GEN_MAX_SLOTS];
+    static float set_sens[256];
+    static unsigned counts[FDI_GEN_MAX_SLOTS];
+    static uint8_t at[FDI_GEN_MAX_SLOTS], sens_at[FDI_GEN_MAX_SLOTS];
     fdi_gen_param_t par;
     fdi_gen_t gen[32];
+    const fdi_gen_set_t *set = NULL;
+    uint32_t run = 0U, live = 0U;
     int k, first = 1, i, ns, with_sens;
     fdi_gen_config_t cfg = {0.01f, 1.0f, 0.7071f, 2.0f, {0.0f, 0.0f, 0.0f, 0.0f}};
     float sens[32];
@@ -45,19 +57,54 @@ int main(int argc, char **argv) {
     for (i = 0; i < 4; ++i) cfg.param[i] = strtof(argv[3 + i], NULL);
     if (fdi_gen_param_init(&par, &cfg) != FDI_OK) return 2;
     for (k = 0; k < harness_n_gens; ++k) {
-        if (fdi_gen_init(&gen[k], harness_gens[k]) != FDI_OK) return 3;
+        const fdi_gen_desc_t *d = harness_gens[k];
+        if (fdi_gen_desc_check(d) != FDI_OK) return 3;
+        if (d->set != NULL) {
+            if ((set != NULL) && (set != d->set)) return 3;
+            set = d->set;
+            run |= (uint32_t)1U << d->slot;
+            counts[d->slot] = fdi_gen_sens_count(d);
+        } else if (fdi_gen_init(&gen[k], d, filt[k], FDI_GEN_MAX_FILTERS, &obs[k]) != FDI_OK) {
+            return 3;
+        }
+    }
+    {
+        unsigned off = 0U;
+        for (i = 0; i < (int)FDI_GEN_MAX_SLOTS; ++i) {
+            at[i] = (uint8_t)i;
+            sens_at[i] = (uint8_t)off;
+            off += counts[i];
+        }
+        if (off > 256U) return 3;
     }
     for (;;) {
         fdi_frame_t in;
         for (i = 0; i < 32; ++i) in.value[i] = 0.0f;
         for (i = 0; i < ns; ++i) { if (scanf("%f", &in.value[i]) != 1) return 0; }
+        if (set != NULL) {
+            fdi_gen_io_t io;
+            const uint32_t failed = fdi_gen_bank_step(set, bank, &par.svf, &in, 0xFFFFFFFFU, first ? 0U : live);
+            live = 0xFFFFFFFFU & ~failed;
+            io.par = &par; io.in = &in; io.bank = bank; io.obs = set_obs; io.r = set_r; io.at = at;
+            io.sens = set_sens; io.sens_at = at; io.run = run; io.restart = first ? run : 0U;
+            io.sens_mask = with_sens ? run : 0U; io.failed = 0U;
+            io.sens_at = sens_at;
+            set->step(&io);
+            if ((failed != 0U) || (io.failed != 0U)) return 4;
+        }
         for (k = 0; k < harness_n_gens; ++k) {
+            const fdi_gen_desc_t *d = harness_gens[k];
             float r = 0.0f;
-            unsigned j, n = with_sens ? fdi_gen_sens_count(harness_gens[k]) : 0U;
-            fdi_status_t st;
-            if (first) {
+            unsigned j, n = with_sens ? fdi_gen_sens_count(d) : 0U;
+            fdi_status_t st = FDI_OK;
+            for (j = 0U; j < n; ++j) sens[j] = 0.0f;
+            if (d->set != NULL) {
+                if (!first) {
+                    r = set_r[d->slot];
+                    for (j = 0U; j < n; ++j) sens[j] = set_sens[sens_at[d->slot] + j];
+                }
+            } else if (first) {
                 st = fdi_gen_reset(&gen[k], &par, &in);
-                for (j = 0U; j < n; ++j) sens[j] = 0.0f;
             } else {
                 st = fdi_gen_step(&gen[k], &par, &in, &r, with_sens ? sens : NULL);
             }

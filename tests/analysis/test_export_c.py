@@ -105,7 +105,15 @@ def test_generated_table_compiles_and_passes_the_firmware_check(
     kinds = re.findall(r"^    \{\.gen = (&?\w+(?:\[\d+\])?),", generated[1], flags=re.M)
     assert kinds == [f"&fdi_romo_generators[{k}]" for k in range(int(n_tests))]
     gens_c = generated_files[f"{GENERATORS}.c"]
-    assert len(re.findall(r"^static fdi_status_t romo_gen_\d+\(", gens_c, flags=re.M)) == int(n_tests)
+    # one generator set: one step for all slots, one block per slot, one descriptor per slot pointing to the set
+    assert len(re.findall(r"^static void romo_gen_step\(", gens_c, flags=re.M)) == 2  # declaration, definition
+    assert len(re.findall(r"^    if \(\(run & 0x[0-9A-F]{8}U\) != 0U\) /\* MSO", gens_c, flags=re.M)) == int(n_tests)
+    assert len(re.findall(r"&fdi_romo_gen_set, \d+U\}", gens_c)) == int(n_tests)
+    # shared terms once: each steering angle's sin and cos evaluated once per step, no powf, no fmaxf, no double
+    assert all(len(re.findall(rf"{f}\(b\[\d+\]\.x1\)", gens_c)) == len(set(re.findall(rf"{f}\(b\[\d+\]\.x1\)",
+                                                                                          gens_c)))
+               for f in ("sinf", "cosf"))
+    assert "powf(" not in gens_c and "fmaxf(" not in gens_c and "double" not in gens_c
 
 
 def test_render_is_deterministic_and_rejects_bad_selections(repo: Path, tmp_path: Path) -> None:

@@ -125,6 +125,27 @@ static void random_table(table_buf_t *b, const fdi_table_t *design_from, fuzz_in
     b->t.test_size = b->size;
 }
 
+/* Filter states a table needs in the diagnoser: its set's bank and the hand-written generators' filters. */
+static uint32_t filters_needed(const fdi_table_t *t)
+{
+    uint32_t n = 0U;
+    const fdi_gen_set_t *set = NULL;
+    uint32_t i;
+    for (i = 0U; i < t->n_tests; ++i)
+    {
+        const fdi_gen_desc_t *g = t->tests[i].gen;
+        if ((g != NULL) && (g->set != NULL))
+        {
+            set = g->set;
+        }
+        else if (g != NULL)
+        {
+            n += g->n_filters;
+        }
+    }
+    return n + ((set != NULL) ? set->n_bank : 0U);
+}
+
 static fdi_diag_config_t good_config(const fdi_table_t *t)
 {
     fdi_diag_config_t c;
@@ -213,9 +234,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     else
     {
         random_table(&tb, &fdi_kin_table, &in);
-        if (fdi_table_check(&tb.t) != FDI_OK)
+        if ((fdi_table_check(&tb.t) != FDI_OK) || (filters_needed(&tb.t) > FDI_DIAG_MAX_FILTERS))
         {
-            return 0; /* e.g. more tests than the template has variances for: not a case for the diagnoser */
+            return 0; /* e.g. a generated generator twice, or more hand-written filters than the diagnoser holds:
+                         not a case for the diagnoser */
         }
         table = &tb.t;
         uint32_t n_sens = 0U;

@@ -64,9 +64,9 @@ static fdi_status_t gen2_step(fdi_gen_t *g, const fdi_gen_param_t *par, const fd
     return FDI_OK;
 }
 
-static const fdi_gen_desc_t gen0 = {"t0", gen0_step, NULL, 0x07U, 0x3U, 0U, 0U};
-static const fdi_gen_desc_t gen1 = {"t1", gen1_step, NULL, 0x18U, 0x2U, 0U, 0U};
-static const fdi_gen_desc_t gen2 = {"t2", gen2_step, NULL, 0x60U, 0x1U, 0U, 0U};
+static const fdi_gen_desc_t gen0 = {"t0", gen0_step, NULL, 0x07U, 0x3U, 0U, 0U, NULL, 0U};
+static const fdi_gen_desc_t gen1 = {"t1", gen1_step, NULL, 0x18U, 0x2U, 0U, 0U, NULL, 0U};
+static const fdi_gen_desc_t gen2 = {"t2", gen2_step, NULL, 0x60U, 0x1U, 0U, 0U, NULL, 0U};
 static const fdi_test_desc_t tests[3] = {
     {&gen0, "t0", 1U, 0x3U, 0x07U, 5.0f, 1.0f, RESP},
     {&gen1, "t1", 2U, 0x2U, 0x18U, 5.0f, 1.0f, RESP},

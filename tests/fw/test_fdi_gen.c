@@ -13,6 +13,7 @@
 
 #include "fdi_gen.h"
 #include "fdi_gen_impl.h"
+#include "fdi_romo_generators.h"
 #include "fdi_romo_kin.h"
 #include "fdi_test_vehicle.h"
 
@@ -33,6 +34,18 @@ static const uint32_t kind_faults[N_KINDS] = {0x1DU, 0x1EU, 0x0FU, 0x17U, 0x1DU,
  */
 static const double consistent_bound[N_KINDS] = {7e-4, 1.2e-3, 2.7e-3, 2.4e-3, 3e-5, 1.2e-5};
 
+/* Storage of a hand-written generator's instance (fdi_gen_t is a view on it). */
+typedef struct
+{
+    fdi_svf_t filt[FDI_GEN_MAX_FILTERS];
+    fdi_obs_t obs;
+} gen_storage_t;
+
+static fdi_status_t init(fdi_gen_t *g, const fdi_gen_desc_t *desc, gen_storage_t *m)
+{
+    return fdi_gen_init(g, desc, m->filt, FDI_GEN_MAX_FILTERS, &m->obs);
+}
+
 static void params(fdi_gen_param_t *p)
 {
     const fdi_gen_config_t cfg = {(float)DT, 1.0f, 0.7071f, 2.0f, {(float)VEH_DX, (float)VEH_DY, 0.0f, 0.0f}};
@@ -43,6 +56,7 @@ static void test_bad_args(void **state)
 {
     fdi_gen_param_t p;
     fdi_gen_t g;
+    gen_storage_t m;
     fdi_frame_t in;
     float r = 0.0f;
     veh_meas_cfg_t mc = {{0.0, 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0, 0.0}};
@@ -59,24 +73,32 @@ static void test_bad_args(void **state)
     assert_int_equal(fdi_gen_param_init(&p, &nan_dx), FDI_NOT_FINITE);
     params(&p);
     veh_measure(0.0, &mc, &rng, &in);
-    assert_int_equal(fdi_gen_init(NULL, &fdi_romo_kin_arr3), FDI_BAD_ARG);
-    assert_int_equal(fdi_gen_init(&g, NULL), FDI_BAD_ARG);
+    assert_int_equal(init(NULL, &fdi_romo_kin_arr3, &m), FDI_BAD_ARG);
+    assert_int_equal(init(&g, NULL, &m), FDI_BAD_ARG);
     bad.step = NULL; /* no step function */
-    assert_int_equal(fdi_gen_init(&g, &bad), FDI_BAD_ARG);
+    assert_int_equal(init(&g, &bad, &m), FDI_BAD_ARG);
     bad = fdi_romo_kin_arr3;
     bad.name = NULL;
-    assert_int_equal(fdi_gen_init(&g, &bad), FDI_BAD_ARG);
+    assert_int_equal(init(&g, &bad, &m), FDI_BAD_ARG);
     bad = fdi_romo_kin_arr3;
     bad.input_mask = 0U;
-    assert_int_equal(fdi_gen_init(&g, &bad), FDI_BAD_ARG);
+    assert_int_equal(init(&g, &bad, &m), FDI_BAD_ARG);
     bad = fdi_romo_kin_arr3;
     bad.n_filters = (uint8_t)(FDI_GEN_MAX_FILTERS + 1U);
-    assert_int_equal(fdi_gen_init(&g, &bad), FDI_BAD_ARG);
+    assert_int_equal(init(&g, &bad, &m), FDI_BAD_ARG);
     bad = fdi_romo_kin_arr3;
     bad.n_obs = 2U;
-    assert_int_equal(fdi_gen_init(&g, &bad), FDI_BAD_ARG);
+    assert_int_equal(init(&g, &bad, &m), FDI_BAD_ARG);
+    bad = fdi_romo_kin_arr3;
+    bad.set = &fdi_romo_gen_set; /* a step and a set: neither kind */
+    assert_int_equal(init(&g, &bad, &m), FDI_BAD_ARG);
+    assert_int_equal(fdi_gen_init(&g, &fdi_romo_kin_arr3, m.filt, 7U, &m.obs), FDI_BAD_ARG); /* needs 8 filters */
+    assert_int_equal(fdi_gen_init(&g, &fdi_romo_kin_arr3, NULL, 8U, &m.obs), FDI_BAD_ARG);
+    assert_int_equal(fdi_gen_init(&g, &fdi_romo_kin_x_obs, m.filt, 0U, NULL), FDI_BAD_ARG); /* needs its observer */
+    assert_int_equal(fdi_gen_init(&g, &fdi_romo_kin_arr3, m.filt, 8U, NULL), FDI_OK);     /* no observer needed */
+    assert_int_equal(fdi_gen_init(&g, &fdi_romo_generators[0], m.filt, 8U, &m.obs), FDI_BAD_ARG); /* a set's slot */
     assert_int_equal(fdi_gen_desc_check(NULL), FDI_BAD_ARG);
-    assert_int_equal(fdi_gen_init(&g, &fdi_romo_kin_arr3), FDI_OK);
+    assert_int_equal(init(&g, &fdi_romo_kin_arr3, &m), FDI_OK);
     assert_int_equal(fdi_gen_reset(NULL, &p, &in), FDI_BAD_ARG);
     assert_int_equal(fdi_gen_reset(&g, NULL, &in), FDI_BAD_ARG);
     assert_int_equal(fdi_gen_reset(&g, &p, NULL), FDI_BAD_ARG);
@@ -111,6 +133,7 @@ static void test_non_finite(void **state)
 {
     fdi_gen_param_t p;
     fdi_gen_t g;
+    gen_storage_t m;
     fdi_frame_t in;
     float r = 5.0f;
     veh_meas_cfg_t mc = {{0.0, 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0, 0.0}};
@@ -118,7 +141,7 @@ static void test_non_finite(void **state)
     (void)state;
     params(&p);
     veh_measure(0.0, &mc, &rng, &in);
-    assert_int_equal(fdi_gen_init(&g, &fdi_romo_kin_arr3), FDI_OK);
+    assert_int_equal(init(&g, &fdi_romo_kin_arr3, &m), FDI_OK);
     assert_int_equal(fdi_gen_reset(&g, &p, &in), FDI_OK);
     in.value[ROMO_SIG_VY_M] = NAN; /* ARR3 does not use vy_m */
     in.value[ROMO_SIG_OMEGA2_M] = INFINITY;
@@ -141,6 +164,7 @@ static void run(const fdi_gen_desc_t *kind, int j, double size, double noise_sca
     static const double sigma[5] = {0.02, 0.02, 0.001, 0.01, 0.01};
     fdi_gen_param_t p;
     fdi_gen_t g;
+    gen_storage_t m;
     fdi_frame_t in;
     veh_meas_cfg_t mc = {{0.0, 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0, 0.0}};
     test_rng_t rng = {42ULL};
@@ -151,7 +175,7 @@ static void run(const fdi_gen_desc_t *kind, int j, double size, double noise_sca
         mc.noise[i] = noise_scale * sigma[i];
     }
     params(&p);
-    assert_int_equal(fdi_gen_init(&g, kind), FDI_OK);
+    assert_int_equal(init(&g, kind, &m), FDI_OK);
     veh_measure(0.0, &mc, &rng, &in);
     assert_int_equal(fdi_gen_reset(&g, &p, &in), FDI_OK);
     for (k = 1; k <= (int)(T_END / DT + 0.5); ++k)
@@ -240,6 +264,7 @@ static void test_long_run(void **state)
 {
     fdi_gen_param_t p;
     fdi_gen_t g;
+    gen_storage_t m;
     fdi_frame_t in;
     veh_meas_cfg_t mc = {{0.0, 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0, 0.0}};
     test_rng_t rng = {7ULL};
@@ -247,7 +272,7 @@ static void test_long_run(void **state)
     long k;
     (void)state;
     params(&p);
-    assert_int_equal(fdi_gen_init(&g, &fdi_romo_kin_arr3), FDI_OK);
+    assert_int_equal(init(&g, &fdi_romo_kin_arr3, &m), FDI_OK);
     veh_measure(0.0, &mc, &rng, &in);
     assert_int_equal(fdi_gen_reset(&g, &p, &in), FDI_OK);
     for (k = 1; k <= 1000000L; ++k)

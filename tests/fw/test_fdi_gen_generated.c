@@ -1,13 +1,15 @@
 /*
  * test_fdi_gen_generated.c - the generated residual generators of the ROMO target
- * (fw/vehicles/romo/generated/fdi_romo_generators.c) through their descriptors: descriptors and input masks,
- * bad descriptors rejected by fdi_gen_init and fdi_table_check, non-finite inputs, the exported table accepted,
- * the sensitivities (finite, zero cost when not requested: the residual is the same), and the generated MSO3
- * generator equal to -r3 of the hand-written fdi_romo_kin_arr3 on the analytic reference vehicle (same filters,
- * same relation times w^2),
- * and the operating domain: a tyre-law test is "not evaluable" in fdi_diag below its minimum speed and
- * restarts with a warm-up when the speed returns, while the kinematic tests stay evaluable; the observer
- * building blocks (fdi_gen_obs_predict/store, heaviside, sign) against the exact solution of x' = J x + b.
+ * (fw/vehicles/romo/generated/fdi_romo_generators.c): one generator set (fdi_gen.h) whose slots the table's tests
+ * point to; descriptors, slots and input masks, the bank (every filtered signal once, fed by its raw signal or an
+ * earlier filter of the same signal; a filter restarts when its signal becomes usable and holds while it is not),
+ * bad descriptors and sets rejected by fdi_gen_desc_check, fdi_gen_init and fdi_table_check (a slot used twice,
+ * two sets), the exported table accepted, the sensitivities (finite, zero cost when not requested: the residual is
+ * the same bit for bit), and the generated MSO3 generator equal to -r3 of the hand-written fdi_romo_kin_arr3 on
+ * the analytic reference vehicle (same filters, same relation times w^2), and the operating domain: a tyre-law
+ * test is "not evaluable" in fdi_diag below its minimum speed and restarts with a warm-up when the speed returns,
+ * while the kinematic tests stay evaluable; the observer building blocks (fdi_gen_obs_predict/store, heaviside,
+ * sign, max, min) against the exact solution of x' = J x + b.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -25,6 +27,7 @@
 #include "fdi_romo_kin.h"
 #include "fdi_romo_table.h"
 #include "fdi_table.h"
+#include "fdi_test_gen.h"
 #include "fdi_test_vehicle.h"
 
 #define DT 0.01
@@ -38,41 +41,84 @@ static void params(fdi_gen_param_t *p)
 static void test_slots_and_inputs(void **state)
 {
     uint32_t i;
+    uint32_t k;
     (void)state;
     assert_int_equal((uint32_t)fdi_romo_table.n_tests, FDI_ROMO_N_GENERATORS);
+    assert_int_equal(fdi_gen_set_check(&fdi_romo_gen_set), FDI_OK);
+    assert_int_equal((uint32_t)fdi_romo_gen_set.n_slots, FDI_ROMO_N_GENERATORS);
     for (i = 0U; i < (uint32_t)fdi_romo_table.n_tests; ++i)
     {
         const fdi_test_desc_t *d = &fdi_romo_table.tests[i];
         assert_ptr_equal(d->gen, &fdi_romo_generators[i]);
         assert_int_equal(fdi_gen_desc_check(d->gen), FDI_OK);
+        assert_ptr_equal(d->gen->set, &fdi_romo_gen_set);
+        assert_int_equal((uint32_t)d->gen->slot, i);
+        assert_null(d->gen->step);
+        assert_int_equal((uint32_t)d->gen->n_filters, 0U);
         assert_true(d->gen->input_mask != 0U);
         assert_int_equal(d->input_mask & d->gen->input_mask, d->gen->input_mask);
         assert_int_equal(d->gen->sens_mask & ~d->fault_mask, 0U); /* sensitivities within the signature */
-        assert_true(d->gen->n_filters <= FDI_GEN_MAX_FILTERS);
     }
+    /* the bank: every signal the generators filter, once; a chain stays within its signal */
+    assert_true(fdi_romo_gen_set.n_bank >= 1U);
+    for (k = 0U; k < (uint32_t)fdi_romo_gen_set.n_bank; ++k)
+    {
+        const fdi_gen_bank_filter_t *f = &fdi_romo_gen_set.bank[k];
+        uint32_t j;
+        assert_true((f->source == FDI_GEN_BANK_RAW) || (fdi_romo_gen_set.bank[f->source].signal == f->signal));
+        for (j = 0U; j < k; ++j)
+        {
+            const fdi_gen_bank_filter_t *g = &fdi_romo_gen_set.bank[j];
+            assert_false((g->signal == f->signal) && (g->source == f->source) && (g->order == f->order));
+        }
+    }
+    assert_int_equal(fdi_gen_bank_signals(&fdi_romo_gen_set) & ~ROMO_SIGM_ALL, 0U);
+    assert_int_equal(fdi_gen_bank_signals(NULL), 0U);
     assert_int_equal(fdi_table_check(&fdi_romo_table), FDI_OK);
 }
 
-static void test_unlinked_and_bad_inputs(void **state)
+/* A finite frame of the reference vehicle with the wheel signals of a steady drive at 10 m/s. */
+static void wheel_frame(double t, fdi_frame_t *in)
 {
-    fdi_gen_param_t p;
-    fdi_gen_t g;
-    fdi_frame_t in;
-    float r = 0.0f;
     veh_meas_cfg_t mc = {{0.0, 0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0, 0.0}};
     test_rng_t rng = {1ULL};
+    veh_measure(t, &mc, &rng, in);
+    in->value[ROMO_SIG_ITM1_M] = 10.0f;
+    in->value[ROMO_SIG_ITM2_M] = 10.0f;
+    in->value[ROMO_SIG_ITM3_M] = 10.0f;
+    in->value[ROMO_SIG_ITM4_M] = 10.0f;
+    in->value[ROMO_SIG_OMEGA1_M] = 37.0f;
+    in->value[ROMO_SIG_OMEGA2_M] = 37.0f;
+    in->value[ROMO_SIG_OMEGA3_M] = 37.0f;
+    in->value[ROMO_SIG_OMEGA4_M] = 37.0f;
+    in->value[ROMO_SIG_P_F_M] = 0.0f;
+    in->value[ROMO_SIG_P_R_M] = 0.0f;
+    in->value[ROMO_SIG_DELTA1_M] = 0.0f;
+    in->value[ROMO_SIG_DELTA2_M] = 0.0f;
+    in->value[ROMO_SIG_DELTA3_M] = 0.0f;
+    in->value[ROMO_SIG_DELTA4_M] = 0.0f;
+}
+
+static void test_bad_descriptors_and_sets(void **state)
+{
     fdi_test_desc_t tests_copy[FDI_TABLE_MAX_TESTS];
     fdi_gen_desc_t bad = fdi_romo_generators[0];
+    fdi_gen_set_t bad_set = fdi_romo_gen_set;
+    fdi_gen_bank_filter_t bank[2] = {{0U, FDI_GEN_BANK_RAW, 0U}, {0U, 0U, 1U}};
     fdi_table_t t = fdi_romo_table;
-    float sens[32];
-    uint32_t i;
     (void)state;
-    params(&p);
     memcpy(tests_copy, fdi_romo_table.tests, sizeof(fdi_test_desc_t) * fdi_romo_table.n_tests);
     t.tests = tests_copy;
-    bad.step = NULL; /* no step function */
     tests_copy[0].gen = &bad;
+    bad.set = NULL; /* neither a step nor a set */
+    assert_int_equal(fdi_gen_desc_check(&bad), FDI_BAD_ARG);
     assert_int_equal(fdi_table_check(&t), FDI_BAD_TABLE);
+    bad = fdi_romo_generators[0];
+    bad.slot = fdi_romo_gen_set.n_slots; /* no such slot */
+    assert_int_equal(fdi_gen_desc_check(&bad), FDI_BAD_ARG);
+    bad = fdi_romo_generators[0];
+    bad.n_filters = 1U; /* a slot has no instance filters */
+    assert_int_equal(fdi_gen_desc_check(&bad), FDI_BAD_ARG);
     bad = fdi_romo_generators[0];
     bad.sens_mask = ~fdi_romo_table.tests[0].fault_mask; /* sensitivities outside the signature */
     assert_int_equal(fdi_table_check(&t), FDI_BAD_TABLE);
@@ -81,35 +127,127 @@ static void test_unlinked_and_bad_inputs(void **state)
     assert_int_equal(fdi_table_check(&t), FDI_BAD_TABLE);
     bad = fdi_romo_generators[0];
     assert_int_equal(fdi_table_check(&t), FDI_OK);
-    for (i = 0U; i < (uint32_t)fdi_romo_table.n_tests; ++i)
+    bad = fdi_romo_generators[1]; /* slot 1 twice */
+    assert_int_equal(fdi_table_check(&t), FDI_BAD_TABLE);
+    bad = fdi_romo_generators[0];
+    bad.set = &bad_set; /* a second set */
+    assert_int_equal(fdi_table_check(&t), FDI_BAD_TABLE);
+    /* sets */
+    assert_int_equal(fdi_gen_set_check(NULL), FDI_BAD_ARG);
+    bad_set.step = NULL;
+    assert_int_equal(fdi_gen_set_check(&bad_set), FDI_BAD_ARG);
+    bad_set = fdi_romo_gen_set;
+    bad_set.n_slots = 0U;
+    assert_int_equal(fdi_gen_set_check(&bad_set), FDI_BAD_ARG);
+    bad_set = fdi_romo_gen_set;
+    bad_set.n_slots = 33U;
+    assert_int_equal(fdi_gen_set_check(&bad_set), FDI_BAD_ARG);
+    bad_set = fdi_romo_gen_set;
+    bad_set.bank = NULL;
+    assert_int_equal(fdi_gen_set_check(&bad_set), FDI_BAD_ARG);
+    bad_set.n_bank = 0U; /* no filters at all: allowed */
+    assert_int_equal(fdi_gen_set_check(&bad_set), FDI_OK);
+    bad_set.bank = bank;
+    bad_set.n_bank = 2U;
+    assert_int_equal(fdi_gen_set_check(&bad_set), FDI_OK);
+    bank[1].signal = 1U; /* fed from a filter of another signal */
+    assert_int_equal(fdi_gen_set_check(&bad_set), FDI_BAD_ARG);
+    bank[1].signal = 0U;
+    bank[1].source = 1U; /* fed from itself */
+    assert_int_equal(fdi_gen_set_check(&bad_set), FDI_BAD_ARG);
+    bank[1].source = 0U;
+    bank[1].order = 2U;
+    assert_int_equal(fdi_gen_set_check(&bad_set), FDI_BAD_ARG);
+    bank[1].order = 1U;
+    bank[0].order = 1U; /* a raw filter has no order */
+    assert_int_equal(fdi_gen_set_check(&bad_set), FDI_BAD_ARG);
+    bank[0].order = 0U;
+    bank[0].signal = 32U;
+    assert_int_equal(fdi_gen_set_check(&bad_set), FDI_BAD_ARG);
+}
+
+/* The bank: restart in steady state at the input, a chain's second filter fed with the first's derivative, hold
+   while the signal is not usable, restart when usable again, hold and report a filter that would overflow. */
+static void test_bank(void **state)
+{
+    fdi_gen_param_t p;
+    fdi_frame_t in;
+    fdi_svf_t b[2];
+    const fdi_gen_bank_filter_t bank[2] = {{3U, FDI_GEN_BANK_RAW, 0U}, {3U, 0U, 1U}};
+    fdi_gen_set_t set = fdi_romo_gen_set;
+    const uint32_t sig = (uint32_t)1U << 3U;
+    uint32_t k;
+    (void)state;
+    params(&p);
+    set.bank = bank;
+    set.n_bank = 2U;
+    memset(&in, 0, sizeof in);
+    memset(b, 0, sizeof b);
+    in.value[3] = 2.0f;
+    assert_int_equal(fdi_gen_bank_step(&set, b, &p.svf, &in, sig, 0U), 0U); /* first step: restart */
+    assert_near(b[0].x1, 2.0, 0.0);
+    assert_near(b[0].x2, 0.0, 0.0);
+    assert_near(b[1].x1, 0.0, 0.0);
+    assert_near(b[1].x2, 0.0, 0.0);
+    for (k = 0U; k < 500U; ++k) /* a ramp of slope 1: y follows, dy -> 1, and the second filter's y -> 1 */
     {
-        veh_measure(1.0, &mc, &rng, &in);
-        in.value[ROMO_SIG_ITM1_M] = 10.0f;
-        in.value[ROMO_SIG_ITM2_M] = 10.0f;
-        in.value[ROMO_SIG_ITM3_M] = 10.0f;
-        in.value[ROMO_SIG_ITM4_M] = 10.0f;
-        in.value[ROMO_SIG_OMEGA1_M] = 37.0f;
-        in.value[ROMO_SIG_OMEGA2_M] = 37.0f;
-        in.value[ROMO_SIG_OMEGA3_M] = 37.0f;
-        in.value[ROMO_SIG_OMEGA4_M] = 37.0f;
-        in.value[ROMO_SIG_P_F_M] = 0.0f;
-        in.value[ROMO_SIG_P_R_M] = 0.0f;
-        in.value[ROMO_SIG_DELTA1_M] = 0.0f;
-        in.value[ROMO_SIG_DELTA2_M] = 0.0f;
-        in.value[ROMO_SIG_DELTA3_M] = 0.0f;
-        in.value[ROMO_SIG_DELTA4_M] = 0.0f;
-        assert_int_equal(fdi_gen_init(&g, fdi_romo_table.tests[i].gen), FDI_OK);
-        assert_int_equal(fdi_gen_reset(&g, &p, &in), FDI_OK);
-        assert_int_equal(fdi_gen_step(&g, &p, &in, &r, sens), FDI_OK);
-        assert_true(fdi_float_is_finite(r));
-        assert_true(fdi_gen_sens_count(fdi_romo_table.tests[i].gen) <= 32U);
-        in.value[ROMO_SIG_PSIDOT_M] = NAN;
-        in.value[ROMO_SIG_OMEGA1_M] = INFINITY;
-        in.value[ROMO_SIG_OMEGA2_M] = INFINITY;
-        in.value[ROMO_SIG_OMEGA3_M] = INFINITY;
-        in.value[ROMO_SIG_OMEGA4_M] = INFINITY;
-        assert_int_equal(fdi_gen_step(&g, &p, &in, &r, NULL), FDI_NOT_FINITE);
+        in.value[3] = 2.0f + (0.01f * (float)(k + 1U));
+        assert_int_equal(fdi_gen_bank_step(&set, b, &p.svf, &in, sig, sig), 0U);
     }
+    assert_near(b[0].x2, 1.0, 1e-3);
+    assert_near(b[1].x1, 1.0, 1e-3);
+    in.value[3] = 100.0f; /* not usable: holds */
+    assert_int_equal(fdi_gen_bank_step(&set, b, &p.svf, &in, 0U, sig), 0U);
+    assert_near(b[1].x1, 1.0, 1e-3);
+    assert_int_equal(fdi_gen_bank_step(&set, b, &p.svf, &in, sig, 0U), 0U); /* usable again: restart */
+    assert_near(b[0].x1, 100.0, 0.0);
+    assert_near(b[0].x2, 0.0, 0.0);
+    assert_near(b[1].x1, 0.0, 0.0);
+    in.value[3] = FLT_MAX; /* the second such sample makes the state overflow: held, reported */
+    assert_int_equal(fdi_gen_bank_step(&set, b, &p.svf, &in, sig, sig), 0U);
+    {
+        const float held = b[0].x1;
+        assert_int_equal(fdi_gen_bank_step(&set, b, &p.svf, &in, sig, sig), sig);
+        assert_near(b[0].x1, held, 0.0);
+    }
+    assert_int_equal(fdi_gen_bank_step(NULL, b, &p.svf, &in, sig, sig), 0U);
+    assert_int_equal(fdi_gen_bank_step(&set, NULL, &p.svf, &in, sig, sig), 0U);
+}
+
+/* Every slot on finite frames: finite residuals and sensitivities; non-finite ones reported as failed. */
+static void test_slots_run(void **state)
+{
+    static test_set_t ts;
+    fdi_gen_param_t p;
+    fdi_frame_t in;
+    float r[FDI_GEN_MAX_SLOTS];
+    float sens[FDI_DIAG_MAX_SENS];
+    const uint32_t all = ((uint32_t)1U << FDI_ROMO_N_GENERATORS) - 1U;
+    uint32_t i;
+    int n;
+    (void)state;
+    params(&p);
+    test_set_init(&ts, &fdi_romo_gen_set, fdi_romo_generators);
+    for (n = 0; n < 50; ++n)
+    {
+        wheel_frame(1.0 + (0.01 * (double)n), &in);
+        assert_int_equal(test_set_step(&ts, &p, &in, all, n == 0, r, sens), 0U);
+        for (i = 0U; i < FDI_ROMO_N_GENERATORS; ++i)
+        {
+            assert_true(fdi_float_is_finite(r[i]));
+            assert_true(fdi_gen_sens_count(&fdi_romo_generators[i]) <= 32U);
+        }
+    }
+    for (i = 0U; i < (uint32_t)ts.sens_at[FDI_ROMO_N_GENERATORS - 1U] +
+                     fdi_gen_sens_count(&fdi_romo_generators[FDI_ROMO_N_GENERATORS - 1U]); ++i)
+    {
+        assert_true(fdi_float_is_finite(sens[i]));
+    }
+    /* a huge frame value in a raw (unfiltered) node or the observer of the set makes slots fail, not crash */
+    wheel_frame(2.0, &in);
+    in.value[ROMO_SIG_OMEGA1_M] = 3.0e38f;
+    in.value[ROMO_SIG_AX_M] = -3.0e38f;
+    assert_true(test_set_step(&ts, &p, &in, all, false, r, NULL) != 0U);
 }
 
 static void frame(fdi_frame_t *in, float vx)
@@ -217,40 +355,85 @@ static void test_operating_domain(void **state)
    and its sensitivities are finite: the sensitivity code runs after the residual and only when asked. */
 static void test_sensitivities_leave_the_residual_alone(void **state)
 {
+    static test_set_t a;
+    static test_set_t b;
     fdi_gen_param_t p;
-    uint32_t i;
+    fdi_frame_t in;
+    float ra[FDI_GEN_MAX_SLOTS];
+    float rb[FDI_GEN_MAX_SLOTS];
+    float sens[FDI_DIAG_MAX_SENS];
+    const uint32_t all = ((uint32_t)1U << FDI_ROMO_N_GENERATORS) - 1U;
+    int n;
     (void)state;
     params(&p);
-    for (i = 0U; i < (uint32_t)fdi_romo_table.n_tests; ++i)
+    test_set_init(&a, &fdi_romo_gen_set, fdi_romo_generators);
+    test_set_init(&b, &fdi_romo_gen_set, fdi_romo_generators);
+    for (n = 0; n < 400; ++n)
     {
-        const fdi_gen_desc_t *desc = fdi_romo_table.tests[i].gen;
-        const uint32_t n_sens = fdi_gen_sens_count(desc);
-        fdi_gen_t a;
-        fdi_gen_t b;
-        fdi_frame_t in;
-        float sens[32];
-        int n;
-        assert_true(n_sens <= 32U);
-        assert_int_equal(fdi_gen_init(&a, desc), FDI_OK);
-        assert_int_equal(fdi_gen_init(&b, desc), FDI_OK);
-        frame(&in, 12.0f);
-        assert_int_equal(fdi_gen_reset(&a, &p, &in), FDI_OK);
-        assert_int_equal(fdi_gen_reset(&b, &p, &in), FDI_OK);
-        for (n = 1; n < 400; ++n)
+        uint32_t i;
+        frame(&in, 12.0f + (0.5f * sinf(0.01f * (float)n)));
+        in.value[ROMO_SIG_PSIDOT_M] = 0.3f;
+        in.value[ROMO_SIG_DELTA1_M] = 0.02f;
+        in.value[ROMO_SIG_ITM1_M] = 15.0f;
+        assert_int_equal(test_set_step(&a, &p, &in, all, n == 0, ra, NULL), 0U);
+        assert_int_equal(test_set_step(&b, &p, &in, all, n == 0, rb, sens), 0U);
+        assert_true(memcmp(ra, rb, sizeof(float) * FDI_ROMO_N_GENERATORS) == 0);
+        for (i = 0U; i < FDI_ROMO_N_GENERATORS; ++i)
         {
-            float ra = 0.0f;
-            float rb = 0.0f;
-            uint32_t k;
-            frame(&in, 12.0f + (0.5f * sinf(0.01f * (float)n)));
-            in.value[ROMO_SIG_PSIDOT_M] = 0.3f;
-            in.value[ROMO_SIG_DELTA1_M] = 0.02f;
-            in.value[ROMO_SIG_ITM1_M] = 15.0f;
-            assert_int_equal(fdi_gen_step(&a, &p, &in, &ra, NULL), FDI_OK);
-            assert_int_equal(fdi_gen_step(&b, &p, &in, &rb, sens), FDI_OK);
-            assert_true(memcmp(&ra, &rb, sizeof ra) == 0);
-            for (k = 0U; k < n_sens; ++k)
+            uint32_t j;
+            for (j = 0U; j < fdi_gen_sens_count(&fdi_romo_generators[i]); ++j)
             {
-                assert_true(fdi_float_is_finite(sens[k]));
+                assert_true(fdi_float_is_finite(sens[b.sens_at[i] + j]));
+            }
+        }
+    }
+}
+
+/*
+ * The diagnoser on the ROMO table with sensitivities reported (cfg.sensitivities): its residuals are those of the
+ * set run on its own, bit for bit (the bank restarted at the first step as the standalone run's), and so are every
+ * evaluated test's sensitivities at every step, listed in the result by sens_offset.
+ */
+static void test_diag_sensitivities(void **state)
+{
+    static test_set_t ts;
+    static fdi_diag_t d;
+    static fdi_diag_result_t res;
+    fdi_diag_config_t cfg;
+    fdi_gen_param_t p;
+    fdi_frame_t in;
+    float r[FDI_GEN_MAX_SLOTS];
+    float sens[FDI_DIAG_MAX_SENS];
+    const uint32_t all = ((uint32_t)1U << FDI_ROMO_N_GENERATORS) - 1U;
+    int n;
+    (void)state;
+    assert_int_equal(fdi_diag_config_default(&cfg, &fdi_romo_table), FDI_OK);
+    cfg.gen_param[FDI_ROMO_KIN_PARAM_D_X] = (float)VEH_DX;
+    cfg.gen_param[FDI_ROMO_KIN_PARAM_D_Y] = (float)VEH_DY;
+    cfg.warmup_steps = 300U;
+    cfg.sensitivities = true;
+    assert_int_equal(fdi_diag_init(&d, &cfg), FDI_OK);
+    params(&p);
+    test_set_init(&ts, &fdi_romo_gen_set, fdi_romo_generators);
+    for (n = 0; n < 400; ++n)
+    {
+        uint32_t i;
+        frame(&in, 12.0f + (0.5f * sinf(0.01f * (float)n)));
+        in.value[ROMO_SIG_PSIDOT_M] = 0.3f + (0.05f * cosf(0.02f * (float)n));
+        in.value[ROMO_SIG_DELTA1_M] = 0.02f;
+        in.value[ROMO_SIG_ITM1_M] = 15.0f;
+        assert_int_equal(test_set_step(&ts, &p, &in, all, n == 0, r, sens), 0U);
+        assert_int_equal(fdi_diag_step(&d, &in, ROMO_SIGM_ALL), FDI_OK);
+        assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
+        assert_true(memcmp(r, res.residual, sizeof(float) * FDI_ROMO_N_GENERATORS) == 0);
+        for (i = 0U; i < FDI_ROMO_N_GENERATORS; ++i)
+        {
+            uint32_t j;
+            assert_int_equal((uint32_t)res.sens_offset[i + 1U] - (uint32_t)res.sens_offset[i],
+                             fdi_gen_sens_count(&fdi_romo_generators[i]));
+            for (j = 0U; j < fdi_gen_sens_count(&fdi_romo_generators[i]); ++j)
+            {
+                assert_true(memcmp(&res.sens[res.sens_offset[i] + j], &sens[ts.sens_at[i] + j], sizeof(float)) == 0);
             }
         }
     }
@@ -263,34 +446,33 @@ static void test_observer_building_blocks(void **state)
     const float poles[3] = {-12.566f, -400.0f, 0.0f};
     const float b = 3.0f;
     fdi_gen_param_t p;
-    fdi_gen_t g;
+    fdi_obs_t o;
     uint32_t i;
     (void)state;
     params(&p);
-    assert_int_equal(fdi_gen_init(&g, &fdi_romo_kin_x_deriv), FDI_OK);
     for (i = 0U; i < 3U; ++i)
     {
         const double jac = (double)poles[i];
         double x = 2.0;
         int n;
-        g.obs.xh = 2.0f;
-        g.obs.g_prev = (poles[i] * 2.0f) + b;
+        o.xh = 2.0f;
+        o.g_prev = (poles[i] * 2.0f) + b;
         for (n = 0; n < 50; ++n)
         {
-            const float g1 = (poles[i] * g.obs.xh) + b;
-            const float xh = fdi_gen_obs_predict(&g, &p, g1, poles[i]);
+            const float g1 = (poles[i] * o.xh) + b;
+            const float xh = fdi_gen_obs_predict(&o, &p, g1, poles[i]);
             const double e = exp(jac * DT);
             x = (fabs(jac) > 0.0) ? ((e * x) + (((e - 1.0) / jac) * (double)b)) : (x + (DT * (double)b));
             assert_true(fabs((double)xh - x) < (1e-4 * (1.0 + fabs(x))));
-            assert_int_equal(fdi_gen_obs_store(&g, xh, (poles[i] * xh) + b), FDI_OK);
+            assert_int_equal(fdi_gen_obs_store(&o, xh, (poles[i] * xh) + b), FDI_OK);
         }
     }
     assert_true(fabs((double)fdi_gen_obs_predict(NULL, &p, 1.0f, -1.0f) - (double)0.0f) <= 0.0);
-    assert_true(fabs((double)fdi_gen_obs_predict(&g, NULL, 1.0f, -1.0f) - (double)0.0f) <= 0.0);
-    g.obs.xh = 1.0f;
-    assert_int_equal(fdi_gen_obs_store(&g, NAN, 0.0f), FDI_NOT_FINITE);
-    assert_int_equal(fdi_gen_obs_store(&g, 0.0f, INFINITY), FDI_NOT_FINITE);
-    assert_true(fabs((double)g.obs.xh - (double)1.0f) <= 0.0); /* nothing stored */
+    assert_true(fabs((double)fdi_gen_obs_predict(&o, NULL, 1.0f, -1.0f) - (double)0.0f) <= 0.0);
+    o.xh = 1.0f;
+    assert_int_equal(fdi_gen_obs_store(&o, NAN, 0.0f), FDI_NOT_FINITE);
+    assert_int_equal(fdi_gen_obs_store(&o, 0.0f, INFINITY), FDI_NOT_FINITE);
+    assert_true(fabs((double)o.xh - (double)1.0f) <= 0.0); /* nothing stored */
     assert_int_equal(fdi_gen_obs_store(NULL, 0.0f, 0.0f), FDI_BAD_ARG);
     assert_true(fabs((double)fdi_gen_heaviside(0.5f) - (double)1.0f) <= 0.0);
     assert_true(fabs((double)fdi_gen_heaviside(0.0f) - (double)0.0f) <= 0.0);
@@ -298,15 +480,22 @@ static void test_observer_building_blocks(void **state)
     assert_true(fabs((double)fdi_gen_sign(-3.0f) - (double)-1.0f) <= 0.0);
     assert_true(fabs((double)fdi_gen_sign(0.0f) - (double)0.0f) <= 0.0);
     assert_true(fabs((double)fdi_gen_sign(7.0f) - (double)1.0f) <= 0.0);
+    assert_true(fabs((double)fdi_gen_max(2.0f, -1.0f) - 2.0) <= 0.0);
+    assert_true(fabs((double)fdi_gen_max(-1.0f, 2.0f) - 2.0) <= 0.0);
+    assert_true(fabs((double)fdi_gen_min(2.0f, -1.0f) + 1.0) <= 0.0);
+    assert_true(fabs((double)fdi_gen_min(-1.0f, 2.0f) + 1.0) <= 0.0);
 }
 
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_slots_and_inputs),
-        cmocka_unit_test(test_unlinked_and_bad_inputs),
+        cmocka_unit_test(test_bad_descriptors_and_sets),
+        cmocka_unit_test(test_bank),
+        cmocka_unit_test(test_slots_run),
         cmocka_unit_test(test_operating_domain),
         cmocka_unit_test(test_sensitivities_leave_the_residual_alone),
+        cmocka_unit_test(test_diag_sensitivities),
         cmocka_unit_test(test_observer_building_blocks),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -89,7 +89,7 @@ def generate_all(model_path: Path, thresholds_path: Path, out: Path, name: str, 
                                  sizes_path.as_posix() if sizes_path is not None else "(no fault-size file)"):
             print(f"wrote {path}")
     faults = [f.name for f in model.faults]
-    gh, gc = emit_c.render(emit_c.generators_file(gens, names, faults, top))
+    gh, gc = emit_c.render(emit_c.generators_file(gens, names, faults, top, signals=[k.name for k in model.knowns]))
     sh, sc = emit_signals.render(emit_signals.signals_file(model, names, top))
     return {f"{name}.h": header, f"{name}.c": source, f"{names.generators}.h": gh, f"{names.generators}.c": gc,
             f"{names.signals}.h": sh, f"{names.signals}.c": sc}

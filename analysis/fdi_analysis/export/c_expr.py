@@ -1,5 +1,7 @@
 """sympy expression -> MISRA-style C99 float expression (every binary operation parenthesised, float
-literals with an f suffix, integer powers as products, single-precision math functions)."""
+literals with an f suffix, integer powers as products and half-integer powers as products with one square root,
+single-precision math functions; Max/Min and the derivatives of Max and Abs through the inline helpers of
+fw/include/fdi_gen_impl.h, no library call)."""
 
 from __future__ import annotations
 
@@ -8,6 +10,7 @@ from collections.abc import Callable
 import numpy as np
 import sympy
 
+MAX_PRODUCT = 8  # integer powers up to this exponent become products (beyond: powf)
 _FUNCS = {sympy.sin: "sinf", sympy.cos: "cosf", sympy.tanh: "tanhf", sympy.Abs: "fabsf", sympy.exp: "expf",
           sympy.tan: "tanf", sympy.atan: "atanf"}
 
@@ -47,17 +50,15 @@ def to_c(e: sympy.Basic, name: Callable[[sympy.Symbol], str]) -> str:
     if isinstance(e, sympy.Pow):
         base, ex = e.args
         b = to_c(base, name)
-        if ex.is_Integer and 1 <= int(ex) <= 4:
-            return "(" + " * ".join([b] * int(ex)) + ")"
-        if ex.is_Integer and -4 <= int(ex) <= -1:
-            return "(1.0f / (" + " * ".join([b] * -int(ex)) + "))"
-        if ex == sympy.Rational(1, 2):
-            return f"sqrtf({b})"
-        if ex == sympy.Rational(-1, 2):
-            return f"(1.0f / sqrtf({b}))"
+        twice = 2 * ex
+        if twice.is_Integer and 1 <= abs(int(twice)) <= 2 * MAX_PRODUCT:
+            n, half = divmod(abs(int(twice)), 2)  # |ex| = n + half / 2
+            factors = [b] * n + ([f"sqrtf({b})"] if half else [])
+            prod = factors[0] if len(factors) == 1 else "(" + " * ".join(factors) + ")"
+            return prod if twice > 0 else f"(1.0f / {prod})" if prod.startswith("(") else f"(1.0f / ({prod}))"
         return f"powf({b}, {to_c(ex, name)})"
     if isinstance(e, (sympy.Max, sympy.Min)):
-        fn = "fmaxf" if isinstance(e, sympy.Max) else "fminf"
+        fn = "fdi_gen_max" if isinstance(e, sympy.Max) else "fdi_gen_min"
         args = [to_c(a, name) for a in sorted(e.args, key=sympy.default_sort_key)]
         out: str = args[-1]
         for a in reversed(args[:-1]):

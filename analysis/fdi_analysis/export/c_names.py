@@ -54,6 +54,11 @@ class VehicleNames:
         return f"fdi_{self.vehicle}_generators"
 
     @property
+    def gen_set(self) -> str:
+        """The generator set of the vehicle's generated generators (fdi_romo_gen_set)."""
+        return f"fdi_{self.vehicle}_gen_set"
+
+    @property
     def sig_count(self) -> str:
         return f"{self.prefix}_SIG_COUNT"
 

@@ -1,20 +1,26 @@
 """The residual generators of a selection as MISRA-style C of a vehicle target (``fdi_<vehicle>_generators.h/.c``).
 
-Per generator a static step function that runs its filter bank (fdi_svf instances held in the caller's fdi_gen_t)
-and evaluates the residual (common subexpressions shared), on request also its fault sensitivities d r / d f_j
-(`Generator.sensitivities`) from the same common subexpressions, an operating-domain function when it has one,
-and a descriptor (fw/include/fdi_gen.h) in the array ``fdi_<vehicle>_generators[]`` that the table's tests point
-to. What goes into the file is computed first (`generators_file`: the C lines of every body from sympy), then
-rendered from the named templates below. Deterministic output.
+The generators of a table are the slots of one generator set (fw/include/fdi_gen.h): a filter bank that filters
+every distinct filtered signal of all generators once per step (``<vehicle>_bank``), and one step function that
+computes every running slot's residual in one pass: one common-subexpression pass over ALL residual and observer
+expressions of the table, so the terms several generators share (sin/cos of a steering angle, tyre-law terms) are
+evaluated once per step, gated by the slots that need them; then per slot its own terms, its observer update and,
+on request, its fault sensitivities d r / d f_j (`Generator.sensitivities`) from the same shared terms. Integer
+and half-integer powers become products and square roots, Max/Min and the derivatives of Abs and Max inline
+helpers (fdi_gen_impl.h); float-only math. The descriptors (one per slot, ``fdi_<vehicle>_generators[]``, the
+table's tests point to them) and the set (``fdi_<vehicle>_gen_set``) close the file. What goes into the file is
+computed first (`generators_file`), then rendered from the named templates below. Deterministic output.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
 from string import Template
 
 import sympy
+from sympy.core.parameters import evaluate
 
 from fdi_analysis.export.c_expr import c_float, to_c
 from fdi_analysis.export.c_names import VehicleNames
@@ -22,8 +28,9 @@ from fdi_analysis.export.c_text import comment_text
 from fdi_analysis.residuals.generator import DOMAIN_SIGNAL, XHAT, Generator
 from fdi_analysis.residuals.signals import Node, node_of
 
-MAX_FILTERS = 16  # FDI_GEN_MAX_FILTERS of fw/include/fdi_gen.h
-MAX_GENERATORS = 32  # FDI_TABLE_MAX_TESTS of fw/include/fdi_table.h
+MAX_BANK = 255  # FDI_GEN_MAX_BANK of fw/include/fdi_gen.h
+MAX_GENERATORS = 32  # FDI_GEN_MAX_SLOTS of fw/include/fdi_gen.h (and FDI_TABLE_MAX_TESTS)
+MAX_SENS = 32  # FDI_DIAG_MAX_TEST_SENS of fw/include/fdi_diag.h
 
 
 class EmitError(ValueError):
@@ -35,7 +42,8 @@ HEADER_FMT = Template("""\
 ${banner}
 /*
  * ${base}.h - residual generators of vehicle ${vehicle}, synthesised from the selected MSO sets
- * (fdi_analysis.residuals): one descriptor (fdi_gen.h) per generator, ${base}[k] for test k of the table.
+ * (fdi_analysis.residuals): the generator set ${set} (fdi_gen.h: a filter bank of ${n_bank} filters, every
+ * filtered signal once, and one step for all slots) and one descriptor per slot, ${base}[k] for test k of the table.
 ${listing}
  */
 #ifndef ${guard}
@@ -43,9 +51,11 @@ ${listing}
 
 #include "fdi_gen.h"
 
-/* ${n_sens} sensitivities in all: a diagnoser computing them needs FDI_DIAG_MAX_SENS >= ${n_sens} */
+/* ${n_sens} sensitivities in all (at most ${max_sens} per generator): a diagnoser listing them needs
+   FDI_DIAG_MAX_SENS >= ${n_sens} */
 #define ${count_macro} ${count}U
 
+extern const fdi_gen_set_t ${set};
 extern const fdi_gen_desc_t ${base}[${count_macro}];
 
 #endif /* ${guard} */
@@ -65,58 +75,95 @@ ${banner}
 #include "fdi_float.h"
 #include "fdi_gen_impl.h"
 #include "fdi_static_assert.h"
-#include "fdi_svf.h"
 #include "${signals}.h"
 
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
-FDI_STATIC_ASSERT(${max_filters}U <= FDI_GEN_MAX_FILTERS, fdi_sa_${vehicle}_generator_filters);
+FDI_STATIC_ASSERT(${count_macro} <= FDI_GEN_MAX_SLOTS, fdi_sa_${vehicle}_generator_slots);
 
-${functions}
+${bank}
+${domains}
+static void ${vehicle}_gen_step(fdi_gen_io_t *io);
 
-/* name, step, domain, signals read, sensitivities (bit j = fault j, ascending), filters, observer states */
+/* name, step (NULL: the set's), domain, signals read, sensitivities (bit j = fault j, ascending), filters, observer
+   states, set, slot */
 const fdi_gen_desc_t ${base}[${count_macro}] = {
 ${descriptors}
 };
+
+const fdi_gen_set_t ${set} = {"${vehicle}", ${vehicle}_gen_step, ${bank_ref}, ${n_bank}U, ${count_macro}};
+
+/* Every slot of io->run in one pass (fdi_gen.h): the terms shared by several slots once, then each slot. */
+static void ${vehicle}_gen_step(fdi_gen_io_t *io)
+{
+${prelude}
+${shared}
+${slots}
+}
 """)
 
-FUNCTION_FMT = Template("""\
-/* ${name}: ${equations}
- * ${causality}
- */
-static fdi_status_t ${function}(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-${pad}float *sens)
+BANK_FMT = Template("""\
+/* The filter bank: every filtered signal of the generators once (b[k].x1 = y, b[k].x2 = dy; fdi_gen.h). */
+static const fdi_gen_bank_filter_t ${vehicle}_bank[${n_bank}] = {
+${lines}
+};
+""")
+BANK_LINE_FMT = Template("    {${signal}, ${source}, ${order}U}, /* b[${k}]: ${what} */")
+
+DOMAIN_FMT = Template("""\
+/* ${name}: ${note} */
+static bool ${function}_in_domain(const fdi_frame_t *in)
 {
-${statements}
-    return st;
-}""")
+    return ${condition};
+}
+""")
 
-OUTPUT_FMT = Template("    fdi_svf_out_t o${k} = {0.0f, 0.0f};")
-FILTER_FMT = Template("    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, ${k}U, ${input}, reset, &o${k}));")
+DESCRIPTOR_FMT = Template("""\
+    {"${name}", NULL, ${domain}, ${inputs},
+     FDI_GEN_SENS_MASK(0x${sens_mask}U), 0U, ${n_obs}U, &${set}, ${slot}U}, /* ${sens_note} */""")
 
-PLAIN_BODY_FMT = Template("""\
+GATED_FMT = Template("""\
+    if ((run & 0x${mask}U) != 0U)
     {
 ${lines}
     }""")
-FINISH = "st = fdi_gen_finish(st, value, reset, r);"
-STORE = "st = fdi_gen_status_worst(st, fdi_gen_obs_store(g, xh, f + (l * value)));"
 
-OBSERVER_BODY_FMT = Template("""\
+SLOT_FMT = Template("""\
+    if ((run & 0x${bit}U) != 0U) /* ${name}: ${equations} */
     {
-${shared}float xh = 0.0f;
-        if (reset)
+${lines}
+    }""")
+
+PLAIN_FMT = Template("""\
+${own}        const float value = ${value};
+        io->r[io->at[${slot}]] = value;
+        if (!fdi_float_is_finite(value))
         {
-${reset}
+            io->failed |= 0x${bit}U;
+        }
+${sens}""")
+
+OBSERVER_FMT = Template("""\
+        fdi_obs_t *const o = &io->obs[io->at[${slot}]];
+${own}        float xh = 0.0f;
+        if ((io->restart & 0x${bit}U) != 0U)
+        {
+${restart}
         }
         else
         {
-            const float xp = g->obs.xh;
+            const float xp = o->xh;
 ${predict}
-            xh = fdi_gen_obs_predict(g, par, f + (l * e), a + (l * c));
+            xh = fdi_gen_obs_predict(o, io->par, f + (l * e), a + (l * c));
         }
         {
 ${at_new}
-        }
-    }""")
+            io->r[io->at[${slot}]] = value;
+            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, f + (l * value)) != FDI_OK))
+            {
+                io->failed |= 0x${bit}U;
+            }
+${sens}
+        }""")
 
 RESET_SENSOR_FMT = Template("""\
             const float x0 = ${x0}; /* ${state} from its sensor outside the MSO set */
@@ -125,40 +172,33 @@ RESET_CONST_FMT = Template("            xh = ${x0};")
 
 SENS_FMT = Template("""\
 #if FDI_GEN_SENSITIVITIES
-${indent}if (sens != NULL) /* d r / d f: ${faults} */
+${indent}if ((io->sens_mask & 0x${bit}U) != 0U) /* d r / d f: ${faults} */
 ${indent}{
+${indent}    float *const sv = &io->sens[io->sens_at[${slot}]];
 ${lines}
-${indent}    st = fdi_gen_sens_finish(st, sens, ${count}U);
 ${indent}}
-#else
-${indent}(void)sens;
 #endif""")
-NO_SENS_FMT = Template("${indent}(void)sens; /* no sensitivity */")
-
-DOMAIN_FMT = Template("""\
-/* ${name}: ${note} */
-static bool ${function}_in_domain(const fdi_frame_t *in)
-{
-    return ${condition};
-}""")
-
-DESCRIPTOR_FMT = Template("""\
-    {"${name}", ${function}, ${domain}, ${inputs},
-     FDI_GEN_SENS_MASK(0x${sens_mask}U), ${n_filters}U, ${n_obs}U}, /* ${sens_note} */""")
 
 
 # ------------------------------------------------------------------------------------------ data model
 @dataclass(frozen=True)
-class GeneratorCode:
-    """Everything the C of one generator needs, computed."""
+class BankFilter:
+    k: int
+    signal: str  # frame signal at the root
+    source: int | None  # None: the raw signal; else the bank index of the filter it is fed from
+    order: int  # fed with that filter's y (0) or dy (1)
+    what: str
+
+
+@dataclass(frozen=True)
+class SlotCode:
+    """Everything the C of one slot needs, computed."""
 
     slot: int
     name: str
-    function: str
     equations: str
     causality: str
-    filter_inputs: tuple[str, ...]  # C expression fed to filter k
-    body: str  # the residual (and sensitivity) block, C text
+    body: str  # its block inside the set's step, C text
     domain_condition: str  # "" when always in the domain
     domain_note: str
     inputs: str  # C mask expression of the signals read
@@ -171,11 +211,9 @@ class GeneratorCode:
 class GeneratorsFile:
     banner: str
     names: VehicleNames
-    generators: tuple[GeneratorCode, ...]
-
-    @property
-    def max_filters(self) -> int:
-        return max(len(g.filter_inputs) for g in self.generators)
+    bank: tuple[BankFilter, ...]
+    shared: str  # the shared terms, C text
+    slots: tuple[SlotCode, ...]
 
 
 # ------------------------------------------------------------------------------------------ computing
@@ -190,42 +228,155 @@ def inputs(g: Generator) -> list[str]:
     return [*g.knowns, *extra]
 
 
-def _raw_c(names: VehicleNames, signal: str) -> str:
-    return f"in->value[{names.sig_index(signal)}]"
+def _xp(k: int) -> sympy.Symbol:
+    return sympy.Symbol(f"xprev_{k}", real=True)  # slot k's previous estimate (prediction)
 
 
-def _node_c(g: Generator, names: VehicleNames, n: Node) -> str:
-    if n.level == 0:
-        return _raw_c(names, n.signal)
-    src = n.source()
-    assert src is not None
-    k = g.filters.index(src)
-    return f"o{k}.{'y' if n.order == src.order else 'dy'}"
+def _xh(k: int) -> sympy.Symbol:
+    return sympy.Symbol(f"xhat_{k}", real=True)  # slot k's new estimate
 
 
-_XPREV = sympy.Symbol("xprev")  # the previous estimate in the prediction's expressions
+def bank_nodes(generators: Sequence[Generator], signals: Sequence[str]) -> list[Node]:
+    """Every filter (by input node) of the generators once, inputs before the filters fed by them, in frame order."""
+    order = list(signals) + sorted({n.signal for g in generators for n in g.filters} - set(signals))
+    return sorted({n for g in generators for n in g.filters}, key=lambda n: (n.level, order.index(n.signal), n.order))
 
 
-def _namer(g: Generator, names: VehicleNames, tmp: set[str]) -> Callable[[sympy.Symbol], str]:
-    def name(s: sympy.Symbol) -> str:
-        if s == XHAT:
-            return "xh"
-        if s == _XPREV:
+def bank_of(nodes: Sequence[Node]) -> tuple[BankFilter, ...]:
+    """The bank's filters: each fed with its raw signal or from the filter of its input's source node."""
+    index = {n: k for k, n in enumerate(nodes)}
+    out = []
+    for k, n in enumerate(nodes):
+        src = n.source()
+        if src is None:
+            out.append(BankFilter(k, n.signal, None, 0, f"{n.signal}"))
+        else:
+            out.append(BankFilter(k, n.signal, index[src], 0 if n.order == src.order else 1, n.text()))
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class _Names:
+    """C text of the symbols of the set's expressions."""
+
+    names: VehicleNames
+    bank: dict[Node, int]  # filter input node -> bank index
+    temps: frozenset[str]
+
+    def __call__(self, s: sympy.Symbol) -> str:
+        text = str(s)
+        if text in self.temps:
+            return text
+        if text.startswith("xprev_"):
             return "xp"
-        return str(s) if str(s) in tmp else _node_c(g, names, node_of(s))
-
-    return name
+        if text.startswith("xhat_") or s == XHAT:
+            return "xh"
+        n = node_of(s)
+        if n.level == 0:
+            return f"in->value[{self.names.sig_index(n.signal)}]"
+        src = n.source()
+        assert src is not None
+        return f"b[{self.bank[src]}].{'x1' if n.order == src.order else 'x2'}"
 
 
 @dataclass(frozen=True)
 class _Temp:
     symbol: sympy.Symbol
-    expr: sympy.Expr  # over nodes, XHAT and earlier temporaries
+    expr: sympy.Expr  # over nodes, the estimates and earlier temporaries
+
+
+@dataclass(frozen=True)
+class _Outputs:
+    """One slot's expressions in the global pass: names and positions in the pass's list."""
+
+    predict: tuple[str, ...]  # at the previous estimate (observer slots)
+    at_new: tuple[str, ...]  # at the new estimate (or the plain residual)
+    start: int
+
+
+def _renamed(e: sympy.Expr, old: sympy.Symbol, new: sympy.Symbol) -> sympy.Expr:
+    """`e` with the symbol `old` renamed, without re-evaluating its functions (a Max keeps its arguments)."""
+    with evaluate(False):
+        return e.xreplace({old: new})
+
+
+def _slot_exprs(k: int, g: Generator) -> tuple[list[str], list[str], list[sympy.Expr]]:
+    o = g.observer
+    if o is None:
+        return [], ["value"], [g.expr]
+    pre = [o.update, o.gain, o.a, o.c, g.expr]
+    new = [o.update, o.gain, g.expr]
+    return (["f", "l", "a", "c", "e"], ["f", "l", "value"],
+            [_renamed(e, XHAT, _xp(k)) for e in pre] + [_renamed(e, XHAT, _xh(k)) for e in new])
+
+
+@dataclass(frozen=True)
+class _Pass:
+    temps: tuple[_Temp, ...]
+    reduced: tuple[sympy.Expr, ...]
+    outputs: tuple[_Outputs, ...]
+    mask: dict[sympy.Symbol, int]  # slots that use each temporary
+    owner: dict[sympy.Symbol, tuple[int, str]]  # estimate-dependent temporaries: (slot, "pre" or "post")
+
+
+def _global_pass(generators: Sequence[Generator]) -> _Pass:
+    """One common-subexpression pass over every slot's residual and observer expressions."""
+    exprs: list[sympy.Expr] = []
+    outputs = []
+    for k, g in enumerate(generators):
+        pre, new, e = _slot_exprs(k, g)
+        outputs.append(_Outputs(tuple(pre), tuple(new), len(exprs)))
+        exprs += e
+    subs, red = sympy.cse(exprs, symbols=sympy.numbered_symbols("t"), order="canonical")
+    temps = tuple(_Temp(s, e) for s, e in subs)
+    owner: dict[sympy.Symbol, tuple[int, str]] = {}
+    deps: dict[sympy.Symbol, set[sympy.Symbol]] = {}
+    for t in temps:
+        deps[t.symbol] = {v for v in t.expr.free_symbols if v in deps}
+        for k in range(len(generators)):
+            if _xp(k) in t.expr.free_symbols:
+                owner[t.symbol] = (k, "pre")
+            elif _xh(k) in t.expr.free_symbols:
+                owner[t.symbol] = (k, "post")
+        for v in deps[t.symbol]:
+            if v in owner:
+                owner[t.symbol] = owner[v]
+    mask: dict[sympy.Symbol, int] = {t.symbol: 0 for t in temps}
+    for k, out in enumerate(outputs):
+        todo = [v for e in red[out.start:out.start + len(out.predict) + len(out.at_new)]
+                for v in e.free_symbols if v in mask]
+        while todo:
+            v = todo.pop()
+            if not mask[v] >> k & 1:
+                mask[v] |= 1 << k
+                todo += list(deps[v])
+    return _Pass(temps, tuple(red), tuple(outputs), mask, owner)
+
+
+def _ordered_shared(p: _Pass) -> list[list[_Temp]]:
+    """The temporaries used by several slots, in dependency order, grouped by the slots that use them (one gate per
+    group)."""
+    shared = [t for t in p.temps if t.symbol not in p.owner and bin(p.mask[t.symbol]).count("1") > 1]
+    done: set[sympy.Symbol] = set()
+    names = {t.symbol for t in shared}
+    groups: list[list[_Temp]] = []
+    left = list(shared)
+    while left:
+        ready = [t for t in left if not ({v for v in t.expr.free_symbols if v in names} - done)]
+        m = p.mask[groups[-1][0].symbol] if groups else None
+        same = [t for t in ready if p.mask[t.symbol] == m]
+        pick = same[0] if same else ready[0]
+        if not same:
+            groups.append([])
+        groups[-1].append(pick)
+        done.add(pick.symbol)
+        left.remove(pick)
+    return groups
 
 
 def _reusing(exprs: Sequence[sympy.Expr], temps: Sequence[_Temp]) -> list[sympy.Expr]:
     """`exprs` with every subexpression that equals an available temporary's expression replaced by the
-    temporary (bottom up, exact subtrees: expensive calls such as cos, sqrt, fmax of the residual are shared)."""
+    temporary (bottom up, exact subtrees: expensive calls such as cos, sqrt, max of the residual are shared)."""
     known = {t.expr: t.symbol for t in temps}
     memo: dict[sympy.Basic, sympy.Basic] = {}
 
@@ -243,152 +394,162 @@ def _reusing(exprs: Sequence[sympy.Expr], temps: Sequence[_Temp]) -> list[sympy.
     return [sympy.sympify(rw(e)) for e in exprs]
 
 
-def _lines(*blocks: str) -> str:
-    """The non-empty blocks of lines, one after the other."""
-    return "\n".join(b for b in blocks if b)
-
-
-def _sens_block(g: Generator, names: VehicleNames, faults: Sequence[str], temps: Sequence[_Temp],
+def _sens_block(k: int, g: Generator, name: _Names, faults: Sequence[str], temps: Sequence[_Temp],
                 indent: str) -> str:
-    """The sensitivity block: d r / d f of `g.sensitivities`, in ascending fault order, from the residual's
-    temporaries `temps` and common subexpressions of their own."""
+    """The sensitivity block of slot k: d r / d f of `g.sensitivities`, in ascending fault order, from the
+    temporaries in scope `temps` and common subexpressions of their own."""
     if not g.sensitivities:
-        return NO_SENS_FMT.substitute(indent=indent)
+        return ""
     ordered = sorted(g.sensitivities, key=lambda fs: faults.index(fs[0]))
-    exprs = _reusing([e for _, e in ordered], temps)
+    # the temporaries at the slot's new estimate, over XHAT as the sensitivities are (their expressions are short)
+    exprs = _reusing([e for _, e in ordered], [_Temp(t.symbol, _renamed(t.expr, _xh(k), XHAT)) for t in temps])
     subs, red = sympy.cse(exprs, symbols=sympy.numbered_symbols("s"), order="canonical")
-    name = _namer(g, names, {str(t.symbol) for t in temps} | {str(s) for s, _ in subs})
-    lines = [f"{indent}    const float {s} = {to_c(e, name)};" for s, e in subs]
-    lines += [f"{indent}    sens[{k}] = {to_c(e, name)}; /* {f} */" for k, ((f, _), e) in enumerate(zip(ordered, red,
-                                                                                                          strict=True))]
+    sname = replace(name, temps=name.temps | {str(s) for s, _ in subs})
+    lines = [f"{indent}    const float {s} = {to_c(e, sname)};" for s, e in subs]
+    lines += [f"{indent}    sv[{j}] = {to_c(e, sname)}; /* {f} */" for j, ((f, _), e) in enumerate(zip(ordered, red,
+                                                                                                        strict=True))]
     return SENS_FMT.substitute(indent=indent, faults=" ".join(f for f, _ in ordered), lines="\n".join(lines),
-                               count=len(ordered))
+                               bit=f"{1 << k:08X}", slot=k)
 
 
-def _plain_body(g: Generator, names: VehicleNames, faults: Sequence[str]) -> str:
-    subs, red = sympy.cse([g.expr], symbols=sympy.numbered_symbols("t"), order="canonical")
-    name = _namer(g, names, {str(s) for s, _ in subs})
-    lines = [f"        const float {s} = {to_c(e, name)};" for s, e in subs]
-    lines += [f"        const float value = {to_c(red[0], name)};", f"        {FINISH}"]
-    temps = [_Temp(s, e) for s, e in subs]
-    return PLAIN_BODY_FMT.substitute(lines=_lines("\n".join(lines), _sens_block(g, names, faults, temps, "        ")))
+def _const_lines(temps: Sequence[_Temp], name: _Names, indent: str) -> str:
+    return "".join(f"{indent}const float {t.symbol} = {to_c(t.expr, name)};\n" for t in temps)
 
 
-def _observer_cse(g: Generator, names: VehicleNames, predict: list[tuple[str, sympy.Expr]],
-                  at_new: list[tuple[str, sympy.Expr]]) -> tuple[list[str], list[str], list[str], list[_Temp]]:
-    """One common-subexpression pass over the prediction (at the previous estimate xp) and the outputs at the
-    new estimate xh, so that what depends on neither (the filtered signals' terms) is computed once per step:
-    (shared lines, prediction lines, lines at the new estimate, the temporaries in scope at the new estimate)."""
-    exprs = [e.xreplace({XHAT: _XPREV}) for _, e in predict] + [e for _, e in at_new]
-    subs, red = sympy.cse(exprs, symbols=sympy.numbered_symbols("t"), order="canonical")
-    name = _namer(g, names, {str(s) for s, _ in subs})
-    uses: dict[sympy.Symbol, set[sympy.Symbol]] = {}
-    shared: list[str] = []
-    before: list[str] = []
-    after: list[str] = []
-    in_scope: list[_Temp] = []
-    for s, e in subs:
-        deps = {v for v in e.free_symbols if v in (_XPREV, XHAT)}
-        for v in e.free_symbols:
-            deps |= uses.get(v, set())
-        uses[s] = deps
-        line = f"const float {s} = {to_c(e, name)};"
-        if XHAT in uses[s]:
-            after.append(line)
-            in_scope.append(_Temp(s, e))
-        elif _XPREV in uses[s]:
-            before.append(line)
-        else:
-            shared.append(line)
-            in_scope.append(_Temp(s, e))
-    outs = [n for n, _ in predict] + [n for n, _ in at_new]
-    lines = [f"const float {n} = {to_c(e, name)};" for n, e in zip(outs, red, strict=True)]
-    return shared, before + lines[: len(predict)], after + lines[len(predict):], in_scope
-
-
-def _observer_body(g: Generator, names: VehicleNames, faults: Sequence[str]) -> str:
-    """The observer step of fdi_analysis.residuals.observer: predict xh from the previous estimate (state
-    update plus output injection, exponential of the error pole, input averaged), then the residual, the next
-    step's input and the sensitivities at the new estimate."""
+def _slot_body(k: int, g: Generator, p: _Pass, name: _Names, faults: Sequence[str]) -> str:
+    """Slot k's block: the temporaries only it uses, its residual (and observer step), its sensitivities."""
+    own = [t for t in p.temps if t.symbol not in p.owner and p.mask[t.symbol] == 1 << k]
+    pre = [t for t in p.temps if p.owner.get(t.symbol) == (k, "pre")]
+    post = [t for t in p.temps if p.owner.get(t.symbol) == (k, "post")]
+    scope = [t for t in p.temps if t.symbol not in p.owner and p.mask[t.symbol] >> k & 1] + post
+    out = p.outputs[k]
+    red = p.reduced[out.start:out.start + len(out.predict) + len(out.at_new)]
+    bit = f"{1 << k:08X}"
+    if g.observer is None:
+        return PLAIN_FMT.substitute(own=_const_lines(own, name, "        "), value=to_c(red[0], name), slot=k, bit=bit,
+                                    sens=_sens_block(k, g, name, faults, scope, "        "))
     o = g.observer
-    assert o is not None
-
-    def raw_name(s: sympy.Symbol) -> str:
-        return _node_c(g, names, node_of(s))
-
     if o.initial.free_symbols:
         # the state's sensor is outside the MSO set (not in the input mask, not checked by the diagnoser):
         # used only when finite, else 0 (an error of the reset value decays with the error pole)
-        reset = RESET_SENSOR_FMT.substitute(x0=to_c(o.initial, raw_name), state=o.state)
+        restart = RESET_SENSOR_FMT.substitute(x0=to_c(o.initial, name), state=o.state)
     else:
-        reset = RESET_CONST_FMT.substitute(x0=c_float(float(o.initial)))
-    shared, predict, at_new, temps = _observer_cse(
-        g, names, [("f", o.update), ("l", o.gain), ("a", o.a), ("c", o.c), ("e", g.expr)],
-        [("f", o.update), ("l", o.gain), ("value", g.expr)])
-    at_new_lines = "\n".join(f"            {x}" for x in [*at_new, STORE, FINISH])
-    return OBSERVER_BODY_FMT.substitute(
-        shared="".join(f"        {x}\n" for x in shared) + "        ", reset=reset,
-        predict="\n".join(f"            {x}" for x in predict),
-        at_new=_lines(at_new_lines, _sens_block(g, names, faults, temps, "            ")))
+        restart = RESET_CONST_FMT.substitute(x0=c_float(float(o.initial)))
+    predict = _const_lines(pre, name, "            ") + "".join(
+        f"            const float {n} = {to_c(e, name)};\n" for n, e in zip(out.predict, red[:len(out.predict)],
+                                                                          strict=True))
+    at_new = _const_lines(post, name, "            ") + "".join(
+        f"            const float {n} = {to_c(e, name)};\n" for n, e in zip(out.at_new, red[len(out.predict):],
+                                                                          strict=True))
+    return OBSERVER_FMT.substitute(slot=k, bit=bit, own=_const_lines(own, name, "        "), restart=restart,
+                                   predict=predict.rstrip("\n"), at_new=at_new.rstrip("\n"),
+                                   sens=_sens_block(k, g, name, faults, scope, "            "))
 
 
-def generator_code(g: Generator, slot: int, names: VehicleNames, faults: Sequence[str]) -> GeneratorCode:
-    if len(g.filters) > MAX_FILTERS:
-        raise EmitError(f"{g.name}: {len(g.filters)} filters, the firmware holds {MAX_FILTERS}")
+def _shared_text(p: _Pass, name: _Names, all_slots: int, slots_text: str) -> str:
+    """The shared temporaries: those of every slot computed unconditionally (the set's step runs only for some
+    slot), the others computed under the gate of the slots that use them: declared first when read outside their
+    gate's block (`slots_text`: the slots' code), else local constants of the block."""
+    groups = _ordered_shared(p)
+    always = [t for grp in groups for t in grp if p.mask[t.symbol] == all_slots]
+    gated = [grp for grp in groups if p.mask[grp[0].symbol] != all_slots]
+    lines = [[f"{t.symbol} = {to_c(t.expr, name)};" for t in grp] for grp in gated]
+
+    def outside(sym: str, g: int) -> bool:
+        pat = re.compile(rf"\b{re.escape(sym)}\b")
+        return bool(pat.search(slots_text)) or any(pat.search(ln) for h, grp in enumerate(lines) if h != g
+                                                   for ln in grp)
+
+    wide = [[outside(str(t.symbol), g) for t in grp] for g, grp in enumerate(gated)]
+    decls = "".join(f"    float {t.symbol} = 0.0f;\n" for g, grp in enumerate(gated)
+                    for t, w in zip(grp, wide[g], strict=True) if w)
+    blocks = [GATED_FMT.substitute(mask=f"{p.mask[grp[0].symbol]:08X}",
+                                   lines="\n".join(f"        {'' if w else 'const float '}{ln}"
+                                                   for ln, w in zip(lines[g], wide[g], strict=True)))
+              for g, grp in enumerate(gated)]
+    return (decls + _const_lines(always, name, "    ") + "\n".join(blocks)).rstrip("\n")
+
+
+def _slot_code(k: int, g: Generator, p: _Pass, name: _Names, names: VehicleNames,
+               faults: Sequence[str]) -> SlotCode:
     unknown = [f for f, _ in g.sensitivities if f not in faults]
     if unknown:
         raise EmitError(f"{g.name}: sensitivities to {unknown}, not faults of the model")
-    body = _observer_body(g, names, faults) if g.observer is not None else _plain_body(g, names, faults)
-    domain = (f"fabsf({_raw_c(names, DOMAIN_SIGNAL)}) >= {c_float(g.min_speed)}" if g.min_speed > 0.0 else "")
+    if len(g.sensitivities) > MAX_SENS:
+        raise EmitError(f"{g.name}: {len(g.sensitivities)} sensitivities, the diagnoser holds {MAX_SENS}")
+    domain = (f"fabsf({name(Node(DOMAIN_SIGNAL, 0, 0).symbol)}) >= {c_float(g.min_speed)}" if g.min_speed > 0.0
+              else "")
     sens_faults = tuple(sorted((f for f, _ in g.sensitivities), key=faults.index))
-    return GeneratorCode(
-        slot=slot, name=g.name, function=f"{names.vehicle}_gen_{slot + 1}", equations=" ".join(g.equations),
-        causality=g.causality(),
-        filter_inputs=tuple(_node_c(g, names, f) for f in g.filters), body=body, domain_condition=domain,
-        domain_note=g.domain(), inputs=names.mask_expr(inputs(g)), sens_faults=sens_faults,
-        sens_mask=sum(1 << faults.index(f) for f in sens_faults), n_obs=0 if g.observer is None else 1)
+    body = SLOT_FMT.substitute(bit=f"{1 << k:08X}", name=g.name, equations=" ".join(g.equations),
+                               lines=_slot_body(k, g, p, name, faults).rstrip("\n"))
+    return SlotCode(slot=k, name=g.name, equations=" ".join(g.equations), causality=g.causality(), body=body,
+                    domain_condition=domain, domain_note=g.domain(), inputs=names.mask_expr(inputs(g)),
+                    sens_faults=sens_faults, sens_mask=sum(1 << faults.index(f) for f in sens_faults),
+                    n_obs=0 if g.observer is None else 1)
 
 
 def generators_file(generators: Sequence[Generator], names: VehicleNames, faults: Sequence[str],
-                    banner: str) -> GeneratorsFile:
-    """What goes into the generator files: the C of every generator of `generators` (slot = position), for the
-    model's fault list `faults` (bit j of a sensitivity mask = faults[j])."""
+                    banner: str, signals: Sequence[str] = ()) -> GeneratorsFile:
+    """What goes into the generator files: the set of `generators` (slot = position), for the model's fault list
+    `faults` (bit j of a sensitivity mask = faults[j]); `signals`: the frame's signals in index order (the bank's
+    order; default: as the generators read them)."""
     if not 0 < len(generators) <= MAX_GENERATORS:
         raise EmitError(f"{len(generators)} generators; the firmware holds 1..{MAX_GENERATORS}")
-    return GeneratorsFile(banner, names,
-                          tuple(generator_code(g, k, names, faults) for k, g in enumerate(generators)))
+    order = list(signals) or list(dict.fromkeys(s for g in generators for s in g.knowns))
+    nodes = bank_nodes(generators, order)
+    if len(nodes) > MAX_BANK:
+        raise EmitError(f"{len(nodes)} filters in the bank, the firmware holds {MAX_BANK}")
+    p = _global_pass(generators)
+    name = _Names(names, {n: k for k, n in enumerate(nodes)}, frozenset(str(t.symbol) for t in p.temps))
+    all_slots = (1 << len(generators)) - 1
+    slots = tuple(_slot_code(k, g, p, name, names, faults) for k, g in enumerate(generators))
+    return GeneratorsFile(banner, names, bank_of(nodes), _shared_text(p, name, all_slots,
+                                                                      "\n".join(c.body for c in slots)), slots)
 
 
 # ------------------------------------------------------------------------------------------ rendering
-def _function_text(c: GeneratorCode) -> str:
-    head = f"static fdi_status_t {c.function}("
-    statements = _lines("\n".join(OUTPUT_FMT.substitute(k=k) for k in range(len(c.filter_inputs))),
-                        "    fdi_status_t st = FDI_OK;",
-                        "\n".join(FILTER_FMT.substitute(k=k, input=x) for k, x in enumerate(c.filter_inputs)),
-                        c.body)
-    text = FUNCTION_FMT.substitute(name=c.name, equations=c.equations, causality=comment_text(c.causality),
-                                   function=c.function, pad=" " * len(head), statements=statements)
-    if c.domain_condition:
-        text += "\n\n" + DOMAIN_FMT.substitute(name=c.name, note=comment_text(c.domain_note), function=c.function,
-                                              condition=c.domain_condition)
-    return text
+def _bank_text(f: GeneratorsFile) -> str:
+    if not f.bank:
+        return ""
+    n = f.names
+    lines = "\n".join(BANK_LINE_FMT.substitute(
+        signal=n.sig_index(b.signal), source="FDI_GEN_BANK_RAW" if b.source is None else f"{b.source}U",
+        order=b.order, k=b.k, what=comment_text(b.what)) for b in f.bank)
+    return BANK_FMT.substitute(vehicle=n.vehicle, n_bank=len(f.bank), lines=lines)
+
+
+def _prelude(body: str) -> str:
+    lines = []
+    if "b[" in body:
+        lines.append("    const fdi_svf_t *const b = io->bank;")
+    if "in->" in body:
+        lines.append("    const fdi_frame_t *const in = io->in;")
+    lines.append("    const uint32_t run = io->run;")
+    return "\n".join(lines)
 
 
 def render(f: GeneratorsFile) -> tuple[str, str]:
     """Header and source text of the generator files."""
     n = f.names
     listing = "\n".join(LISTING_FMT.substitute(base=n.generators, slot=c.slot, name=c.name,
-                                               causality=comment_text(c.causality)) for c in f.generators)
+                                               causality=comment_text(c.causality)) for c in f.slots)
     header = HEADER_FMT.substitute(banner=f.banner, base=n.generators, vehicle=n.vehicle, listing=listing,
-                                   guard=n.generators.upper() + "_H", count_macro=n.n_generators,
-                                   count=len(f.generators), n_sens=sum(len(c.sens_faults) for c in f.generators))
+                                   guard=n.generators.upper() + "_H", count_macro=n.n_generators, set=n.gen_set,
+                                   count=len(f.slots), n_bank=len(f.bank), max_sens=max(len(c.sens_faults)
+                                                                                        for c in f.slots),
+                                   n_sens=sum(len(c.sens_faults) for c in f.slots))
     descriptors = "\n".join(DESCRIPTOR_FMT.substitute(
-        name=c.name, function=c.function, domain=f"{c.function}_in_domain" if c.domain_condition else "NULL",
-        inputs=c.inputs, sens_mask=f"{c.sens_mask:08X}", n_filters=len(c.filter_inputs), n_obs=c.n_obs,
+        name=c.name, domain=f"{n.vehicle}_gen_{c.slot + 1}_in_domain" if c.domain_condition else "NULL",
+        inputs=c.inputs, sens_mask=f"{c.sens_mask:08X}", n_obs=c.n_obs, set=n.gen_set, slot=c.slot,
         sens_note=("sensitivities " + " ".join(c.sens_faults)) if c.sens_faults else "no sensitivities")
-        for c in f.generators)
+        for c in f.slots)
+    domains = "".join(DOMAIN_FMT.substitute(name=c.name, note=comment_text(c.domain_note),
+                                            function=f"{n.vehicle}_gen_{c.slot + 1}", condition=c.domain_condition)
+                      + "\n" for c in f.slots if c.domain_condition)
+    body = f.shared + "\n" + "\n".join(c.body for c in f.slots)
     source = SOURCE_FMT.substitute(banner=f.banner, base=n.generators, signals=n.signals, vehicle=n.vehicle,
-                                   max_filters=f.max_filters, functions="\n\n".join(_function_text(c)
-                                                                                  for c in f.generators),
-                                   count_macro=n.n_generators, descriptors=descriptors)
+                                   bank=_bank_text(f), domains=domains, count_macro=n.n_generators,
+                                   descriptors=descriptors, set=n.gen_set,
+                                   bank_ref=f"{n.vehicle}_bank" if f.bank else "NULL", n_bank=len(f.bank),
+                                   prelude=_prelude(body), shared=f.shared, slots="\n".join(c.body for c in f.slots))
     return header, source

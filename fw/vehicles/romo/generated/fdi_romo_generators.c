@@ -9,356 +9,38 @@
 #include "fdi_float.h"
 #include "fdi_gen_impl.h"
 #include "fdi_static_assert.h"
-#include "fdi_svf.h"
 #include "fdi_romo_signals.h"
 
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
-FDI_STATIC_ASSERT(16U <= FDI_GEN_MAX_FILTERS, fdi_sa_romo_generator_filters);
+FDI_STATIC_ASSERT(FDI_ROMO_N_GENERATORS <= FDI_GEN_MAX_SLOTS, fdi_sa_romo_generator_slots);
 
-/* MSO1: K1 D1 S1 S3 S4 S5
- * residual K1; derivative causality for dvx; 4 filters, level 1
- */
-static fdi_status_t romo_gen_1(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                               float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_svf_out_t o2 = {0.0f, 0.0f};
-    fdi_svf_out_t o3 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[ROMO_SIG_AX_M], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[ROMO_SIG_PSIDOT_M], reset, &o1));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->value[ROMO_SIG_VX_M], reset, &o2));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->value[ROMO_SIG_VY_M], reset, &o3));
-    {
-        const float value = (o0.y + (-0.3f * o1.dy) + (-o2.dy) + (o1.y * ((-1.0f * o1.y) + o3.y)));
-        st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-        if (sens != NULL) /* d r / d f: f1 f3 f5 */
-        {
-            sens[0] = 1.0f; /* f1 */
-            sens[1] = ((-2.0f * o1.y) + o3.y); /* f3 */
-            sens[2] = o1.y; /* f5 */
-            st = fdi_gen_sens_finish(st, sens, 3U);
-        }
-#else
-        (void)sens;
-#endif
-    }
-    return st;
-}
-
-/* MSO2: K2 D2 S2 S3 S4 S5
- * residual K2; derivative causality for dvy; 4 filters, level 1
- */
-static fdi_status_t romo_gen_2(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                               float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_svf_out_t o2 = {0.0f, 0.0f};
-    fdi_svf_out_t o3 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[ROMO_SIG_AY_M], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[ROMO_SIG_PSIDOT_M], reset, &o1));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->value[ROMO_SIG_VX_M], reset, &o2));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->value[ROMO_SIG_VY_M], reset, &o3));
-    {
-        const float value = (o0.y + (1.0f * o1.dy) + (-o3.dy) + (-(o1.y * ((0.3f * o1.y) + o2.y))));
-        st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-        if (sens != NULL) /* d r / d f: f2 f3 f4 */
-        {
-            sens[0] = 1.0f; /* f2 */
-            sens[1] = ((-0.6f * o1.y) + (-o2.y)); /* f3 */
-            sens[2] = (-o1.y); /* f4 */
-            st = fdi_gen_sens_finish(st, sens, 3U);
-        }
-#else
-        (void)sens;
-#endif
-    }
-    return st;
-}
-
-/* MSO12: K1 D1 W1.FL W1.dyn W1.D S1 S2 S4 S5 S.omega1
- * residual W1.FL; derivative causality for domega1; observer for vx (integrates D1, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 8 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- */
-static fdi_status_t romo_gen_3(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                               float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_svf_out_t o2 = {0.0f, 0.0f};
-    fdi_svf_out_t o3 = {0.0f, 0.0f};
-    fdi_svf_out_t o4 = {0.0f, 0.0f};
-    fdi_svf_out_t o5 = {0.0f, 0.0f};
-    fdi_svf_out_t o6 = {0.0f, 0.0f};
-    fdi_svf_out_t o7 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[ROMO_SIG_AX_M], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[ROMO_SIG_AY_M], reset, &o1));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->value[ROMO_SIG_VX_M], reset, &o2));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->value[ROMO_SIG_VY_M], reset, &o3));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, in->value[ROMO_SIG_DELTA1_M], reset, &o4));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, in->value[ROMO_SIG_ITM1_M], reset, &o5));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, in->value[ROMO_SIG_P_F_M], reset, &o6));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 7U, in->value[ROMO_SIG_OMEGA1_M], reset, &o7));
-    {
-        const float t0 = (3.3333333f * o2.y);
-        const float t2 = ((22.222221f * o2.y) + (3.3333333f * o3.y));
-        const float t4 = sinf(o4.y);
-        const float t5 = cosf(o4.y);
-        const float t6 = ((0.66333336f * t4) + (-1.4166666f * t5));
-        const float t7 = (2565.315f + (-109.04921f * o0.y) + (-180.34483f * o1.y));
-        const float t8 = (19.5f * t7);
-        const float t9 = (-(t6 * t8));
-        const float t10 = (2.4166667f * o2.y);
-        const float t12 = ((-0.66333336f * o2.y) + o3.y);
-        const float t16 = (0.27f * fabsf(o7.y));
-        const float t22 = (-0.27f * o7.y);
-        const float t30 = (-fmaxf(0.5f, t16));
-        const float t32 = ((2.8333333f * t4) + (1.3266667f * t5));
-        const float t34 = ((-1.3266667f * t4) + (2.8333333f * t5));
-        const float t35 = (380.25f * t6);
-        const float t39 = ((-5.9259257f * o5.y) + (3.3333333f * o7.dy) + (0.00035555556f * o6.y * tanhf((2.0f * o7.y))));
-        float xh = 0.0f;
-        if (reset)
-        {
-            const float x0 = ((0.3f * in->value[ROMO_SIG_PSIDOT_M]) + in->value[ROMO_SIG_VX_M]); /* vx from its sensor outside the MSO set */
-            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;
-        }
-        else
-        {
-            const float xp = g->obs.xh;
-            const float t1 = (t0 + (-3.3333333f * xp));
-            const float t3 = (t2 + (-22.222221f * xp));
-            const float t11 = (t10 + (-1.4166666f * xp));
-            const float t13 = (t12 + (0.66333336f * xp));
-            const float t14 = ((-(t11 * t4)) + (t13 * t5));
-            const float t15 = (t14 * t14);
-            const float t17 = ((t11 * t5) + (t13 * t4));
-            const float t18 = fabsf(t17);
-            const float t19 = fmaxf(0.5f, fmaxf(t16, t18));
-            const float t20 = (1.0f / (t19 * t19));
-            const float t21 = (380.25f * t20);
-            const float t23 = ((-t17) + (-t22));
-            const float t24 = (t23 * t23);
-            const float t25 = (1.0f + (t15 * t21) + (t21 * t24));
-            const float t26 = (1.0f / sqrtf(t25));
-            const float t27 = (1.0f / (t19));
-            const float t28 = (t26 * t27);
-            const float t29 = fdi_gen_sign(t17);
-            const float t31 = fdi_gen_heaviside((t18 + t30));
-            const float t33 = (190.125f * t20);
-            const float t36 = ((1.0f / (t19 * t19 * t19)) * t29 * t31 * t35);
-            const float t37 = (t23 * t8);
-            const float t38 = ((-(t28 * t9)) + (-(powf(t25, -1.5f) * t27 * t37 * ((t15 * t36) + (t24 * t36) + (-(t14 * t32 * t33)) + (-(t23 * t33 * t34))))) + (19.5f * t20 * t23 * t26 * t29 * t31 * t6 * t7));
-            const float f = (o0.y + (-(t1 * (t1 + o3.y))));
-            const float l = (-(t38 * (1.0f / ((191844.0f + (t38 * t38)))) * fmaxf(0.0f, (12.566371f + t3))));
-            const float a = t3;
-            const float c = t38;
-            const float e = ((-t39) + (-(t28 * t37)));
-            xh = fdi_gen_obs_predict(g, par, f + (l * e), a + (l * c));
-        }
-        {
-            const float t40 = (t0 + (-3.3333333f * xh));
-            const float t41 = (t10 + (-1.4166666f * xh));
-            const float t42 = (t12 + (0.66333336f * xh));
-            const float t43 = ((-(t4 * t41)) + (t42 * t5));
-            const float t44 = (t43 * t43);
-            const float t45 = ((t4 * t42) + (t41 * t5));
-            const float t46 = fabsf(t45);
-            const float t47 = fmaxf(0.5f, fmaxf(t16, t46));
-            const float t48 = (1.0f / (t47 * t47));
-            const float t49 = (380.25f * t48);
-            const float t50 = ((-t22) + (-t45));
-            const float t51 = (t50 * t50);
-            const float t52 = (1.0f + (t44 * t49) + (t49 * t51));
-            const float t53 = (1.0f / sqrtf(t52));
-            const float t54 = (1.0f / (t47));
-            const float t55 = (t53 * t54);
-            const float t56 = fdi_gen_sign(t45);
-            const float t57 = fdi_gen_heaviside((t30 + t46));
-            const float t58 = (190.125f * t48);
-            const float t59 = (t35 * (1.0f / (t47 * t47 * t47)) * t56 * t57);
-            const float t60 = (t50 * t8);
-            const float t61 = ((-(t55 * t9)) + (-(powf(t52, -1.5f) * t54 * t60 * ((t44 * t59) + (t51 * t59) + (-(t32 * t43 * t58)) + (-(t34 * t50 * t58))))) + (19.5f * t48 * t50 * t53 * t56 * t57 * t6 * t7));
-            const float f = (o0.y + (-(t40 * (t40 + o3.y))));
-            const float l = (-(t61 * (1.0f / ((191844.0f + (t61 * t61)))) * fmaxf(0.0f, (12.566371f + t2 + (-22.222221f * xh)))));
-            const float value = ((-t39) + (-(t55 * t60)));
-            st = fdi_gen_status_worst(st, fdi_gen_obs_store(g, xh, f + (l * value)));
-            st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-            if (sens != NULL) /* d r / d f: f1 f2 f4 f5 f6 f10 f14 f18 f22 */
-            {
-                const float s0 = ((22.222221f * o2.y) + (3.3333333f * o3.y) + (-22.222221f * xh));
-                const float s1 = (t41 * t5);
-                const float s2 = ((-0.66333336f * o2.y) + o3.y + (0.66333336f * xh));
-                const float s3 = (s2 * t4);
-                const float s4 = (s1 + s3);
-                const float s5 = ((0.27f * o7.y) + (-s4));
-                const float s6 = (s5 * s5);
-                const float s7 = fabsf(s4);
-                const float s8 = fmaxf(0.5f, fmaxf(s7, t16));
-                const float s9 = (1.0f / (s8 * s8));
-                const float s10 = (380.25f * s9);
-                const float s11 = ((-2.4166667f * o2.y) + (1.4166666f * xh));
-                const float s12 = (s2 * t5);
-                const float s13 = (s12 + (s11 * t4));
-                const float s14 = (s13 * s13);
-                const float s15 = (1.0f + (s10 * s14) + (s10 * s6));
-                const float s16 = (1.0f / sqrtf(s15));
-                const float s17 = (1.0f / (s8));
-                const float s18 = (s16 * s17);
-                const float s19 = (s18 * s5);
-                const float s20 = (0.66333336f * t4);
-                const float s21 = (s18 * t7);
-                const float s22 = (19.5f * s21);
-                const float s23 = fdi_gen_sign(s4);
-                const float s24 = (s5 * t7);
-                const float s25 = (19.5f * s24);
-                const float s26 = fdi_gen_heaviside((s7 + t30));
-                const float s27 = (s16 * s9);
-                const float s28 = (190.125f * s9);
-                const float s29 = (s28 * s5);
-                const float s30 = (s13 * s28);
-                const float s31 = (1.0f / (s8 * s8 * s8));
-                const float s32 = (powf(s15, -1.5f) * s17 * s25);
-                const float s33 = ((s22 * ((-s20) + (1.4166666f * t5))) + (s32 * ((-(s29 * t34)) + (-(s30 * t32)) + (380.25f * s14 * s23 * s26 * s31 * t6) + (380.25f * s23 * s26 * s31 * s6 * t6))) + (-(s23 * s25 * s26 * s27 * t6)));
-                const float s34 = (-s33);
-                const float s35 = (s34 * s34);
-                const float s36 = (1.0f / (fminf(-0.1f, (s0 + (-(s35 * (1.0f / ((191844.0f + s35))) * fmaxf(0.0f, (12.566371f + s0))))))));
-                const float s37 = (s0 * s36);
-                const float s38 = ((-s20) + (2.4166667f * t5));
-                const float s39 = fdi_gen_sign(((-s3) + (s11 * t5)));
-                const float s40 = (s31 * s6);
-                const float s41 = (380.25f * s26);
-                const float s42 = (s39 * t4);
-                const float s43 = (s14 * s31);
-                const float s44 = (t4 * t41);
-                const float s45 = (-s13);
-                const float s46 = (s36 * ((-82.30453f * o2.y) + (-12.345679f * o3.y) + (82.30453f * xh)));
-                const float s47 = (fdi_gen_heaviside((t16 + (-fmaxf(0.5f, s7)))) * fdi_gen_sign(o7.y));
-                const float s48 = (102.6675f * s47);
-                sens[0] = (s36 * (s33 + (2126.4595f * s0 * s19))); /* f1 */
-                sens[1] = (3516.724f * s19 * s37); /* f2 */
-                sens[2] = (s36 * ((s0 * s34) + (-(s0 * ((-(s22 * s38)) + (-(s32 * ((-(s29 * ((-1.3266667f * t4) + (4.8333335f * t5)))) + (-(s30 * ((4.8333335f * t4) + (1.3266667f * t5)))) + (380.25f * s14 * s26 * s31 * s38 * s39) + (380.25f * s26 * s31 * s38 * s39 * s6)))) + (19.5f * s16 * s26 * s38 * s39 * s5 * s9 * t7)))))); /* f4 */
-                sens[3] = (s36 * ((-(s0 * ((-(s22 * t4)) + (-(s32 * ((s10 * s13 * t5) + (-(s10 * s5 * t4)) + (s40 * s41 * s42) + (s41 * s42 * s43)))) + (19.5f * s16 * s26 * s39 * s5 * s9 * t4 * t7)))) + (s34 * t40))); /* f5 */
-                sens[4] = (-(s37 * ((-(s22 * ((-s12) + s44))) + (-(s32 * ((-(s29 * ((-2.0f * s12) + (2.0f * s44)))) + (-(s30 * ((-2.0f * s3) + (2.0f * s11 * t5)))) + (380.25f * s14 * s26 * s31 * s39 * s45) + (380.25f * s26 * s31 * s39 * s45 * s6)))) + (19.5f * s16 * s26 * s39 * s45 * s5 * s9 * t7)))); /* f6 */
-                sens[5] = s46; /* f10 */
-                sens[6] = s46; /* f14 */
-                sens[7] = s37; /* f18 */
-                sens[8] = (-(s37 * ((5.265f * s21) + (0.00035555556f * o6.y * (2.0f + (-2.0f * (tanhf((2.0f * o7.y)) * tanhf((2.0f * o7.y)))))) + (-(s32 * ((-(s28 * ((-0.1458f * o7.y) + (0.54f * s1) + (0.54f * s3)))) + (-(s40 * s48)) + (-(s43 * s48))))) + (-5.265f * s24 * s27 * s47)))); /* f22 */
-                st = fdi_gen_sens_finish(st, sens, 9U);
-            }
-#else
-            (void)sens;
-#endif
-        }
-    }
-    return st;
-}
+/* The filter bank: every filtered signal of the generators once (b[k].x1 = y, b[k].x2 = dy; fdi_gen.h). */
+static const fdi_gen_bank_filter_t romo_bank[19] = {
+    {ROMO_SIG_AX_M, FDI_GEN_BANK_RAW, 0U}, /* b[0]: ax_m */
+    {ROMO_SIG_AY_M, FDI_GEN_BANK_RAW, 0U}, /* b[1]: ay_m */
+    {ROMO_SIG_PSIDOT_M, FDI_GEN_BANK_RAW, 0U}, /* b[2]: psidot_m */
+    {ROMO_SIG_VX_M, FDI_GEN_BANK_RAW, 0U}, /* b[3]: vx_m */
+    {ROMO_SIG_VY_M, FDI_GEN_BANK_RAW, 0U}, /* b[4]: vy_m */
+    {ROMO_SIG_DELTA1_M, FDI_GEN_BANK_RAW, 0U}, /* b[5]: delta1_m */
+    {ROMO_SIG_DELTA2_M, FDI_GEN_BANK_RAW, 0U}, /* b[6]: delta2_m */
+    {ROMO_SIG_DELTA3_M, FDI_GEN_BANK_RAW, 0U}, /* b[7]: delta3_m */
+    {ROMO_SIG_DELTA4_M, FDI_GEN_BANK_RAW, 0U}, /* b[8]: delta4_m */
+    {ROMO_SIG_ITM1_M, FDI_GEN_BANK_RAW, 0U}, /* b[9]: iTM1_m */
+    {ROMO_SIG_ITM2_M, FDI_GEN_BANK_RAW, 0U}, /* b[10]: iTM2_m */
+    {ROMO_SIG_ITM3_M, FDI_GEN_BANK_RAW, 0U}, /* b[11]: iTM3_m */
+    {ROMO_SIG_ITM4_M, FDI_GEN_BANK_RAW, 0U}, /* b[12]: iTM4_m */
+    {ROMO_SIG_P_F_M, FDI_GEN_BANK_RAW, 0U}, /* b[13]: P_f_m */
+    {ROMO_SIG_P_R_M, FDI_GEN_BANK_RAW, 0U}, /* b[14]: P_r_m */
+    {ROMO_SIG_OMEGA1_M, FDI_GEN_BANK_RAW, 0U}, /* b[15]: omega1_m */
+    {ROMO_SIG_OMEGA2_M, FDI_GEN_BANK_RAW, 0U}, /* b[16]: omega2_m */
+    {ROMO_SIG_OMEGA3_M, FDI_GEN_BANK_RAW, 0U}, /* b[17]: omega3_m */
+    {ROMO_SIG_OMEGA4_M, FDI_GEN_BANK_RAW, 0U}, /* b[18]: omega4_m */
+};
 
 /* MSO12: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
 static bool romo_gen_3_in_domain(const fdi_frame_t *in)
 {
     return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
-}
-
-/* MSO39: K1 K2 D1 D2 W1.FL W1.dyn W1.D S3 S4 S5 S.omega1
- * residual W1.FL; derivative causality for dvx, dvy, domega1; 7 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- */
-static fdi_status_t romo_gen_4(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                               float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_svf_out_t o2 = {0.0f, 0.0f};
-    fdi_svf_out_t o3 = {0.0f, 0.0f};
-    fdi_svf_out_t o4 = {0.0f, 0.0f};
-    fdi_svf_out_t o5 = {0.0f, 0.0f};
-    fdi_svf_out_t o6 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[ROMO_SIG_PSIDOT_M], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[ROMO_SIG_VX_M], reset, &o1));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->value[ROMO_SIG_VY_M], reset, &o2));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->value[ROMO_SIG_DELTA1_M], reset, &o3));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, in->value[ROMO_SIG_ITM1_M], reset, &o4));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, in->value[ROMO_SIG_P_F_M], reset, &o5));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, in->value[ROMO_SIG_OMEGA1_M], reset, &o6));
-    {
-        const float t0 = cosf(o3.y);
-        const float t1 = ((0.425f * o0.y) + (-o1.y));
-        const float t2 = sinf(o3.y);
-        const float t3 = ((0.199f * o0.y) + o2.y);
-        const float t4 = (t2 * t3);
-        const float t5 = ((0.27f * o6.y) + (-t4) + (t0 * t1));
-        const float t6 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o6.y)), fabsf(((-t4) + (t0 * t1)))));
-        const float t7 = (380.25f * (1.0f / (t6 * t6)));
-        const float value = ((5.9259257f * o4.y) + (-3.3333333f * o6.dy) + (-0.00035555556f * o5.y * tanhf((2.0f * o6.y))) + (-19.5f * t5 * (1.0f / (t6)) * (1.0f / sqrtf((1.0f + ((t5 * t5) * t7) + (t7 * (((t0 * t3) + (t1 * t2)) * ((t0 * t3) + (t1 * t2))))))) * (2565.315f + (147.63007f * o0.dy) + (-109.04921f * o1.dy) + (-180.34483f * o2.dy) + (109.04921f * o0.y * ((-1.0f * o0.y) + o2.y)) + (-180.34483f * o0.y * ((0.3f * o0.y) + o1.y)))));
-        st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-        if (sens != NULL) /* d r / d f: f3 f4 f5 f6 f10 f14 f18 f22 */
-        {
-            const float s0 = (t2 * t3);
-            const float s1 = ((-0.425f * o0.y) + o1.y);
-            const float s2 = (s1 * t0);
-            const float s3 = ((0.27f * o6.y) + (-s0) + (-s2));
-            const float s4 = (1.0f / (t6));
-            const float s5 = (t0 * t3);
-            const float s6 = (s5 + (t1 * t2));
-            const float s7 = (s6 * s6);
-            const float s8 = (1.0f / (t6 * t6));
-            const float s9 = (380.25f * s8);
-            const float s10 = (s3 * s3);
-            const float s11 = (1.0f + (s10 * s9) + (s7 * s9));
-            const float s12 = (1.0f / sqrtf(s11));
-            const float s13 = (s12 * s4);
-            const float s14 = (s13 * s3);
-            const float s15 = ((-0.425f * t0) + (0.199f * t2));
-            const float s16 = (2565.315f + (147.63007f * o0.dy) + (-109.04921f * o1.dy) + (-180.34483f * o2.dy) + (109.04921f * o0.y * ((-1.0f * o0.y) + o2.y)) + (-180.34483f * o0.y * ((0.3f * o0.y) + o1.y)));
-            const float s17 = (s13 * s16);
-            const float s18 = (19.5f * s17);
-            const float s19 = (0.27f * fabsf(o6.y));
-            const float s20 = (t0 * t1);
-            const float s21 = fabsf((s20 + (-t4)));
-            const float s22 = fdi_gen_heaviside((s21 + (-fmaxf(0.5f, s19))));
-            const float s23 = fdi_gen_sign(((-s0) + s20));
-            const float s24 = (s22 * s23);
-            const float s25 = (19.5f * s16 * s3);
-            const float s26 = (s12 * s24 * s25 * s8);
-            const float s27 = (190.125f * s8);
-            const float s28 = (s27 * s6);
-            const float s29 = (s27 * s3);
-            const float s30 = (1.0f / (t6 * t6 * t6));
-            const float s31 = powf(s11, -1.5f);
-            const float s32 = (s25 * s31 * s4);
-            const float s33 = (o0.y * s14);
-            const float s34 = (s9 * t2);
-            const float s35 = (s9 * t0);
-            const float s36 = (s30 * s7);
-            const float s37 = (380.25f * s24 * t2);
-            const float s38 = (s10 * s30);
-            const float s39 = (-s6);
-            const float s40 = fdi_gen_sign(o6.y);
-            const float s41 = fdi_gen_heaviside((s19 + (-fmaxf(0.5f, s21))));
-            const float s42 = (102.6675f * s40 * s41);
-            sens[0] = ((19.5f * s14 * ((326.3053f * o0.y) + (180.34483f * o1.y) + (-109.04921f * o2.y))) + (s15 * s18) + (-(s15 * s26)) + (s32 * ((-(s28 * ((-0.398f * t0) + (-0.85f * t2)))) + (-(s29 * ((-0.85f * t0) + (0.398f * t2)))) + (380.25f * s10 * s15 * s22 * s23 * s30) + (380.25f * s15 * s22 * s23 * s30 * s7)))); /* f3 */
-            sens[1] = ((3516.724f * s33) + (s18 * t0) + (-(s26 * t0)) + (s32 * ((-(s3 * s35)) + (-(s34 * s6)) + (380.25f * s10 * s22 * s23 * s30 * t0) + (380.25f * s22 * s23 * s30 * s7 * t0)))); /* f4 */
-            sens[2] = ((-2126.4595f * s33) + (-(s26 * t2)) + (19.5f * s12 * s16 * s4 * t2) + (19.5f * s16 * s3 * s31 * s4 * ((-(s3 * s34)) + (s35 * s6) + (s36 * s37) + (s37 * s38)))); /* f5 */
-            sens[3] = ((s18 * ((-s5) + (s1 * t2))) + (-(s26 * s39)) + (s32 * ((-(s28 * ((-2.0f * s0) + (2.0f * s20)))) + (-(s29 * ((-2.0f * s5) + (2.0f * s1 * t2)))) + (380.25f * s10 * s22 * s23 * s30 * s39) + (380.25f * s22 * s23 * s30 * s39 * s7)))); /* f6 */
-            sens[4] = -3.7037036f; /* f10 */
-            sens[5] = -3.7037036f; /* f14 */
-            sens[6] = 1.0f; /* f18 */
-            sens[7] = ((-5.265f * s17) + (-0.00035555556f * o5.y * (2.0f + (-2.0f * (tanhf((2.0f * o6.y)) * tanhf((2.0f * o6.y)))))) + (19.5f * s16 * s3 * s31 * s4 * ((-(s27 * ((-0.1458f * o6.y) + (0.54f * s0) + (0.54f * s2)))) + (-(s36 * s42)) + (-(s38 * s42)))) + (5.265f * s12 * s16 * s3 * s40 * s41 * s8)); /* f22 */
-            st = fdi_gen_sens_finish(st, sens, 8U);
-        }
-#else
-        (void)sens;
-#endif
-    }
-    return st;
 }
 
 /* MSO39: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
@@ -367,208 +49,10 @@ static bool romo_gen_4_in_domain(const fdi_frame_t *in)
     return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
 }
 
-/* MSO49: K1 K2 D1 D2 W2.FL W2.dyn W2.D S3 S4 S5 S.omega2
- * residual W2.FL; derivative causality for dvx, dvy, domega2; 7 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- */
-static fdi_status_t romo_gen_5(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                               float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_svf_out_t o2 = {0.0f, 0.0f};
-    fdi_svf_out_t o3 = {0.0f, 0.0f};
-    fdi_svf_out_t o4 = {0.0f, 0.0f};
-    fdi_svf_out_t o5 = {0.0f, 0.0f};
-    fdi_svf_out_t o6 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[ROMO_SIG_PSIDOT_M], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[ROMO_SIG_VX_M], reset, &o1));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->value[ROMO_SIG_VY_M], reset, &o2));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->value[ROMO_SIG_DELTA2_M], reset, &o3));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, in->value[ROMO_SIG_ITM2_M], reset, &o4));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, in->value[ROMO_SIG_P_F_M], reset, &o5));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, in->value[ROMO_SIG_OMEGA2_M], reset, &o6));
-    {
-        const float t0 = sinf(o3.y);
-        const float t1 = ((0.199f * o0.y) + o2.y);
-        const float t2 = cosf(o3.y);
-        const float t3 = ((1.025f * o0.y) + o1.y);
-        const float t4 = ((t0 * t1) + (t2 * t3));
-        const float t5 = ((0.27f * o6.y) + (-t4));
-        const float t6 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o6.y)), fabsf(t4)));
-        const float t7 = (380.25f * (1.0f / (t6 * t6)));
-        const float value = ((5.9259257f * o4.y) + (-3.3333333f * o6.dy) + (-0.00035555556f * o5.y * tanhf((2.0f * o6.y))) + (-19.5f * t5 * (1.0f / (t6)) * (1.0f / sqrtf((1.0f + ((t5 * t5) * t7) + (t7 * (((-(t0 * t3)) + (t1 * t2)) * ((-(t0 * t3)) + (t1 * t2))))))) * (2565.315f + (-213.05959f * o0.dy) + (-109.04921f * o1.dy) + (180.34483f * o2.dy) + (109.04921f * o0.y * ((-1.0f * o0.y) + o2.y)) + (180.34483f * o0.y * ((0.3f * o0.y) + o1.y)))));
-        st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-        if (sens != NULL) /* d r / d f: f3 f4 f5 f7 f11 f15 f19 f23 */
-        {
-            const float s0 = (t0 * t1);
-            const float s1 = (t2 * t3);
-            const float s2 = ((0.27f * o6.y) + (-s0) + (-s1));
-            const float s3 = (1.0f / (t6));
-            const float s4 = (s2 * s2);
-            const float s5 = (1.0f / (t6 * t6));
-            const float s6 = (380.25f * s5);
-            const float s7 = (t1 * t2);
-            const float s8 = ((-1.025f * o0.y) + (-o1.y));
-            const float s9 = (s8 * t0);
-            const float s10 = (s7 + s9);
-            const float s11 = (s10 * s10);
-            const float s12 = (1.0f + (s11 * s6) + (s4 * s6));
-            const float s13 = (1.0f / sqrtf(s12));
-            const float s14 = (s13 * s3);
-            const float s15 = (s14 * s2);
-            const float s16 = ((0.199f * t0) + (1.025f * t2));
-            const float s17 = (2565.315f + (-213.05959f * o0.dy) + (-109.04921f * o1.dy) + (180.34483f * o2.dy) + (109.04921f * o0.y * ((-1.0f * o0.y) + o2.y)) + (180.34483f * o0.y * ((0.3f * o0.y) + o1.y)));
-            const float s18 = (s14 * s17);
-            const float s19 = (19.5f * s18);
-            const float s20 = fabsf(t4);
-            const float s21 = (0.27f * fabsf(o6.y));
-            const float s22 = fdi_gen_heaviside((s20 + (-fmaxf(0.5f, s21))));
-            const float s23 = ((-0.199f * o0.y) + (-o2.y));
-            const float s24 = fdi_gen_sign(((s23 * t0) + (s8 * t2)));
-            const float s25 = (s22 * s24);
-            const float s26 = (19.5f * s17 * s2);
-            const float s27 = (s13 * s25 * s26 * s5);
-            const float s28 = (190.125f * s5);
-            const float s29 = (s2 * s28);
-            const float s30 = (s10 * s28);
-            const float s31 = (1.0f / (t6 * t6 * t6));
-            const float s32 = powf(s12, -1.5f);
-            const float s33 = (s26 * s3 * s32);
-            const float s34 = (o0.y * s15);
-            const float s35 = (s2 * s6);
-            const float s36 = (s10 * s6);
-            const float s37 = (s31 * s4);
-            const float s38 = (380.25f * s25 * t0);
-            const float s39 = (s11 * s31);
-            const float s40 = (t0 * t3);
-            const float s41 = ((-s9) + (s23 * t2));
-            const float s42 = fdi_gen_sign(o6.y);
-            const float s43 = fdi_gen_heaviside((s21 + (-fmaxf(0.5f, s20))));
-            const float s44 = (102.6675f * s42 * s43);
-            sens[0] = ((19.5f * s15 * ((109.89152f * o0.y) + (-180.34483f * o1.y) + (-109.04921f * o2.y))) + (s16 * s19) + (-(s16 * s27)) + (s33 * ((-(s29 * ((0.398f * t0) + (2.05f * t2)))) + (-(s30 * ((2.05f * t0) + (-0.398f * t2)))) + (380.25f * s11 * s16 * s22 * s24 * s31) + (380.25f * s16 * s22 * s24 * s31 * s4)))); /* f3 */
-            sens[1] = ((-3516.724f * s34) + (-(s27 * t2)) + (19.5f * s13 * s17 * s3 * t2) + (19.5f * s17 * s2 * s3 * s32 * ((-(s35 * t2)) + (-(s36 * t0)) + (380.25f * s11 * s22 * s24 * s31 * t2) + (380.25f * s22 * s24 * s31 * s4 * t2)))); /* f4 */
-            sens[2] = ((-2126.4595f * s34) + (-(s27 * t0)) + (19.5f * s13 * s17 * s3 * t0) + (19.5f * s17 * s2 * s3 * s32 * ((-(s35 * t0)) + (s36 * t2) + (s37 * s38) + (s38 * s39)))); /* f5 */
-            sens[3] = ((s19 * (s40 + (-s7))) + (-(s27 * s41)) + (s33 * ((-(s29 * ((2.0f * s40) + (-2.0f * s7)))) + (-(s30 * ((-2.0f * s0) + (2.0f * s8 * t2)))) + (380.25f * s11 * s22 * s24 * s31 * s41) + (380.25f * s22 * s24 * s31 * s4 * s41)))); /* f7 */
-            sens[4] = -3.7037036f; /* f11 */
-            sens[5] = -3.7037036f; /* f15 */
-            sens[6] = 1.0f; /* f19 */
-            sens[7] = ((-5.265f * s18) + (-0.00035555556f * o5.y * (2.0f + (-2.0f * (tanhf((2.0f * o6.y)) * tanhf((2.0f * o6.y)))))) + (19.5f * s17 * s2 * s3 * s32 * ((-(s28 * ((-0.1458f * o6.y) + (0.54f * s0) + (0.54f * s1)))) + (-(s37 * s44)) + (-(s39 * s44)))) + (5.265f * s13 * s17 * s2 * s42 * s43 * s5)); /* f23 */
-            st = fdi_gen_sens_finish(st, sens, 8U);
-        }
-#else
-        (void)sens;
-#endif
-    }
-    return st;
-}
-
 /* MSO49: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
 static bool romo_gen_5_in_domain(const fdi_frame_t *in)
 {
     return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
-}
-
-/* MSO59: K1 K2 D1 D2 W3.FL W3.dyn W3.D S3 S4 S5 S.omega3
- * residual W3.FL; derivative causality for dvx, dvy, domega3; 7 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- */
-static fdi_status_t romo_gen_6(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                               float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_svf_out_t o2 = {0.0f, 0.0f};
-    fdi_svf_out_t o3 = {0.0f, 0.0f};
-    fdi_svf_out_t o4 = {0.0f, 0.0f};
-    fdi_svf_out_t o5 = {0.0f, 0.0f};
-    fdi_svf_out_t o6 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[ROMO_SIG_PSIDOT_M], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[ROMO_SIG_VX_M], reset, &o1));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->value[ROMO_SIG_VY_M], reset, &o2));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->value[ROMO_SIG_DELTA3_M], reset, &o3));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, in->value[ROMO_SIG_ITM3_M], reset, &o4));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, in->value[ROMO_SIG_P_R_M], reset, &o5));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, in->value[ROMO_SIG_OMEGA3_M], reset, &o6));
-    {
-        const float t0 = sinf(o3.y);
-        const float t1 = (-o2.y);
-        const float t2 = ((2.199f * o0.y) + t1);
-        const float t3 = (-t2);
-        const float t4 = cosf(o3.y);
-        const float t5 = ((0.425f * o0.y) + (-o1.y));
-        const float t6 = ((0.27f * o6.y) + (-(t0 * t3)) + (t4 * t5));
-        const float t7 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o6.y)), fabsf(((t0 * t2) + (t4 * t5)))));
-        const float t8 = (380.25f * (1.0f / (t7 * t7)));
-        const float value = ((5.9259257f * o4.y) + (-3.3333333f * o6.dy) + (-0.00035555556f * o5.y * tanhf((2.0f * o6.y))) + (-19.5f * t6 * (1.0f / (t7)) * (1.0f / sqrtf((1.0f + ((t6 * t6) * t8) + (t8 * (((t0 * t5) + (t3 * t4)) * ((t0 * t5) + (t3 * t4))))))) * (2565.315f + (213.05959f * o0.dy) + (109.04921f * o1.dy) + (-180.34483f * o2.dy) + (-109.04921f * o0.y * ((-1.0f * o0.y) + (-t1))) + (-180.34483f * o0.y * ((0.3f * o0.y) + o1.y)))));
-        st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-        if (sens != NULL) /* d r / d f: f3 f4 f5 f8 f12 f16 f20 f24 */
-        {
-            const float s0 = (-o2.y);
-            const float s1 = ((-2.199f * o0.y) + (-s0));
-            const float s2 = (s1 * t0);
-            const float s3 = ((-0.425f * o0.y) + o1.y);
-            const float s4 = (s3 * t4);
-            const float s5 = (s2 + s4);
-            const float s6 = ((0.27f * o6.y) + (-s5));
-            const float s7 = (1.0f / (t7));
-            const float s8 = (s1 * t4);
-            const float s9 = (s8 + (t0 * t5));
-            const float s10 = (s9 * s9);
-            const float s11 = (1.0f / (t7 * t7));
-            const float s12 = (380.25f * s11);
-            const float s13 = (s6 * s6);
-            const float s14 = (1.0f + (s10 * s12) + (s12 * s13));
-            const float s15 = (1.0f / sqrtf(s14));
-            const float s16 = (s15 * s7);
-            const float s17 = (s16 * s6);
-            const float s18 = ((2.199f * t0) + (0.425f * t4));
-            const float s19 = (2565.315f + (213.05959f * o0.dy) + (109.04921f * o1.dy) + (-180.34483f * o2.dy) + (-109.04921f * o0.y * ((-1.0f * o0.y) + (-s0))) + (-180.34483f * o0.y * ((0.3f * o0.y) + o1.y)));
-            const float s20 = (s16 * s19);
-            const float s21 = (19.5f * s20);
-            const float s22 = (0.27f * fabsf(o6.y));
-            const float s23 = fabsf(((t0 * t2) + (t4 * t5)));
-            const float s24 = fdi_gen_heaviside((s23 + (-fmaxf(0.5f, s22))));
-            const float s25 = fdi_gen_sign(s5);
-            const float s26 = (s24 * s25);
-            const float s27 = (19.5f * s19 * s6);
-            const float s28 = (s11 * s15 * s26 * s27);
-            const float s29 = (190.125f * s11);
-            const float s30 = (s29 * s9);
-            const float s31 = (s29 * s6);
-            const float s32 = (1.0f / (t7 * t7 * t7));
-            const float s33 = powf(s14, -1.5f);
-            const float s34 = (s27 * s33 * s7);
-            const float s35 = (o0.y * s17);
-            const float s36 = (s12 * s6);
-            const float s37 = (s10 * s32);
-            const float s38 = (380.25f * s26);
-            const float s39 = (s38 * t4);
-            const float s40 = (s13 * s32);
-            const float s41 = (s38 * t0);
-            const float s42 = (s3 * t0);
-            const float s43 = (s42 + (-s8));
-            const float s44 = (-s43);
-            const float s45 = fdi_gen_sign(o6.y);
-            const float s46 = fdi_gen_heaviside((s22 + (-fmaxf(0.5f, s23))));
-            const float s47 = (102.6675f * s45 * s46);
-            sens[0] = ((19.5f * s17 * ((-109.89152f * o0.y) + (180.34483f * o1.y) + (109.04921f * o2.y))) + (-(s18 * s21)) + (-(s18 * s28)) + (s34 * ((-(s30 * ((-0.85f * t0) + (4.398f * t4)))) + (-(s31 * ((-4.398f * t0) + (-0.85f * t4)))) + (380.25f * s10 * s18 * s24 * s25 * s32) + (380.25f * s13 * s18 * s24 * s25 * s32)))); /* f3 */
-            sens[1] = ((3516.724f * s35) + (s21 * t4) + (s28 * t4) + (s34 * ((-(s36 * t4)) + (-(s37 * s39)) + (-(s39 * s40)) + (-(s12 * s9 * t0))))); /* f4 */
-            sens[2] = ((2126.4595f * s35) + (s21 * t0) + (s28 * t0) + (s34 * ((-(s36 * t0)) + (-(s37 * s41)) + (-(s40 * s41)) + (380.25f * s11 * s9 * t4)))); /* f5 */
-            sens[3] = ((s21 * s43) + (-(s28 * s44)) + (s34 * ((-(s30 * ((-2.0f * s2) + (2.0f * t4 * t5)))) + (-(s31 * ((2.0f * s42) + (-2.0f * s8)))) + (380.25f * s10 * s24 * s25 * s32 * s44) + (380.25f * s13 * s24 * s25 * s32 * s44)))); /* f8 */
-            sens[4] = -3.7037036f; /* f12 */
-            sens[5] = -3.7037036f; /* f16 */
-            sens[6] = 1.0f; /* f20 */
-            sens[7] = ((-5.265f * s20) + (-0.00035555556f * o5.y * (2.0f + (-2.0f * (tanhf((2.0f * o6.y)) * tanhf((2.0f * o6.y)))))) + (19.5f * s19 * s33 * s6 * s7 * ((-(s29 * ((-0.1458f * o6.y) + (0.54f * s2) + (0.54f * s4)))) + (-(s37 * s47)) + (-(s40 * s47)))) + (5.265f * s11 * s15 * s19 * s45 * s46 * s6)); /* f24 */
-            st = fdi_gen_sens_finish(st, sens, 8U);
-        }
-#else
-        (void)sens;
-#endif
-    }
-    return st;
 }
 
 /* MSO59: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
@@ -577,830 +61,10 @@ static bool romo_gen_6_in_domain(const fdi_frame_t *in)
     return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
 }
 
-/* MSO1670: B1 K1 D1 W1.FL W3.FL W1.FS W2.FS W3.FS W4.FS W1.Fx W2.Fx W3.Fx W4.Fx W1.dyn W2.dyn W4.dyn W1.D W2.D W4.D S2 S3 S4 S5 S.omega2 S.omega3 S.omega4
- * residual B1; derivative causality for dvx, domega2, domega4; observer for omega1 (integrates W1.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 16 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- */
-static fdi_status_t romo_gen_7(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                               float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_svf_out_t o2 = {0.0f, 0.0f};
-    fdi_svf_out_t o3 = {0.0f, 0.0f};
-    fdi_svf_out_t o4 = {0.0f, 0.0f};
-    fdi_svf_out_t o5 = {0.0f, 0.0f};
-    fdi_svf_out_t o6 = {0.0f, 0.0f};
-    fdi_svf_out_t o7 = {0.0f, 0.0f};
-    fdi_svf_out_t o8 = {0.0f, 0.0f};
-    fdi_svf_out_t o9 = {0.0f, 0.0f};
-    fdi_svf_out_t o10 = {0.0f, 0.0f};
-    fdi_svf_out_t o11 = {0.0f, 0.0f};
-    fdi_svf_out_t o12 = {0.0f, 0.0f};
-    fdi_svf_out_t o13 = {0.0f, 0.0f};
-    fdi_svf_out_t o14 = {0.0f, 0.0f};
-    fdi_svf_out_t o15 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[ROMO_SIG_AY_M], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[ROMO_SIG_PSIDOT_M], reset, &o1));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->value[ROMO_SIG_VX_M], reset, &o2));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->value[ROMO_SIG_VY_M], reset, &o3));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, in->value[ROMO_SIG_DELTA1_M], reset, &o4));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, in->value[ROMO_SIG_DELTA2_M], reset, &o5));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, in->value[ROMO_SIG_DELTA3_M], reset, &o6));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 7U, in->value[ROMO_SIG_DELTA4_M], reset, &o7));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 8U, in->value[ROMO_SIG_ITM1_M], reset, &o8));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 9U, in->value[ROMO_SIG_ITM2_M], reset, &o9));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 10U, in->value[ROMO_SIG_ITM4_M], reset, &o10));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 11U, in->value[ROMO_SIG_P_F_M], reset, &o11));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 12U, in->value[ROMO_SIG_P_R_M], reset, &o12));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 13U, in->value[ROMO_SIG_OMEGA2_M], reset, &o13));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 14U, in->value[ROMO_SIG_OMEGA3_M], reset, &o14));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 15U, in->value[ROMO_SIG_OMEGA4_M], reset, &o15));
-    {
-        const float t0 = (-1.7777778f * o8.y);
-        const float t2 = (0.00010666667f * o11.y);
-        const float t3 = (180.34483f * o0.y);
-        const float t4 = (32.714764f * o1.dy);
-        const float t5 = (109.04921f * o2.dy);
-        const float t6 = (-o3.y);
-        const float t7 = (o1.y * ((-1.0f * o1.y) + (-t6)));
-        const float t8 = (109.04921f * t7);
-        const float t9 = (t4 + t5 + (-t8));
-        const float t10 = (t3 + t9);
-        const float t11 = (2565.315f + (-t10));
-        const float t12 = cosf(o4.y);
-        const float t13 = ((0.199f * o1.y) + o3.y);
-        const float t14 = sinf(o4.y);
-        const float t15 = ((0.425f * o1.y) + (-o2.y));
-        const float t16 = ((t12 * t13) + (t14 * t15));
-        const float t17 = (t16 * t16);
-        const float t19 = (t13 * t14);
-        const float t20 = fabsf(((-t19) + (t12 * t15)));
-        const float t24 = (-t15);
-        const float t25 = (t12 * t24);
-        const float t26 = (t19 + t25);
-        const float t35 = (1.5795f * t11);
-        const float t37 = (-fmaxf(0.5f, t20));
-        const float t39 = ((0.54f * t19) + (0.54f * t25));
-        const float t40 = (102.6675f * t17);
-        const float t44 = (5.265f * t12);
-        const float t45 = (t14 * t16);
-        const float t50 = cosf(o5.y);
-        const float t51 = cosf(o7.y);
-        const float t52 = sinf(o5.y);
-        const float t53 = ((1.025f * o1.y) + o2.y);
-        const float t54 = (-t53);
-        const float t55 = ((t13 * t50) + (t52 * t54));
-        const float t56 = ((t13 * t52) + (t50 * t53));
-        const float t57 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o13.y)), fabsf(t56)));
-        const float t58 = (380.25f * (1.0f / (t57 * t57)));
-        const float t59 = sinf(o6.y);
-        const float t60 = cosf(o6.y);
-        const float t61 = ((2.199f * o1.y) + t6);
-        const float t62 = (-t61);
-        const float t63 = ((t15 * t59) + (t60 * t62));
-        const float t64 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o14.y)), fabsf(((t15 * t60) + (t59 * t61)))));
-        const float t65 = (380.25f * (1.0f / (t64 * t64)));
-        const float t66 = ((0.27f * o14.y) + (-(t24 * t60)) + (-(t59 * t62)));
-        const float t67 = (19.5f * (1.0f / (t64)) * (2565.315f + (-t3) + t9) * (1.0f / sqrtf((1.0f + ((t63 * t63) * t65) + (t65 * (t66 * t66))))));
-        const float t68 = sinf(o7.y);
-        const float t69 = ((t51 * t62) + (t54 * t68));
-        const float t70 = (t51 * t53);
-        const float t71 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o15.y)), fabsf(((-t70) + (t61 * t68)))));
-        const float t72 = (380.25f * (1.0f / (t71 * t71)));
-        const float t73 = ((-313.8f * o1.dy) + (1046.0f * t7) + (-1046.0f * o2.dy) + (t50 * ((5.9259257f * o9.y) + (-3.3333333f * o13.dy) + (-0.00035555556f * o11.y * tanhf((2.0f * o13.y))))) + (t51 * ((5.9259257f * o10.y) + (-3.3333333f * o15.dy) + (-0.00035555556f * o12.y * tanhf((2.0f * o15.y))))) + (t59 * t63 * t67) + (t60 * t66 * t67) + (19.5f * t52 * t55 * (1.0f / (t57)) * (1.0f / sqrtf((1.0f + ((t55 * t55) * t58) + (t58 * (((0.27f * o13.y) + (-t56)) * ((0.27f * o13.y) + (-t56))))))) * (2565.315f + t3 + (-t4) + (-t5) + t8)) + (19.5f * t68 * t69 * (1.0f / (t71)) * (2565.315f + t10) * (1.0f / sqrtf((1.0f + ((t69 * t69) * t72) + (t72 * (((0.27f * o15.y) + (-t70) + (-(t62 * t68))) * ((0.27f * o15.y) + (-t70) + (-(t62 * t68))))))))));
-        float xh = 0.0f;
-        if (reset)
-        {
-            const float x0 = in->value[ROMO_SIG_OMEGA1_M]; /* omega1 from its sensor outside the MSO set */
-            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;
-        }
-        else
-        {
-            const float xp = g->obs.xh;
-            const float t1 = tanhf((2.0f * xp));
-            const float t18 = (0.27f * fabsf(xp));
-            const float t21 = fmaxf(0.5f, fmaxf(t18, t20));
-            const float t22 = (1.0f / (t21 * t21));
-            const float t23 = (380.25f * t22);
-            const float t27 = ((-t26) + (0.27f * xp));
-            const float t28 = (t27 * t27);
-            const float t29 = (1.0f + (t17 * t23) + (t23 * t28));
-            const float t30 = (1.0f / sqrtf(t29));
-            const float t31 = (1.0f / (t21));
-            const float t32 = (t30 * t31);
-            const float t33 = (t11 * t32);
-            const float t34 = (5.85f * t27);
-            const float t36 = fdi_gen_sign(xp);
-            const float t38 = fdi_gen_heaviside((t18 + t37));
-            const float t41 = ((1.0f / (t21 * t21 * t21)) * t36 * t38);
-            const float t42 = (t11 * powf(t29, -1.5f) * t31 * ((-190.125f * t22 * ((-t39) + (0.1458f * xp))) + (102.6675f * t28 * t41) + (t40 * t41)));
-            const float t43 = ((t2 * (2.0f + (-2.0f * (t1 * t1)))) + (t32 * t35) + (t34 * t42) + (-1.5795f * t11 * t22 * t27 * t30 * t36 * t38));
-            const float t46 = (19.5f * t42);
-            const float t47 = (t12 * t27);
-            const float t48 = ((-(t33 * t44)) + (-(t45 * t46)) + (-(t46 * t47)) + (5.265f * t11 * t12 * t22 * t27 * t30 * t36 * t38) + (5.265f * t11 * t14 * t16 * t22 * t30 * t36 * t38));
-            const float t49 = (19.5f * t33);
-            const float f = ((-t0) + (-(t1 * t2)) + (-(t33 * t34)));
-            const float l = (-(t48 * (1.0f / ((7140.25f + (t48 * t48)))) * fmaxf(0.0f, (12.566371f + (-t43)))));
-            const float a = (-t43);
-            const float c = t48;
-            const float e = ((-t73) + (-(t45 * t49)) + (-(t47 * t49)));
-            xh = fdi_gen_obs_predict(g, par, f + (l * e), a + (l * c));
-        }
-        {
-            const float t74 = tanhf((2.0f * xh));
-            const float t75 = (0.27f * fabsf(xh));
-            const float t76 = fmaxf(0.5f, fmaxf(t20, t75));
-            const float t77 = (1.0f / (t76 * t76));
-            const float t78 = (380.25f * t77);
-            const float t79 = ((-t26) + (0.27f * xh));
-            const float t80 = (t79 * t79);
-            const float t81 = (1.0f + (t17 * t78) + (t78 * t80));
-            const float t82 = (1.0f / sqrtf(t81));
-            const float t83 = (1.0f / (t76));
-            const float t84 = (t82 * t83);
-            const float t85 = (t11 * t84);
-            const float t86 = (5.85f * t79);
-            const float t87 = fdi_gen_sign(xh);
-            const float t88 = fdi_gen_heaviside((t37 + t75));
-            const float t89 = ((1.0f / (t76 * t76 * t76)) * t87 * t88);
-            const float t90 = (t11 * powf(t81, -1.5f) * t83 * ((t40 * t89) + (-190.125f * t77 * ((-t39) + (0.1458f * xh))) + (102.6675f * t80 * t89)));
-            const float t91 = (19.5f * t90);
-            const float t92 = (t12 * t79);
-            const float t93 = ((-(t44 * t85)) + (-(t45 * t91)) + (-(t91 * t92)) + (5.265f * t11 * t12 * t77 * t79 * t82 * t87 * t88) + (5.265f * t11 * t14 * t16 * t77 * t82 * t87 * t88));
-            const float t94 = (19.5f * t85);
-            const float f = ((-t0) + (-(t2 * t74)) + (-(t85 * t86)));
-            const float l = (-(t93 * (1.0f / ((7140.25f + (t93 * t93)))) * fmaxf(0.0f, (12.566371f + (-(t2 * (2.0f + (-2.0f * (t74 * t74))))) + (-(t35 * t84)) + (-(t86 * t90)) + (1.5795f * t11 * t77 * t79 * t82 * t87 * t88)))));
-            const float value = ((-t73) + (-(t45 * t94)) + (-(t92 * t94)));
-            st = fdi_gen_status_worst(st, fdi_gen_obs_store(g, xh, f + (l * value)));
-            st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-            if (sens != NULL) /* d r / d f: f2 f3 f4 f5 f6 f7 f8 f9 f10 f11 f13 f14 f15 f17 f18 f19 f20 f21 f23 f24 f25 */
-            {
-                const float s0 = (180.34483f * o0.y);
-                const float s1 = (32.714764f * o1.dy);
-                const float s2 = (109.04921f * o2.dy);
-                const float s3 = (-o3.y);
-                const float s4 = (109.04921f * o1.y * ((-1.0f * o1.y) + (-s3)));
-                const float s5 = (-s4);
-                const float s6 = (2565.315f + (-s0) + (-s1) + (-s2) + (-s5));
-                const float s7 = (380.25f * t77);
-                const float s8 = (t13 * t14);
-                const float s9 = ((-0.425f * o1.y) + o2.y);
-                const float s10 = (s9 * t12);
-                const float s11 = ((-s10) + (-s8) + (0.27f * xh));
-                const float s12 = (s11 * s11);
-                const float s13 = (1.0f + (s12 * s7) + (s7 * t17));
-                const float s14 = (1.0f / sqrtf(s13));
-                const float s15 = (s14 * t83);
-                const float s16 = (s15 * s6);
-                const float s17 = (s16 * t12);
-                const float s18 = (t14 * t16);
-                const float s19 = (1.0f / (t76 * t76 * t76));
-                const float s20 = (s19 * t17);
-                const float s21 = (t87 * t88);
-                const float s22 = (102.6675f * s21);
-                const float s23 = (190.125f * t77);
-                const float s24 = (s12 * s19);
-                const float s25 = ((s20 * s22) + (s22 * s24) + (-(s23 * ((-0.54f * s10) + (-0.54f * s8) + (0.1458f * xh)))));
-                const float s26 = powf(s13, -1.5f);
-                const float s27 = (s26 * t83);
-                const float s28 = (s25 * s27);
-                const float s29 = (s28 * s6);
-                const float s30 = (19.5f * s29);
-                const float s31 = (s11 * t12);
-                const float s32 = ((-5.265f * s17) + (-(s18 * s30)) + (-(s30 * s31)) + (5.265f * s11 * s14 * s6 * t12 * t77 * t87 * t88) + (5.265f * s14 * s6 * t14 * t16 * t77 * t87 * t88));
-                const float s33 = (s11 * s15);
-                const float s34 = (s11 * s6);
-                const float s35 = (5.85f * s34);
-                const float s36 = ((1.5795f * s16) + (0.00010666667f * o11.y * (2.0f + (-2.0f * (t74 * t74)))) + (s28 * s35) + (-1.5795f * s11 * s14 * s6 * t77 * t87 * t88));
-                const float s37 = (-s36);
-                const float s38 = (3516.724f * s15);
-                const float s39 = (1.0f / (t57));
-                const float s40 = (t13 * t50);
-                const float s41 = ((-1.025f * o1.y) + (-o2.y));
-                const float s42 = (s41 * t52);
-                const float s43 = (s40 + s42);
-                const float s44 = (t13 * t52);
-                const float s45 = (t50 * t53);
-                const float s46 = ((0.27f * o13.y) + (-s44) + (-s45));
-                const float s47 = (s46 * s46);
-                const float s48 = (1.0f / (t57 * t57));
-                const float s49 = (380.25f * s48);
-                const float s50 = (s43 * s43);
-                const float s51 = (1.0f + (s47 * s49) + (s49 * s50));
-                const float s52 = (1.0f / sqrtf(s51));
-                const float s53 = (1.0f / (t64));
-                const float s54 = ((-2.199f * o1.y) + (-s3));
-                const float s55 = (s54 * t60);
-                const float s56 = (s55 + (t15 * t59));
-                const float s57 = (s56 * s56);
-                const float s58 = (1.0f / (t64 * t64));
-                const float s59 = (380.25f * s58);
-                const float s60 = (s54 * t59);
-                const float s61 = (s9 * t60);
-                const float s62 = (s60 + s61);
-                const float s63 = ((0.27f * o14.y) + (-s62));
-                const float s64 = (s63 * s63);
-                const float s65 = (1.0f + (s57 * s59) + (s59 * s64));
-                const float s66 = (1.0f / sqrtf(s65));
-                const float s67 = (s53 * s66);
-                const float s68 = (3516.724f * s67);
-                const float s69 = (s56 * t59);
-                const float s70 = (1.0f / (t71));
-                const float s71 = (s54 * t51);
-                const float s72 = (s71 + (s41 * t68));
-                const float s73 = (t51 * t53);
-                const float s74 = (s54 * t68);
-                const float s75 = ((0.27f * o15.y) + (-s73) + (-s74));
-                const float s76 = (s75 * s75);
-                const float s77 = (1.0f / (t71 * t71));
-                const float s78 = (380.25f * s77);
-                const float s79 = (s72 * s72);
-                const float s80 = (1.0f + (s76 * s78) + (s78 * s79));
-                const float s81 = (1.0f / sqrtf(s80));
-                const float s82 = (s63 * t60);
-                const float s83 = (s32 * s32);
-                const float s84 = (1.0f / (fminf(-0.1f, ((-s36) + (-(s83 * (1.0f / ((7140.25f + s83))) * fmaxf(0.0f, (12.566371f + (-s36)))))))));
-                const float s85 = ((218.09842f * o1.y) + (-109.04921f * o3.y));
-                const float s86 = (s33 * s85);
-                const float s87 = ((-0.425f * t12) + (0.199f * t14));
-                const float s88 = (s16 * s87);
-                const float s89 = fdi_gen_heaviside((t20 + (-fmaxf(0.5f, t75))));
-                const float s90 = (t12 * t15);
-                const float s91 = ((-s8) + s90);
-                const float s92 = fdi_gen_sign(s91);
-                const float s93 = (s23 * t16);
-                const float s94 = (s11 * s23);
-                const float s95 = (s27 * ((-(s93 * ((-0.398f * t12) + (-0.85f * t14)))) + (-(s94 * ((-0.85f * t12) + (0.398f * t14)))) + (380.25f * s12 * s19 * s87 * s89 * s92) + (380.25f * s19 * s87 * s89 * s92 * t17)));
-                const float s96 = (19.5f * s85);
-                const float s97 = (s15 * t16);
-                const float s98 = (19.5f * s16);
-                const float s99 = (19.5f * s95);
-                const float s100 = (s6 * t16);
-                const float s101 = (s89 * s92);
-                const float s102 = (s14 * t77);
-                const float s103 = (s101 * s102);
-                const float s104 = (s39 * s52);
-                const float s105 = (s104 * s43);
-                const float s106 = (2565.315f + t3);
-                const float s107 = ((-s1) + s106 + (-s2) + s4);
-                const float s108 = (19.5f * s107);
-                const float s109 = (s104 * s108);
-                const float s110 = ((1.025f * t50) + (0.199f * t52));
-                const float s111 = fabsf(t56);
-                const float s112 = (0.27f * fabsf(o13.y));
-                const float s113 = fdi_gen_heaviside((s111 + (-fmaxf(0.5f, s112))));
-                const float s114 = ((-0.199f * o1.y) + t6);
-                const float s115 = fdi_gen_sign(((s114 * t52) + (s41 * t50)));
-                const float s116 = (190.125f * s48);
-                const float s117 = (s116 * s46);
-                const float s118 = (s116 * s43);
-                const float s119 = (1.0f / (t57 * t57 * t57));
-                const float s120 = (s108 * s43);
-                const float s121 = (s120 * s39 * powf(s51, -1.5f));
-                const float s122 = (-19.5f * s85);
-                const float s123 = (s56 * s67);
-                const float s124 = (s5 + t4 + t5);
-                const float s125 = (2565.315f + (-s0) + s124);
-                const float s126 = (s125 * s67);
-                const float s127 = (19.5f * s126);
-                const float s128 = ((2.199f * t59) + (0.425f * t60));
-                const float s129 = fdi_gen_sign(s62);
-                const float s130 = (0.27f * fabsf(o14.y));
-                const float s131 = (t15 * t60);
-                const float s132 = fabsf((s131 + (t59 * t61)));
-                const float s133 = fdi_gen_heaviside((s132 + (-fmaxf(0.5f, s130))));
-                const float s134 = (s125 * s56);
-                const float s135 = (19.5f * s134);
-                const float s136 = (190.125f * s58);
-                const float s137 = (s136 * s56);
-                const float s138 = (s136 * s63);
-                const float s139 = (1.0f / (t64 * t64 * t64));
-                const float s140 = (s53 * powf(s65, -1.5f));
-                const float s141 = (s140 * ((-(s137 * ((-0.85f * t59) + (4.398f * t60)))) + (-(s138 * ((-4.398f * t59) + (-0.85f * t60)))) + (380.25f * s128 * s129 * s133 * s139 * s57) + (380.25f * s128 * s129 * s133 * s139 * s64)));
-                const float s142 = (s63 * s67);
-                const float s143 = (s125 * s63);
-                const float s144 = (19.5f * s143);
-                const float s145 = (s129 * s133);
-                const float s146 = (s58 * s66);
-                const float s147 = (s145 * s146);
-                const float s148 = (s70 * s81);
-                const float s149 = (s106 + s124);
-                const float s150 = (19.5f * s149);
-                const float s151 = (s148 * s150);
-                const float s152 = (s148 * s72);
-                const float s153 = ((1.025f * t51) + (-2.199f * t68));
-                const float s154 = (0.27f * fabsf(o15.y));
-                const float s155 = fabsf(((-t70) + (t61 * t68)));
-                const float s156 = fdi_gen_heaviside((s155 + (-fmaxf(0.5f, s154))));
-                const float s157 = (s41 * t51);
-                const float s158 = (s157 + (-s74));
-                const float s159 = fdi_gen_sign(s158);
-                const float s160 = (190.125f * s77);
-                const float s161 = (s160 * s75);
-                const float s162 = (s160 * s72);
-                const float s163 = (1.0f / (t71 * t71 * t71));
-                const float s164 = (s150 * s70 * s72 * powf(s80, -1.5f));
-                const float s165 = (5.85f * s17);
-                const float s166 = (s7 * t14);
-                const float s167 = (s7 * t12);
-                const float s168 = (380.25f * s101);
-                const float s169 = (s168 * t12);
-                const float s170 = (s27 * ((-(s11 * s167)) + (-(s166 * t16)) + (s169 * s20) + (s169 * s24)));
-                const float s171 = (s98 * t14);
-                const float s172 = (19.5f * s170);
-                const float s173 = (19.5f * s17);
-                const float s174 = (s31 * s6);
-                const float s175 = (s49 * t50);
-                const float s176 = (s49 * t52);
-                const float s177 = (s127 * t59);
-                const float s178 = (s59 * s63);
-                const float s179 = (s139 * s57);
-                const float s180 = (380.25f * s145);
-                const float s181 = (s180 * t60);
-                const float s182 = (s139 * s64);
-                const float s183 = (s140 * ((-(s178 * t60)) + (-(s179 * s181)) + (-(s181 * s182)) + (-(s56 * s59 * t59))));
-                const float s184 = (s127 * t60);
-                const float s185 = (19.5f * s125 * s147);
-                const float s186 = (s78 * t51);
-                const float s187 = (s78 * t68);
-                const float s188 = (o1.y * s33);
-                const float s189 = (5.85f * s16);
-                const float s190 = (s168 * t14);
-                const float s191 = ((-(s11 * s166)) + (s167 * t16) + (s190 * s20) + (s190 * s24));
-                const float s192 = (s191 * s27);
-                const float s193 = (2126.4595f * o1.y);
-                const float s194 = (s18 * s6);
-                const float s195 = (19.5f * s103);
-                const float s196 = (s195 * s34);
-                const float s197 = (s113 * s115);
-                const float s198 = (s48 * s52);
-                const float s199 = (s119 * s47);
-                const float s200 = (380.25f * s197 * t52);
-                const float s201 = (s119 * s50);
-                const float s202 = (s180 * t59);
-                const float s203 = (s140 * ((-(s178 * t59)) + (-(s179 * s202)) + (-(s182 * s202)) + (380.25f * s56 * s58 * t60)));
-                const float s204 = (s144 * s147);
-                const float s205 = (s163 * s76);
-                const float s206 = (380.25f * s156 * s159 * t68);
-                const float s207 = (s163 * s79);
-                const float s208 = (t12 * t13);
-                const float s209 = ((-s208) + (s9 * t14));
-                const float s210 = ((-s208) + (-(t14 * t15)));
-                const float s211 = (s27 * ((-(s93 * ((-2.0f * s8) + (2.0f * s90)))) + (-(s94 * ((-2.0f * s208) + (2.0f * s9 * t14)))) + (380.25f * s12 * s19 * s210 * s89 * s92) + (380.25f * s19 * s210 * s89 * s92 * t17)));
-                const float s212 = (19.5f * s211);
-                const float s213 = tanhf((2.0f * o13.y));
-                const float s214 = (0.00035555556f * o11.y);
-                const float s215 = ((-s42) + (s114 * t50));
-                const float s216 = (s37 * s84);
-                const float s217 = (s9 * t59);
-                const float s218 = (s217 + (-(s54 * t60)));
-                const float s219 = (-s218);
-                const float s220 = (s140 * ((-(s137 * ((2.0f * s131) + (-2.0f * s60)))) + (-(s138 * ((2.0f * s217) + (-2.0f * s55)))) + (380.25f * s129 * s133 * s139 * s219 * s57) + (380.25f * s129 * s133 * s139 * s219 * s64)));
-                const float s221 = tanhf((2.0f * o15.y));
-                const float s222 = (0.00035555556f * o12.y);
-                const float s223 = (-s72);
-                const float s224 = (21.666666f * s29);
-                const float s225 = (s84 * ((-s165) + (-(s18 * s224)) + (-(s224 * s31)) + (5.85f * s11 * s14 * s6 * t12 * t77 * t87 * t88) + (5.85f * s14 * s6 * t14 * t16 * t77 * t87 * t88)));
-                const float s226 = (3.7037036f * s216);
-                const float s227 = (s226 * t50);
-                const float s228 = (s226 * t51);
-                const float s229 = (1.5795f * s102 * s21);
-                const float s230 = (fdi_gen_heaviside((s112 + (-fmaxf(0.5f, s111)))) * fdi_gen_sign(o13.y));
-                const float s231 = (102.6675f * s230);
-                const float s232 = (fdi_gen_heaviside((s130 + (-fmaxf(0.5f, s132)))) * fdi_gen_sign(o14.y));
-                const float s233 = (5.265f * s146 * s232);
-                const float s234 = (102.6675f * s232);
-                const float s235 = (s140 * ((-(s136 * ((-0.1458f * o14.y) + (0.54f * s60) + (0.54f * s61)))) + (-(s179 * s234)) + (-(s182 * s234))));
-                const float s236 = (fdi_gen_heaviside((s154 + (-fmaxf(0.5f, s155)))) * fdi_gen_sign(o15.y));
-                const float s237 = (102.6675f * s236);
-                sens[0] = (s84 * ((-1055.0172f * s32 * s33) + (-(s37 * ((-(s18 * s38)) + (-(s31 * s38)) + (-(s68 * s69)) + (-(s68 * s82)) + (3516.724f * s39 * s43 * s52 * t52) + (3516.724f * s70 * s72 * s81 * t68)))))); /* f2 */
-                sens[1] = (s84 * ((s32 * ((-5.85f * s86) + (-5.85f * s88) + (-(s35 * s95)) + (5.85f * s11 * s14 * s6 * s87 * s89 * s92 * t77))) + (-(s37 * ((-2092.0f * o1.y) + (1046.0f * o3.y) + (-(t12 * ((19.5f * s86) + (19.5f * s88) + (s34 * s99) + (-19.5f * s103 * s34 * s87)))) + (t14 * ((-(s100 * s99)) + (-(s96 * s97)) + (-(s98 * ((-0.199f * t12) + (-0.425f * t14)))) + (19.5f * s14 * s6 * s87 * s89 * s92 * t16 * t77))) + (t52 * ((-(s105 * s96)) + (-(s109 * ((-0.199f * t50) + (1.025f * t52)))) + (-(s121 * ((-(s117 * ((2.05f * t50) + (0.398f * t52)))) + (-(s118 * ((-0.398f * t50) + (2.05f * t52)))) + (380.25f * s110 * s113 * s115 * s119 * s47) + (380.25f * s110 * s113 * s115 * s119 * s50)))) + (19.5f * s107 * s110 * s113 * s115 * s43 * s48 * s52))) + (t59 * ((-(s122 * s123)) + (-(s127 * ((-0.425f * t59) + (2.199f * t60)))) + (-(s135 * s141)) + (19.5f * s125 * s128 * s129 * s133 * s56 * s58 * s66))) + (-(t60 * ((s122 * s142) + (-(s127 * s128)) + (s141 * s144) + (-(s128 * s144 * s147))))) + (t68 * ((-(s122 * s152)) + (-(s151 * ((2.199f * t51) + (1.025f * t68)))) + (-(s164 * ((-(s161 * ((2.05f * t51) + (-4.398f * t68)))) + (-(s162 * ((4.398f * t51) + (2.05f * t68)))) + (380.25f * s153 * s156 * s159 * s163 * s76) + (380.25f * s153 * s156 * s159 * s163 * s79)))) + (19.5f * s149 * s153 * s156 * s159 * s72 * s77 * s81)))))))); /* f3 */
-                sens[2] = (s84 * ((s32 * ((-s165) + (-(s170 * s35)) + (5.85f * s11 * s14 * s6 * s89 * s92 * t12 * t77))) + (-(s37 * ((-(t12 * (s173 + (-19.5f * s103 * s174) + (s172 * s34)))) + (t14 * ((-s171) + (-(s100 * s172)) + (19.5f * s14 * s6 * s89 * s92 * t12 * t16 * t77))) + (t52 * ((-(s109 * t52)) + (-(s121 * ((-(s175 * s46)) + (-(s176 * s43)) + (380.25f * s113 * s115 * s119 * s47 * t50) + (380.25f * s113 * s115 * s119 * s50 * t50)))) + (19.5f * s107 * s113 * s115 * s43 * s48 * s52 * t50))) + (t59 * ((-s177) + (-(s135 * s183)) + (-(s135 * s147 * t60)))) + (-(t60 * (s184 + (s144 * s183) + (s185 * s82)))) + (t68 * ((-(s151 * t68)) + (-(s164 * ((-(s186 * s75)) + (-(s187 * s72)) + (380.25f * s156 * s159 * s163 * s76 * t51) + (380.25f * s156 * s159 * s163 * s79 * t51)))) + (19.5f * s149 * s156 * s159 * s72 * s77 * s81 * t51)))))))); /* f4 */
-                sens[3] = (s84 * ((s32 * ((637.93787f * s188) + (-(s189 * t14)) + (-(s192 * s35)) + (s103 * s35 * t14))) + (-(s37 * ((1046.0f * o1.y) + (-(t12 * (s171 + (-2126.4595f * s188) + (-(s196 * t14)) + (19.5f * s11 * s191 * s26 * s6 * t83)))) + (t14 * (s173 + (-19.5f * s100 * s192) + (s193 * s97) + (s194 * s195))) + (t52 * ((s105 * s193) + (s109 * t50) + (-(s121 * ((s175 * s43) + (-(s176 * s46)) + (s199 * s200) + (s200 * s201)))) + (s120 * s197 * s198 * t52))) + (t59 * ((-(s123 * s193)) + (-(s135 * s203)) + (-(s185 * s69)) + (19.5f * s125 * s53 * s66 * t60))) + (-(t60 * (s177 + (s142 * s193) + (s144 * s203) + (s204 * t59)))) + (t68 * ((-(s152 * s193)) + (-(s164 * ((s186 * s72) + (-(s187 * s75)) + (s205 * s206) + (s206 * s207)))) + (19.5f * s149 * s70 * s81 * t51) + (19.5f * s149 * s156 * s159 * s72 * s77 * s81 * t68)))))))); /* f5 */
-                sens[4] = (s84 * ((s32 * ((-(s189 * s209)) + (-(s211 * s35)) + (5.85f * s11 * s14 * s210 * s6 * s89 * s92 * t77))) + (-(s37 * ((-(s173 * t16)) + (-(t12 * ((-(s196 * s210)) + (s209 * s98) + (s212 * s34)))) + (t14 * ((-(s100 * s212)) + (-(s91 * s98)) + (19.5f * s14 * s210 * s6 * s89 * s92 * t16 * t77))) + (19.5f * s11 * s14 * s6 * t14 * t83)))))); /* f6 */
-                sens[5] = (-(s216 * ((t52 * ((5.9259257f * o9.y) + (-3.3333333f * o13.dy) + (-(s213 * s214)))) + (t52 * ((-(s109 * ((-s44) + (s41 * t50)))) + (-(s121 * ((-(s117 * ((-2.0f * s40) + (2.0f * t52 * t53)))) + (-(s118 * ((-2.0f * s44) + (2.0f * s41 * t50)))) + (380.25f * s113 * s115 * s119 * s215 * s47) + (380.25f * s113 * s115 * s119 * s215 * s50)))) + (19.5f * s107 * s113 * s115 * s215 * s43 * s48 * s52))) + (-(s105 * s108 * t50))))); /* f7 */
-                sens[6] = (-(s216 * ((s177 * s63) + (-(s184 * s56)) + (t59 * ((-(s127 * (s131 + (-s60)))) + (-(s135 * s220)) + (19.5f * s125 * s129 * s133 * s219 * s56 * s58 * s66))) + (-(t60 * ((s127 * s218) + (s144 * s220) + (-(s204 * s219)))))))); /* f8 */
-                sens[7] = (-(s216 * ((t68 * ((5.9259257f * o10.y) + (-3.3333333f * o15.dy) + (-(s221 * s222)))) + (t68 * ((-(s151 * s158)) + (-(s164 * ((-(s161 * ((-2.0f * s71) + (2.0f * t53 * t68)))) + (-(s162 * ((2.0f * s157) + (-2.0f * s74)))) + (380.25f * s156 * s159 * s163 * s223 * s76) + (380.25f * s156 * s159 * s163 * s223 * s79)))) + (19.5f * s149 * s156 * s159 * s223 * s72 * s77 * s81))) + (-(s150 * s152 * t51))))); /* f9 */
-                sens[8] = s225; /* f10 */
-                sens[9] = s227; /* f11 */
-                sens[10] = s228; /* f13 */
-                sens[11] = s225; /* f14 */
-                sens[12] = s227; /* f15 */
-                sens[13] = s228; /* f17 */
-                sens[14] = (s84 * ((-(s174 * s229)) + (-(s194 * s229)) + (-(s37 * ((-t12) + t14))) + (1.5795f * s14 * s6 * t12 * t83) + (5.85f * s11 * s25 * s26 * s6 * t12 * t83) + (5.85f * s25 * s26 * s6 * t14 * t16 * t83))); /* f18 */
-                sens[15] = (-(s216 * t52)); /* f19 */
-                sens[16] = (-(s216 * (t59 + (-t60)))); /* f20 */
-                sens[17] = (-(s216 * t68)); /* f21 */
-                sens[18] = (-(s216 * ((t52 * ((-(s121 * ((-(s116 * ((-0.1458f * o13.y) + (0.54f * s44) + (0.54f * s45)))) + (-(s199 * s231)) + (-(s201 * s231))))) + (-5.265f * s107 * s198 * s230 * s43))) + (-(s214 * t50 * (2.0f + (-2.0f * (s213 * s213)))))))); /* f23 */
-                sens[19] = (-(s216 * ((t59 * ((-(s134 * s233)) + (-(s135 * s235)))) + (-(t60 * ((-5.265f * s126) + (s143 * s233) + (s144 * s235))))))); /* f24 */
-                sens[20] = (-(s216 * ((t68 * ((-(s164 * ((-(s160 * ((-0.1458f * o15.y) + (0.54f * s73) + (0.54f * s74)))) + (-(s205 * s237)) + (-(s207 * s237))))) + (-5.265f * s149 * s236 * s72 * s77 * s81))) + (-(s222 * t51 * (2.0f + (-2.0f * (s221 * s221)))))))); /* f25 */
-                st = fdi_gen_sens_finish(st, sens, 21U);
-            }
-#else
-            (void)sens;
-#endif
-        }
-    }
-    return st;
-}
-
 /* MSO1670: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
 static bool romo_gen_7_in_domain(const fdi_frame_t *in)
 {
     return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
-}
-
-/* MSO1958: B1 B2 B3 D.psidot K1 K2 D2 W1.FL W2.FL W4.FL W1.FS W2.FS W4.FS W1.Fx W2.Fx W4.Fx W1.Fy W2.Fy W4.Fy W4.dyn W4.D S1 S3 S4 S5 S.omega1 S.omega2
- * residual B1; derivative causality for dpsidot, dvy; observer for omega4 (integrates W4.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 11 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- */
-static fdi_status_t romo_gen_8(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                               float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_svf_out_t o2 = {0.0f, 0.0f};
-    fdi_svf_out_t o3 = {0.0f, 0.0f};
-    fdi_svf_out_t o4 = {0.0f, 0.0f};
-    fdi_svf_out_t o5 = {0.0f, 0.0f};
-    fdi_svf_out_t o6 = {0.0f, 0.0f};
-    fdi_svf_out_t o7 = {0.0f, 0.0f};
-    fdi_svf_out_t o8 = {0.0f, 0.0f};
-    fdi_svf_out_t o9 = {0.0f, 0.0f};
-    fdi_svf_out_t o10 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[ROMO_SIG_AX_M], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[ROMO_SIG_PSIDOT_M], reset, &o1));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->value[ROMO_SIG_VX_M], reset, &o2));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->value[ROMO_SIG_VY_M], reset, &o3));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, in->value[ROMO_SIG_DELTA1_M], reset, &o4));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, in->value[ROMO_SIG_DELTA2_M], reset, &o5));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, in->value[ROMO_SIG_DELTA4_M], reset, &o6));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 7U, in->value[ROMO_SIG_ITM4_M], reset, &o7));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 8U, in->value[ROMO_SIG_P_R_M], reset, &o8));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 9U, in->value[ROMO_SIG_OMEGA1_M], reset, &o9));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 10U, in->value[ROMO_SIG_OMEGA2_M], reset, &o10));
-    {
-        const float t0 = (-1.7777778f * o7.y);
-        const float t2 = (0.00010666667f * o8.y);
-        const float t3 = (180.34483f * o3.dy);
-        const float t4 = (109.04921f * o0.y);
-        const float t5 = (-180.34483f * o1.dy);
-        const float t6 = ((0.3f * o1.y) + o2.y);
-        const float t7 = (180.34483f * o1.y * t6);
-        const float t8 = (t3 + t4 + t5 + t7);
-        const float t9 = (2565.315f + t8);
-        const float t10 = cosf(o6.y);
-        const float t11 = ((2.199f * o1.y) + (-o3.y));
-        const float t12 = (-t11);
-        const float t13 = sinf(o6.y);
-        const float t14 = ((1.025f * o1.y) + o2.y);
-        const float t15 = (-t14);
-        const float t16 = ((t10 * t12) + (t13 * t15));
-        const float t17 = (t16 * t16);
-        const float t19 = (t10 * t14);
-        const float t20 = fabsf(((-t19) + (t11 * t13)));
-        const float t24 = (t12 * t13);
-        const float t25 = (t19 + t24);
-        const float t34 = (1.5795f * t9);
-        const float t36 = (-fmaxf(0.5f, t20));
-        const float t38 = ((0.54f * t19) + (0.54f * t24));
-        const float t39 = (102.6675f * t17);
-        const float t43 = (10.53f * t10);
-        const float t44 = (t13 * t16);
-        const float t49 = sinf(o5.y);
-        const float t50 = cosf(o5.y);
-        const float t51 = ((0.199f * o1.y) + o3.y);
-        const float t52 = ((t15 * t49) + (t50 * t51));
-        const float t53 = ((t14 * t50) + (t49 * t51));
-        const float t54 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o10.y)), fabsf(t53)));
-        const float t55 = (380.25f * (1.0f / (t54 * t54)));
-        const float t56 = ((0.27f * o10.y) + (-t53));
-        const float t57 = (1.0f / sqrtf((1.0f + ((t52 * t52) * t55) + (t55 * (t56 * t56)))));
-        const float t58 = (1.0f / (t54));
-        const float t59 = (2565.315f + t3 + (-t4) + t5 + t7);
-        const float t60 = (t56 * t57 * t58 * t59);
-        const float t61 = sinf(o4.y);
-        const float t62 = cosf(o4.y);
-        const float t63 = ((0.425f * o1.y) + (-o2.y));
-        const float t64 = (t51 * t61);
-        const float t65 = ((0.27f * o9.y) + (-t64) + (t62 * t63));
-        const float t66 = ((t51 * t62) + (t61 * t63));
-        const float t67 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o9.y)), fabsf(((-t64) + (t62 * t63)))));
-        const float t68 = (380.25f * (1.0f / (t67 * t67)));
-        const float t69 = (1.0f / sqrtf((1.0f + ((t65 * t65) * t68) + ((t66 * t66) * t68))));
-        const float t70 = (1.0f / (t67));
-        const float t71 = (2565.315f + (-t8));
-        const float t72 = ((-1046.0f * o0.y) + (171.2469f * o1.dy) + (-1729.8676f * o3.dy) + (-1729.8676f * o1.y * t6) + (64.49793f * t49 * t60) + (39.0f * t50 * t60) + (39.0f * t49 * t52 * t57 * t58 * t59) + (-64.49793f * t50 * t52 * t57 * t58 * t59) + (64.49793f * t61 * t65 * t69 * t70 * t71) + (-64.49793f * t62 * t66 * t69 * t70 * t71));
-        float xh = 0.0f;
-        if (reset)
-        {
-            const float x0 = in->value[ROMO_SIG_OMEGA4_M]; /* omega4 from its sensor outside the MSO set */
-            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;
-        }
-        else
-        {
-            const float xp = g->obs.xh;
-            const float t1 = tanhf((2.0f * xp));
-            const float t18 = (0.27f * fabsf(xp));
-            const float t21 = fmaxf(0.5f, fmaxf(t18, t20));
-            const float t22 = (1.0f / (t21 * t21));
-            const float t23 = (380.25f * t22);
-            const float t26 = ((-t25) + (0.27f * xp));
-            const float t27 = (t26 * t26);
-            const float t28 = (1.0f + (t17 * t23) + (t23 * t27));
-            const float t29 = (1.0f / sqrtf(t28));
-            const float t30 = (1.0f / (t21));
-            const float t31 = (t29 * t30);
-            const float t32 = (t31 * t9);
-            const float t33 = (5.85f * t26);
-            const float t35 = fdi_gen_sign(xp);
-            const float t37 = fdi_gen_heaviside((t18 + t36));
-            const float t40 = ((1.0f / (t21 * t21 * t21)) * t35 * t37);
-            const float t41 = (powf(t28, -1.5f) * t30 * t9 * ((-190.125f * t22 * ((-t38) + (0.1458f * xp))) + (102.6675f * t27 * t40) + (t39 * t40)));
-            const float t42 = ((t2 * (2.0f + (-2.0f * (t1 * t1)))) + (t31 * t34) + (t33 * t41) + (-1.5795f * t22 * t26 * t29 * t35 * t37 * t9));
-            const float t45 = (39.0f * t41);
-            const float t46 = (t10 * t26);
-            const float t47 = ((-(t32 * t43)) + (-(t44 * t45)) + (-(t45 * t46)) + (10.53f * t10 * t22 * t26 * t29 * t35 * t37 * t9) + (10.53f * t13 * t16 * t22 * t29 * t35 * t37 * t9));
-            const float t48 = (39.0f * t32);
-            const float f = ((-t0) + (-(t1 * t2)) + (-(t32 * t33)));
-            const float l = (-(t47 * (1.0f / ((65025.0f + (t47 * t47)))) * fmaxf(0.0f, (12.566371f + (-t42)))));
-            const float a = (-t42);
-            const float c = t47;
-            const float e = ((-t72) + (-(t44 * t48)) + (-(t46 * t48)));
-            xh = fdi_gen_obs_predict(g, par, f + (l * e), a + (l * c));
-        }
-        {
-            const float t73 = tanhf((2.0f * xh));
-            const float t74 = (0.27f * fabsf(xh));
-            const float t75 = fmaxf(0.5f, fmaxf(t20, t74));
-            const float t76 = (1.0f / (t75 * t75));
-            const float t77 = (380.25f * t76);
-            const float t78 = ((-t25) + (0.27f * xh));
-            const float t79 = (t78 * t78);
-            const float t80 = (1.0f + (t17 * t77) + (t77 * t79));
-            const float t81 = (1.0f / sqrtf(t80));
-            const float t82 = (1.0f / (t75));
-            const float t83 = (t81 * t82);
-            const float t84 = (t83 * t9);
-            const float t85 = (5.85f * t78);
-            const float t86 = fdi_gen_sign(xh);
-            const float t87 = fdi_gen_heaviside((t36 + t74));
-            const float t88 = ((1.0f / (t75 * t75 * t75)) * t86 * t87);
-            const float t89 = (powf(t80, -1.5f) * t82 * t9 * ((t39 * t88) + (-190.125f * t76 * ((-t38) + (0.1458f * xh))) + (102.6675f * t79 * t88)));
-            const float t90 = (39.0f * t89);
-            const float t91 = (t10 * t78);
-            const float t92 = ((-(t43 * t84)) + (-(t44 * t90)) + (-(t90 * t91)) + (10.53f * t10 * t76 * t78 * t81 * t86 * t87 * t9) + (10.53f * t13 * t16 * t76 * t81 * t86 * t87 * t9));
-            const float t93 = (39.0f * t84);
-            const float f = ((-t0) + (-(t2 * t73)) + (-(t84 * t85)));
-            const float l = (-(t92 * (1.0f / ((65025.0f + (t92 * t92)))) * fmaxf(0.0f, (12.566371f + (-(t2 * (2.0f + (-2.0f * (t73 * t73))))) + (-(t34 * t83)) + (-(t85 * t89)) + (1.5795f * t76 * t78 * t81 * t86 * t87 * t9)))));
-            const float value = ((-t72) + (-(t44 * t93)) + (-(t91 * t93)));
-            st = fdi_gen_status_worst(st, fdi_gen_obs_store(g, xh, f + (l * value)));
-            st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-            if (sens != NULL) /* d r / d f: f1 f3 f4 f5 f6 f7 f9 f13 f17 f18 f19 f21 f22 f23 */
-            {
-                const float s0 = (2565.315f + t3 + t5 + t7);
-                const float s1 = (s0 + t4);
-                const float s2 = (t10 * t14);
-                const float s3 = ((-2.199f * o1.y) + o3.y);
-                const float s4 = (s3 * t13);
-                const float s5 = ((-s2) + (-s4) + (0.27f * xh));
-                const float s6 = (s5 * s5);
-                const float s7 = (380.25f * t76);
-                const float s8 = (s3 * t10);
-                const float s9 = ((-1.025f * o1.y) + (-o2.y));
-                const float s10 = (s8 + (s9 * t13));
-                const float s11 = (s10 * s10);
-                const float s12 = (1.0f + (s11 * s7) + (s6 * s7));
-                const float s13 = (1.0f / sqrtf(s12));
-                const float s14 = (s13 * t82);
-                const float s15 = (s1 * s14);
-                const float s16 = (s15 * t10);
-                const float s17 = (s5 * t10);
-                const float s18 = (190.125f * t76);
-                const float s19 = (t86 * t87);
-                const float s20 = (102.6675f * s19);
-                const float s21 = (1.0f / (t75 * t75 * t75));
-                const float s22 = (s21 * s6);
-                const float s23 = (s11 * s21);
-                const float s24 = ((-(s18 * ((-0.54f * s2) + (-0.54f * s4) + (0.1458f * xh)))) + (s20 * s22) + (s20 * s23));
-                const float s25 = powf(s12, -1.5f);
-                const float s26 = (s25 * t82);
-                const float s27 = (s24 * s26);
-                const float s28 = (s1 * s27);
-                const float s29 = (39.0f * s28);
-                const float s30 = (s10 * t13);
-                const float s31 = ((-10.53f * s16) + (-(s17 * s29)) + (-(s29 * s30)) + (10.53f * s1 * s10 * s13 * t13 * t76 * t86 * t87) + (10.53f * s1 * s13 * s5 * t10 * t76 * t86 * t87));
-                const float s32 = (s14 * s5);
-                const float s33 = (s1 * s5);
-                const float s34 = (5.85f * s33);
-                const float s35 = ((1.5795f * s15) + (0.00010666667f * o8.y * (2.0f + (-2.0f * (t73 * t73)))) + (s27 * s34) + (-1.5795f * s1 * s13 * s5 * t76 * t86 * t87));
-                const float s36 = (-s35);
-                const float s37 = (t66 * t66);
-                const float s38 = (1.0f / (t67 * t67));
-                const float s39 = (380.25f * s38);
-                const float s40 = (t51 * t61);
-                const float s41 = ((-0.425f * o1.y) + o2.y);
-                const float s42 = (s41 * t62);
-                const float s43 = ((0.27f * o9.y) + (-s40) + (-s42));
-                const float s44 = (s43 * s43);
-                const float s45 = (1.0f + (s37 * s39) + (s39 * s44));
-                const float s46 = (1.0f / sqrtf(s45));
-                const float s47 = (s46 * t70);
-                const float s48 = (s43 * t61);
-                const float s49 = (t14 * t50);
-                const float s50 = (t49 * t51);
-                const float s51 = ((0.27f * o10.y) + (-s49) + (-s50));
-                const float s52 = (s51 * s51);
-                const float s53 = (1.0f / (t54 * t54));
-                const float s54 = (380.25f * s53);
-                const float s55 = (t50 * t51);
-                const float s56 = (s9 * t49);
-                const float s57 = (s55 + s56);
-                const float s58 = (s57 * s57);
-                const float s59 = (1.0f + (s52 * s54) + (s54 * s58));
-                const float s60 = (1.0f / sqrtf(s59));
-                const float s61 = (s60 * t58);
-                const float s62 = (s51 * t49);
-                const float s63 = (4252.919f * s61);
-                const float s64 = (s51 * t50);
-                const float s65 = (s57 * t49);
-                const float s66 = (s31 * s31);
-                const float s67 = (1.0f / (fminf(-0.1f, ((-s35) + (-(s66 * (1.0f / ((65025.0f + s66))) * fmaxf(0.0f, (12.566371f + (-s35)))))))));
-                const float s68 = ((1.025f * t10) + (-2.199f * t13));
-                const float s69 = (s15 * s68);
-                const float s70 = ((108.206894f * o1.y) + (180.34483f * o2.y));
-                const float s71 = (-s70);
-                const float s72 = (s32 * s71);
-                const float s73 = fdi_gen_heaviside((t20 + (-fmaxf(0.5f, t74))));
-                const float s74 = (s9 * t10);
-                const float s75 = ((-s4) + s74);
-                const float s76 = fdi_gen_sign(s75);
-                const float s77 = (s18 * s5);
-                const float s78 = (s10 * s18);
-                const float s79 = (s26 * ((-(s77 * ((2.05f * t10) + (-4.398f * t13)))) + (-(s78 * ((4.398f * t10) + (2.05f * t13)))) + (380.25f * s11 * s21 * s68 * s73 * s76) + (380.25f * s21 * s6 * s68 * s73 * s76)));
-                const float s80 = (19.5f * s70);
-                const float s81 = (s47 * t66);
-                const float s82 = (109.04921f * o0.y);
-                const float s83 = (2565.315f + (180.34483f * o1.dy) + (-s82) + (-180.34483f * o3.dy) + (-180.34483f * o1.y * t6));
-                const float s84 = (s47 * s83);
-                const float s85 = (19.5f * s84);
-                const float s86 = ((0.199f * t61) + (-0.425f * t62));
-                const float s87 = ((-s40) + (t62 * t63));
-                const float s88 = fdi_gen_sign(s87);
-                const float s89 = (0.27f * fabsf(o9.y));
-                const float s90 = fabsf(((-t64) + (t62 * t63)));
-                const float s91 = fdi_gen_heaviside((s90 + (-fmaxf(0.5f, s89))));
-                const float s92 = (190.125f * s38);
-                const float s93 = (s92 * t66);
-                const float s94 = (s43 * s92);
-                const float s95 = (1.0f / (t67 * t67 * t67));
-                const float s96 = (s37 * s95);
-                const float s97 = (s88 * s91);
-                const float s98 = (380.25f * s97);
-                const float s99 = (s86 * s98);
-                const float s100 = (s44 * s95);
-                const float s101 = (powf(s45, -1.5f) * t70);
-                const float s102 = (s101 * ((s100 * s99) + (-(s93 * ((-0.85f * t61) + (-0.398f * t62)))) + (-(s94 * ((0.398f * t61) + (-0.85f * t62)))) + (s96 * s99)));
-                const float s103 = (s83 * t66);
-                const float s104 = (19.5f * s103);
-                const float s105 = (3.3075862f * t62);
-                const float s106 = (s43 * s47);
-                const float s107 = (s43 * s83);
-                const float s108 = (19.5f * s107);
-                const float s109 = (s38 * s46);
-                const float s110 = (s109 * s97);
-                const float s111 = (3.3075862f * t61);
-                const float s112 = ((0.199f * t49) + (1.025f * t50));
-                const float s113 = (s0 + (-s82));
-                const float s114 = (s113 * s61);
-                const float s115 = (19.5f * s114);
-                const float s116 = (19.5f * s71);
-                const float s117 = (s116 * s61);
-                const float s118 = (s113 * s51);
-                const float s119 = (19.5f * s118);
-                const float s120 = fabsf(t53);
-                const float s121 = (0.27f * fabsf(o10.y));
-                const float s122 = fdi_gen_heaviside((s120 + (-fmaxf(0.5f, s121))));
-                const float s123 = ((-0.199f * o1.y) + (-o3.y));
-                const float s124 = fdi_gen_sign(((s123 * t49) + (s9 * t50)));
-                const float s125 = (s122 * s124);
-                const float s126 = (s53 * s60);
-                const float s127 = (s125 * s126);
-                const float s128 = (190.125f * s53);
-                const float s129 = (s128 * s51);
-                const float s130 = (s128 * s57);
-                const float s131 = (1.0f / (t54 * t54 * t54));
-                const float s132 = powf(s59, -1.5f);
-                const float s133 = (s132 * t58);
-                const float s134 = (s133 * ((-(s129 * ((0.398f * t49) + (2.05f * t50)))) + (-(s130 * ((2.05f * t49) + (-0.398f * t50)))) + (380.25f * s112 * s122 * s124 * s131 * s52) + (380.25f * s112 * s122 * s124 * s131 * s58)));
-                const float s135 = ((s112 * s115) + (s117 * s51) + (s119 * s134) + (-(s112 * s119 * s127)));
-                const float s136 = (3.3075862f * t49);
-                const float s137 = (2.0f * t50);
-                const float s138 = (s113 * s57);
-                const float s139 = (19.5f * s138);
-                const float s140 = ((-(s115 * ((1.025f * t49) + (-0.199f * t50)))) + (-(s117 * s57)) + (-(s134 * s139)) + (19.5f * s112 * s113 * s122 * s124 * s53 * s57 * s60));
-                const float s141 = (3.3075862f * t50);
-                const float s142 = (s73 * s76);
-                const float s143 = (s13 * t76);
-                const float s144 = (s142 * s143);
-                const float s145 = (19.5f * s79);
-                const float s146 = (2.0f * t10);
-                const float s147 = (19.5f * s15);
-                const float s148 = (s10 * s14);
-                const float s149 = (s1 * s10);
-                const float s150 = (o1.y * s32);
-                const float s151 = (s1 * s17);
-                const float s152 = (s144 * s151);
-                const float s153 = (s7 * t10);
-                const float s154 = (s7 * t13);
-                const float s155 = ((-(s10 * s154)) + (-(s153 * s5)) + (380.25f * s11 * s21 * s73 * s76 * t10) + (380.25f * s21 * s6 * s73 * s76 * t10));
-                const float s156 = (s155 * s26);
-                const float s157 = (3516.724f * o1.y);
-                const float s158 = (s85 * t61);
-                const float s159 = (s39 * t66);
-                const float s160 = (s39 * s43);
-                const float s161 = (s101 * ((-(s159 * t61)) + (-(s160 * t62)) + (380.25f * s37 * s88 * s91 * s95 * t62) + (380.25f * s44 * s88 * s91 * s95 * t62)));
-                const float s162 = (s85 * t62);
-                const float s163 = (s108 * s110);
-                const float s164 = (s157 * s61);
-                const float s165 = (19.5f * s113 * s127);
-                const float s166 = (s51 * s54);
-                const float s167 = (s54 * s57);
-                const float s168 = ((-(s166 * t50)) + (-(s167 * t49)) + (380.25f * s122 * s124 * s131 * s52 * t50) + (380.25f * s122 * s124 * s131 * s58 * t50));
-                const float s169 = ((-(s164 * s51)) + (-(s165 * s64)) + (19.5f * s113 * s60 * t50 * t58) + (19.5f * s113 * s132 * s168 * s51 * t58));
-                const float s170 = (s115 * t49);
-                const float s171 = (s57 * t50);
-                const float s172 = ((-s170) + (s164 * s57) + (s165 * s171) + (-(s133 * s139 * s168)));
-                const float s173 = (s147 * t13);
-                const float s174 = (19.5f * s144);
-                const float s175 = (5.85f * s15);
-                const float s176 = (380.25f * s142 * t13);
-                const float s177 = (s26 * ((s10 * s153) + (-(s154 * s5)) + (s176 * s22) + (s176 * s23)));
-                const float s178 = (s98 * t61);
-                const float s179 = (s101 * ((s100 * s178) + (s159 * t62) + (-(s160 * t61)) + (s178 * s96)));
-                const float s180 = (s131 * s52);
-                const float s181 = (380.25f * s125 * t49);
-                const float s182 = (s131 * s58);
-                const float s183 = (s133 * ((-(s166 * t49)) + (s167 * t50) + (s180 * s181) + (s181 * s182)));
-                const float s184 = (s170 + (s119 * s183) + (-(s165 * s62)));
-                const float s185 = ((s115 * t50) + (-(s139 * s183)) + (s165 * s65));
-                const float s186 = (s174 * s33);
-                const float s187 = (19.5f * s177);
-                const float s188 = (s1 * s30);
-                const float s189 = (64.49793f * s84);
-                const float s190 = (t51 * t62);
-                const float s191 = ((-s190) + (-(t61 * t63)));
-                const float s192 = (s191 * s98);
-                const float s193 = (s101 * ((s100 * s192) + (s192 * s96) + (-(s93 * ((-2.0f * s40) + (2.0f * t62 * t63)))) + (-(s94 * ((-2.0f * s190) + (2.0f * s41 * t61))))));
-                const float s194 = (s36 * s67);
-                const float s195 = (64.49793f * s114);
-                const float s196 = (t14 * t49);
-                const float s197 = ((-s56) + (s123 * t50));
-                const float s198 = (s133 * ((-(s129 * ((2.0f * s196) + (-2.0f * s55)))) + (-(s130 * ((-2.0f * s50) + (2.0f * s9 * t50)))) + (380.25f * s122 * s124 * s131 * s197 * s52) + (380.25f * s122 * s124 * s131 * s197 * s58)));
-                const float s199 = ((s115 * (s196 + (-s55))) + (s119 * s198) + (-(s119 * s127 * s197)));
-                const float s200 = ((-(s115 * ((-s50) + (s9 * t50)))) + (-(s139 * s198)) + (19.5f * s113 * s122 * s124 * s197 * s53 * s57 * s60));
-                const float s201 = ((-s8) + (t13 * t14));
-                const float s202 = (-s10);
-                const float s203 = (s26 * ((-(s77 * ((-2.0f * s8) + (2.0f * t13 * t14)))) + (-(s78 * ((-2.0f * s4) + (2.0f * s74)))) + (380.25f * s11 * s202 * s21 * s73 * s76) + (380.25f * s202 * s21 * s6 * s73 * s76)));
-                const float s204 = (19.5f * s203);
-                const float s205 = (43.333332f * s28);
-                const float s206 = (s67 * ((-11.7f * s16) + (-(s17 * s205)) + (-(s205 * s30)) + (11.7f * s1 * s10 * s13 * t13 * t76 * t86 * t87) + (11.7f * s1 * s13 * s5 * t10 * t76 * t86 * t87)));
-                const float s207 = (3.159f * s143 * s19);
-                const float s208 = (fdi_gen_heaviside((s89 + (-fmaxf(0.5f, s90)))) * fdi_gen_sign(o9.y));
-                const float s209 = (5.265f * s109 * s208);
-                const float s210 = (102.6675f * s208);
-                const float s211 = (s101 * ((-(s100 * s210)) + (-(s210 * s96)) + (-(s92 * ((-0.1458f * o9.y) + (0.54f * s40) + (0.54f * s42))))));
-                const float s212 = (fdi_gen_heaviside((s121 + (-fmaxf(0.5f, s120)))) * fdi_gen_sign(o10.y));
-                const float s213 = (5.265f * s126 * s212);
-                const float s214 = (102.6675f * s212);
-                const float s215 = (s133 * ((-(s128 * ((-0.1458f * o10.y) + (0.54f * s49) + (0.54f * s50)))) + (-(s180 * s214)) + (-(s182 * s214))));
-                const float s216 = ((-(s138 * s213)) + (-(s139 * s215)));
-                const float s217 = ((-5.265f * s114) + (s118 * s213) + (s119 * s215));
-                sens[0] = (s67 * ((637.93787f * s31 * s32) + (-(s36 * (-1046.0f + (-7033.448f * s47 * s48) + (-7033.448f * s61 * s62) + (-(s63 * s64)) + (-(s63 * s65)) + (4252.919f * s10 * s13 * t13 * t82) + (4252.919f * s13 * s5 * t10 * t82) + (7033.448f * s46 * t62 * t66 * t70) + (7033.448f * s57 * s60 * t50 * t58)))))); /* f1 */
-                sens[1] = (s67 * ((s31 * ((-5.85f * s69) + (-5.85f * s72) + (-(s34 * s79)) + (5.85f * s1 * s13 * s5 * s68 * s73 * s76 * t76))) + (-(s36 * ((-1037.9205f * o1.y) + (-1729.8676f * o2.y) + (-(s105 * ((-(s102 * s104)) + (-(s80 * s81)) + (-(s85 * ((-0.425f * t61) + (-0.199f * t62)))) + (19.5f * s38 * s46 * s83 * s86 * s88 * s91 * t66)))) + (-(s111 * ((s102 * s108) + (s106 * s80) + (s85 * s86) + (-(s108 * s110 * s86))))) + (-(s135 * s136)) + (-(s135 * s137)) + (-(s140 * s141)) + (2.0f * s140 * t49) + (-(s146 * ((19.5f * s69) + (19.5f * s72) + (s145 * s33) + (-19.5f * s144 * s33 * s68)))) + (2.0f * t13 * ((-(s116 * s148)) + (-(s145 * s149)) + (-(s147 * ((2.199f * t10) + (1.025f * t13)))) + (19.5f * s1 * s10 * s13 * s68 * s73 * s76 * t76)))))))); /* f3 */
-                sens[2] = (s67 * ((s31 * ((1055.0172f * s150) + (5.85f * s152) + (-5.85f * s16) + (-(s156 * s34)))) + (-(s36 * ((-1729.8676f * o1.y) + (-(s105 * ((-s158) + (-(s104 * s161)) + (-(s157 * s81)) + (19.5f * s38 * s46 * s83 * s88 * s91 * t62 * t66)))) + (-(s111 * (s162 + (s106 * s157) + (s108 * s161) + (-(s163 * t62))))) + (-(s136 * s169)) + (-(s137 * s169)) + (-(s141 * s172)) + (-(s146 * ((-3516.724f * s150) + (-19.5f * s152) + (19.5f * s1 * s13 * t10 * t82) + (19.5f * s1 * s155 * s25 * s5 * t82)))) + (2.0f * s172 * t49) + (2.0f * t13 * ((-s173) + (s148 * s157) + (-19.5f * s149 * s156) + (s149 * s174 * t10)))))))); /* f4 */
-                sens[3] = (s67 * ((s31 * ((-(s175 * t13)) + (-(s177 * s34)) + (5.85f * s1 * s13 * s5 * s73 * s76 * t13 * t76))) + (-(s36 * ((-(s105 * (s162 + (-(s104 * s179)) + (s104 * s110 * t61)))) + (-(s111 * (s158 + (s108 * s179) + (-19.5f * s110 * s48 * s83)))) + (-(s136 * s184)) + (-(s137 * s184)) + (-(s141 * s185)) + (-(s146 * (s173 + (-(s186 * t13)) + (s187 * s33)))) + (2.0f * s185 * t49) + (2.0f * t13 * ((19.5f * s16) + (-(s149 * s187)) + (s174 * s188)))))))); /* f5 */
-                sens[4] = (-(s194 * ((-(s105 * ((-(s104 * s193)) + (-(s85 * s87)) + (19.5f * s191 * s38 * s46 * s83 * s88 * s91 * t66)))) + (-(s111 * ((s108 * s193) + (-(s163 * s191)) + (s85 * ((-s190) + (s41 * t61)))))) + (-(s189 * s43 * t62)) + (-(s189 * t61 * t66))))); /* f6 */
-                sens[5] = (-(s194 * ((-39.0f * s114 * s171) + (-(s136 * s199)) + (-(s137 * s199)) + (-(s141 * s200)) + (-(s195 * s64)) + (-(s195 * s65)) + (2.0f * s200 * t49) + (39.0f * s113 * s51 * s60 * t49 * t58)))); /* f7 */
-                sens[6] = (s67 * ((s31 * ((-(s175 * s201)) + (-(s203 * s34)) + (5.85f * s1 * s13 * s202 * s5 * s73 * s76 * t76))) + (-(s36 * ((-39.0f * s10 * s16) + (-(s146 * ((s147 * s201) + (-(s186 * s202)) + (s204 * s33)))) + (2.0f * t13 * ((-(s147 * s75)) + (-(s149 * s204)) + (19.5f * s1 * s10 * s13 * s202 * s73 * s76 * t76))) + (39.0f * s1 * s13 * s5 * t13 * t82)))))); /* f9 */
-                sens[7] = s206; /* f13 */
-                sens[8] = s206; /* f17 */
-                sens[9] = (-(s194 * ((-s105) + (-s111)))); /* f18 */
-                sens[10] = (-(s194 * ((-1.3075862f * t49) + (-5.307586f * t50)))); /* f19 */
-                sens[11] = (s67 * ((-(s151 * s207)) + (-(s188 * s207)) + (-(s36 * ((-s146) + (2.0f * t13)))) + (3.159f * s1 * s13 * t10 * t82) + (11.7f * s1 * s10 * s24 * s25 * t13 * t82) + (11.7f * s1 * s24 * s25 * s5 * t10 * t82))); /* f21 */
-                sens[12] = (-(s194 * ((-(s105 * ((-(s103 * s209)) + (-(s104 * s211))))) + (-(s111 * ((-5.265f * s84) + (s107 * s209) + (s108 * s211))))))); /* f22 */
-                sens[13] = (-(s194 * ((-(s136 * s217)) + (-(s137 * s217)) + (-(s141 * s216)) + (2.0f * s216 * t49)))); /* f23 */
-                st = fdi_gen_sens_finish(st, sens, 14U);
-            }
-#else
-            (void)sens;
-#endif
-        }
-    }
-    return st;
 }
 
 /* MSO1958: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
@@ -1409,812 +73,10 @@ static bool romo_gen_8_in_domain(const fdi_frame_t *in)
     return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
 }
 
-/* MSO2058: B1 B2 B3 D.psidot K1 K2 D1 D2 W1.FL W2.FL W3.FL W1.FS W2.FS W3.FS W1.Fx W2.Fx W3.Fx W1.Fy W2.Fy W3.Fy W2.dyn W2.D S3 S4 S5 S.omega1 S.omega3
- * residual B1; derivative causality for dpsidot, dvx, dvy; observer for omega2 (integrates W2.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 10 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- */
-static fdi_status_t romo_gen_9(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                               float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_svf_out_t o2 = {0.0f, 0.0f};
-    fdi_svf_out_t o3 = {0.0f, 0.0f};
-    fdi_svf_out_t o4 = {0.0f, 0.0f};
-    fdi_svf_out_t o5 = {0.0f, 0.0f};
-    fdi_svf_out_t o6 = {0.0f, 0.0f};
-    fdi_svf_out_t o7 = {0.0f, 0.0f};
-    fdi_svf_out_t o8 = {0.0f, 0.0f};
-    fdi_svf_out_t o9 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[ROMO_SIG_PSIDOT_M], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[ROMO_SIG_VX_M], reset, &o1));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->value[ROMO_SIG_VY_M], reset, &o2));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->value[ROMO_SIG_DELTA1_M], reset, &o3));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, in->value[ROMO_SIG_DELTA2_M], reset, &o4));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, in->value[ROMO_SIG_DELTA3_M], reset, &o5));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, in->value[ROMO_SIG_ITM2_M], reset, &o6));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 7U, in->value[ROMO_SIG_P_F_M], reset, &o7));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 8U, in->value[ROMO_SIG_OMEGA1_M], reset, &o8));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 9U, in->value[ROMO_SIG_OMEGA3_M], reset, &o9));
-    {
-        const float t0 = (-1.7777778f * o6.y);
-        const float t2 = (0.00010666667f * o7.y);
-        const float t3 = (-109.04921f * o1.dy);
-        const float t4 = (-o2.y);
-        const float t5 = (o0.y * ((-1.0f * o0.y) + (-t4)));
-        const float t6 = (109.04921f * t5);
-        const float t7 = (2565.315f + t3 + t6);
-        const float t8 = (180.34483f * o2.dy);
-        const float t9 = (o0.y * ((0.3f * o0.y) + o1.y));
-        const float t10 = (180.34483f * t9);
-        const float t11 = ((-213.05959f * o0.dy) + t10 + t8);
-        const float t12 = (t11 + t7);
-        const float t13 = cosf(o4.y);
-        const float t14 = ((0.199f * o0.y) + o2.y);
-        const float t15 = sinf(o4.y);
-        const float t16 = ((1.025f * o0.y) + o1.y);
-        const float t17 = ((t13 * t14) + (-(t15 * t16)));
-        const float t18 = (t17 * t17);
-        const float t20 = (t14 * t15);
-        const float t21 = (t13 * t16);
-        const float t22 = (t20 + t21);
-        const float t23 = fabsf(t22);
-        const float t35 = (1.5795f * t12);
-        const float t37 = (-fmaxf(0.5f, t23));
-        const float t39 = ((0.54f * t20) + (0.54f * t21));
-        const float t40 = (102.6675f * t18);
-        const float t45 = (17.414442f * t15);
-        const float t47 = (t13 * t17);
-        const float t48 = (17.414442f * t12 * t47);
-        const float t49 = (t12 * t45);
-        const float t52 = cosf(o3.y);
-        const float t53 = sinf(o3.y);
-        const float t54 = ((0.425f * o0.y) + (-o1.y));
-        const float t55 = ((t14 * t52) + (t53 * t54));
-        const float t56 = (t14 * t53);
-        const float t57 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o8.y)), fabsf(((-t56) + (t52 * t54)))));
-        const float t58 = (380.25f * (1.0f / (t57 * t57)));
-        const float t59 = (-t54);
-        const float t60 = ((0.27f * o8.y) + (-t56) + (-(t52 * t59)));
-        const float t61 = (1.0f / sqrtf((1.0f + ((t55 * t55) * t58) + (t58 * (t60 * t60)))));
-        const float t62 = (1.0f / (t57));
-        const float t63 = ((147.63007f * o0.dy) + (-t10) + t7 + (-t8));
-        const float t64 = (t52 * t61 * t62 * t63);
-        const float t65 = sinf(o5.y);
-        const float t66 = cosf(o5.y);
-        const float t67 = ((2.199f * o0.y) + t4);
-        const float t68 = (-t67);
-        const float t69 = ((t54 * t65) + (t66 * t68));
-        const float t70 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o9.y)), fabsf(((t54 * t66) + (t65 * t67)))));
-        const float t71 = (380.25f * (1.0f / (t70 * t70)));
-        const float t72 = ((0.27f * o9.y) + (-(t59 * t66)) + (-(t65 * t68)));
-        const float t73 = (39.0f * (1.0f / (t70)) * (1.0f / sqrtf((1.0f + ((t69 * t69) * t71) + (t71 * (t72 * t72))))) * (2565.315f + (-t11) + (-t3) + (-t6)));
-        const float t74 = ((-485.0469f * o0.dy) + (1046.0f * t5) + (1729.8676f * t9) + (-1046.0f * o1.dy) + (1729.8676f * o2.dy) + (64.49793f * t55 * t64) + (39.0f * t60 * t64) + (t65 * t69 * t73) + (t66 * t72 * t73) + (39.0f * t53 * t55 * t61 * t62 * t63) + (-64.49793f * t53 * t60 * t61 * t62 * t63));
-        float xh = 0.0f;
-        if (reset)
-        {
-            const float x0 = in->value[ROMO_SIG_OMEGA2_M]; /* omega2 from its sensor outside the MSO set */
-            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;
-        }
-        else
-        {
-            const float xp = g->obs.xh;
-            const float t1 = tanhf((2.0f * xp));
-            const float t19 = (0.27f * fabsf(xp));
-            const float t24 = fmaxf(0.5f, fmaxf(t19, t23));
-            const float t25 = (1.0f / (t24 * t24));
-            const float t26 = (380.25f * t25);
-            const float t27 = ((-t22) + (0.27f * xp));
-            const float t28 = (t27 * t27);
-            const float t29 = (1.0f + (t18 * t26) + (t26 * t28));
-            const float t30 = (1.0f / sqrtf(t29));
-            const float t31 = (1.0f / (t24));
-            const float t32 = (t30 * t31);
-            const float t33 = (t12 * t32);
-            const float t34 = (5.85f * t27);
-            const float t36 = fdi_gen_sign(xp);
-            const float t38 = fdi_gen_heaviside((t19 + t37));
-            const float t41 = (t36 * t38);
-            const float t42 = ((1.0f / (t24 * t24 * t24)) * t41);
-            const float t43 = (t12 * powf(t29, -1.5f) * t31 * ((-190.125f * t25 * ((-t39) + (0.1458f * xp))) + (102.6675f * t28 * t42) + (t40 * t42)));
-            const float t44 = ((t2 * (2.0f + (-2.0f * (t1 * t1)))) + (t32 * t35) + (t34 * t43) + (-1.5795f * t12 * t25 * t27 * t30 * t36 * t38));
-            const float t46 = (t25 * t30 * t41);
-            const float t50 = (64.49793f * t43);
-            const float t51 = ((t33 * t45) + (t46 * t48) + (-(t47 * t50)) + (t15 * t27 * t50) + (-(t27 * t46 * t49)));
-            const float f = ((-t0) + (-(t1 * t2)) + (-(t33 * t34)));
-            const float l = (-(t51 * (1.0f / ((61.9369f + (t51 * t51)))) * fmaxf(0.0f, (12.566371f + (-t44)))));
-            const float a = (-t44);
-            const float c = t51;
-            const float e = ((-t74) + (-64.49793f * t33 * t47) + (64.49793f * t12 * t15 * t27 * t30 * t31));
-            xh = fdi_gen_obs_predict(g, par, f + (l * e), a + (l * c));
-        }
-        {
-            const float t75 = tanhf((2.0f * xh));
-            const float t76 = (0.27f * fabsf(xh));
-            const float t77 = fmaxf(0.5f, fmaxf(t23, t76));
-            const float t78 = (1.0f / (t77 * t77));
-            const float t79 = (380.25f * t78);
-            const float t80 = ((-t22) + (0.27f * xh));
-            const float t81 = (t80 * t80);
-            const float t82 = (1.0f + (t18 * t79) + (t79 * t81));
-            const float t83 = (1.0f / sqrtf(t82));
-            const float t84 = (1.0f / (t77));
-            const float t85 = (t83 * t84);
-            const float t86 = (t12 * t85);
-            const float t87 = (5.85f * t80);
-            const float t88 = fdi_gen_sign(xh);
-            const float t89 = fdi_gen_heaviside((t37 + t76));
-            const float t90 = (t88 * t89);
-            const float t91 = ((1.0f / (t77 * t77 * t77)) * t90);
-            const float t92 = (t12 * powf(t82, -1.5f) * t84 * ((t40 * t91) + (-190.125f * t78 * ((-t39) + (0.1458f * xh))) + (102.6675f * t81 * t91)));
-            const float t93 = (t78 * t83 * t90);
-            const float t94 = (64.49793f * t92);
-            const float t95 = ((t45 * t86) + (-(t47 * t94)) + (t48 * t93) + (t15 * t80 * t94) + (-(t49 * t80 * t93)));
-            const float f = ((-t0) + (-(t2 * t75)) + (-(t86 * t87)));
-            const float l = (-(t95 * (1.0f / ((61.9369f + (t95 * t95)))) * fmaxf(0.0f, (12.566371f + (-(t2 * (2.0f + (-2.0f * (t75 * t75))))) + (-(t35 * t85)) + (-(t87 * t92)) + (1.5795f * t12 * t78 * t80 * t83 * t88 * t89)))));
-            const float value = ((-t74) + (-64.49793f * t47 * t86) + (64.49793f * t12 * t15 * t80 * t83 * t84));
-            st = fdi_gen_status_worst(st, fdi_gen_obs_store(g, xh, f + (l * value)));
-            st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-            if (sens != NULL) /* d r / d f: f3 f4 f5 f6 f7 f8 f11 f15 f18 f19 f20 f22 f24 */
-            {
-                const float s0 = (-o2.y);
-                const float s1 = (109.04921f * o0.y * ((-1.0f * o0.y) + (-s0)));
-                const float s2 = (2565.315f + s1 + t3);
-                const float s3 = (180.34483f * o0.y * ((0.3f * o0.y) + o1.y));
-                const float s4 = ((-213.05959f * o0.dy) + s3);
-                const float s5 = (s2 + s4 + t8);
-                const float s6 = (t13 * t16);
-                const float s7 = (t14 * t15);
-                const float s8 = ((-s6) + (-s7) + (0.27f * xh));
-                const float s9 = (s8 * s8);
-                const float s10 = (380.25f * t78);
-                const float s11 = (t13 * t14);
-                const float s12 = ((-1.025f * o0.y) + (-o1.y));
-                const float s13 = (s12 * t15);
-                const float s14 = (s11 + s13);
-                const float s15 = (s14 * s14);
-                const float s16 = (1.0f + (s10 * s15) + (s10 * s9));
-                const float s17 = (1.0f / sqrtf(s16));
-                const float s18 = (s17 * t84);
-                const float s19 = (s18 * s5);
-                const float s20 = (190.125f * t78);
-                const float s21 = (t88 * t89);
-                const float s22 = (102.6675f * s21);
-                const float s23 = (1.0f / (t77 * t77 * t77));
-                const float s24 = (s23 * s9);
-                const float s25 = (s15 * s23);
-                const float s26 = ((-(s20 * ((-0.54f * s6) + (-0.54f * s7) + (0.1458f * xh)))) + (s22 * s24) + (s22 * s25));
-                const float s27 = (5.85f * s8);
-                const float s28 = (s27 * s5);
-                const float s29 = powf(s16, -1.5f);
-                const float s30 = (s29 * t84);
-                const float s31 = (s28 * s30);
-                const float s32 = ((1.5795f * s19) + (0.00010666667f * o7.y * (2.0f + (-2.0f * (t75 * t75)))) + (s26 * s31) + (-1.5795f * s17 * s5 * s8 * t78 * t88 * t89));
-                const float s33 = (s19 * t15);
-                const float s34 = (s17 * t78);
-                const float s35 = (s34 * s5);
-                const float s36 = (s21 * s35);
-                const float s37 = (s36 * s8 * t15);
-                const float s38 = (s14 * t13);
-                const float s39 = (s36 * s38);
-                const float s40 = (64.49793f * s8);
-                const float s41 = (s30 * s5);
-                const float s42 = (s26 * s41);
-                const float s43 = (s42 * t15);
-                const float s44 = (64.49793f * s14);
-                const float s45 = (s42 * t13);
-                const float s46 = ((17.414442f * s33) + (-17.414442f * s37) + (17.414442f * s39) + (s40 * s43) + (-(s44 * s45)));
-                const float s47 = (s46 * s46);
-                const float s48 = (1.0f / (fminf(-0.1f, ((-s32) + (-(s47 * (1.0f / ((61.9369f + s47))) * fmaxf(0.0f, (12.566371f + (-s32)))))))));
-                const float s49 = (180.34483f * o1.y);
-                const float s50 = (109.04921f * o2.y);
-                const float s51 = ((-109.89152f * o0.y) + s49 + s50);
-                const float s52 = (-(s18 * s51));
-                const float s53 = ((1.025f * t13) + (0.199f * t15));
-                const float s54 = (s19 * s53);
-                const float s55 = fdi_gen_heaviside((t23 + (-fmaxf(0.5f, t76))));
-                const float s56 = ((-0.199f * o0.y) + t4);
-                const float s57 = (s12 * t13);
-                const float s58 = fdi_gen_sign((s57 + (s56 * t15)));
-                const float s59 = (s20 * s8);
-                const float s60 = (s14 * s20);
-                const float s61 = ((-(s59 * ((2.05f * t13) + (0.398f * t15)))) + (-(s60 * ((-0.398f * t13) + (2.05f * t15)))) + (380.25f * s15 * s23 * s53 * s55 * s58) + (380.25f * s23 * s53 * s55 * s58 * s9));
-                const float s62 = (-s32);
-                const float s63 = (t55 * t55);
-                const float s64 = (1.0f / (t57 * t57));
-                const float s65 = (380.25f * s64);
-                const float s66 = (t14 * t53);
-                const float s67 = ((-0.425f * o0.y) + o1.y);
-                const float s68 = (s67 * t52);
-                const float s69 = ((0.27f * o8.y) + (-s66) + (-s68));
-                const float s70 = (s69 * s69);
-                const float s71 = (1.0f + (s63 * s65) + (s65 * s70));
-                const float s72 = (1.0f / sqrtf(s71));
-                const float s73 = (s72 * t62);
-                const float s74 = (s73 * t55);
-                const float s75 = ((6362.9536f * o0.y) + (19.5f * s49) + (-19.5f * s50));
-                const float s76 = (180.34483f * o2.dy);
-                const float s77 = ((147.63007f * o0.dy) + s2 + (-s3) + (-s76));
-                const float s78 = (s73 * s77);
-                const float s79 = (19.5f * s78);
-                const float s80 = ((-0.425f * t52) + (0.199f * t53));
-                const float s81 = ((-s66) + (t52 * t54));
-                const float s82 = fdi_gen_sign(s81);
-                const float s83 = (0.27f * fabsf(o8.y));
-                const float s84 = fabsf(((-t56) + (t52 * t54)));
-                const float s85 = fdi_gen_heaviside((s84 + (-fmaxf(0.5f, s83))));
-                const float s86 = (s77 * t55);
-                const float s87 = (19.5f * s86);
-                const float s88 = (190.125f * s64);
-                const float s89 = (s88 * t55);
-                const float s90 = (s69 * s88);
-                const float s91 = (1.0f / (t57 * t57 * t57));
-                const float s92 = (s63 * s91);
-                const float s93 = (s82 * s85);
-                const float s94 = (380.25f * s93);
-                const float s95 = (s80 * s94);
-                const float s96 = (s70 * s91);
-                const float s97 = powf(s71, -1.5f);
-                const float s98 = (s97 * t62);
-                const float s99 = (s98 * ((-(s89 * ((-0.398f * t52) + (-0.85f * t53)))) + (-(s90 * ((-0.85f * t52) + (0.398f * t53)))) + (s92 * s95) + (s95 * s96)));
-                const float s100 = ((-(s74 * s75)) + (-(s79 * ((-0.199f * t52) + (-0.425f * t53)))) + (-(s87 * s99)) + (19.5f * s64 * s72 * s77 * s80 * s82 * s85 * t55));
-                const float s101 = (3.3075862f * t52);
-                const float s102 = (2.0f * t53);
-                const float s103 = (s69 * s73);
-                const float s104 = (s69 * s77);
-                const float s105 = (19.5f * s104);
-                const float s106 = (s64 * s72);
-                const float s107 = (s106 * s93);
-                const float s108 = ((s103 * s75) + (s105 * s99) + (s79 * s80) + (-(s105 * s107 * s80)));
-                const float s109 = (2.0f * t52);
-                const float s110 = (3.3075862f * t53);
-                const float s111 = (19.5f * s52);
-                const float s112 = (s55 * s58);
-                const float s113 = (19.5f * s35);
-                const float s114 = (19.5f * s41);
-                const float s115 = (s114 * s61);
-                const float s116 = (3.3075862f * t15);
-                const float s117 = (19.5f * s19);
-                const float s118 = (3.3075862f * t13);
-                const float s119 = ((-2.199f * o0.y) + (-s0));
-                const float s120 = (s119 * t66);
-                const float s121 = (s120 + (t54 * t65));
-                const float s122 = (1.0f / (t70));
-                const float s123 = (s121 * s121);
-                const float s124 = (1.0f / (t70 * t70));
-                const float s125 = (380.25f * s124);
-                const float s126 = (s119 * t65);
-                const float s127 = (s67 * t66);
-                const float s128 = (s126 + s127);
-                const float s129 = ((0.27f * o9.y) + (-s128));
-                const float s130 = (s129 * s129);
-                const float s131 = (1.0f + (s123 * s125) + (s125 * s130));
-                const float s132 = (1.0f / sqrtf(s131));
-                const float s133 = (s122 * s132);
-                const float s134 = (s121 * s133);
-                const float s135 = (19.5f * s51);
-                const float s136 = (2565.315f + (-s1) + (-s4) + (-s76) + (109.04921f * o1.dy));
-                const float s137 = (s133 * s136);
-                const float s138 = (19.5f * s137);
-                const float s139 = ((2.199f * t65) + (0.425f * t66));
-                const float s140 = fdi_gen_sign(s128);
-                const float s141 = (0.27f * fabsf(o9.y));
-                const float s142 = (t54 * t66);
-                const float s143 = fabsf((s142 + (t65 * t67)));
-                const float s144 = fdi_gen_heaviside((s143 + (-fmaxf(0.5f, s141))));
-                const float s145 = (s121 * s136);
-                const float s146 = (19.5f * s145);
-                const float s147 = (190.125f * s124);
-                const float s148 = (s121 * s147);
-                const float s149 = (s129 * s147);
-                const float s150 = (1.0f / (t70 * t70 * t70));
-                const float s151 = (s122 * powf(s131, -1.5f));
-                const float s152 = (s151 * ((-(s148 * ((-0.85f * t65) + (4.398f * t66)))) + (-(s149 * ((-4.398f * t65) + (-0.85f * t66)))) + (380.25f * s123 * s139 * s140 * s144 * s150) + (380.25f * s130 * s139 * s140 * s144 * s150)));
-                const float s153 = (2.0f * t65);
-                const float s154 = (s129 * s133);
-                const float s155 = (s129 * s136);
-                const float s156 = (19.5f * s155);
-                const float s157 = (s140 * s144);
-                const float s158 = (s124 * s132);
-                const float s159 = (s157 * s158);
-                const float s160 = (2.0f * t66);
-                const float s161 = (o0.y * s18);
-                const float s162 = (s161 * s8);
-                const float s163 = (5.85f * s19);
-                const float s164 = (s28 * s34);
-                const float s165 = (s112 * t13);
-                const float s166 = (s10 * t13);
-                const float s167 = (s10 * t15);
-                const float s168 = ((-(s14 * s167)) + (-(s166 * s8)) + (380.25f * s15 * s23 * s55 * s58 * t13) + (380.25f * s23 * s55 * s58 * s9 * t13));
-                const float s169 = (3516.724f * o0.y);
-                const float s170 = (s79 * t53);
-                const float s171 = (s65 * t53);
-                const float s172 = (s65 * t52);
-                const float s173 = (s94 * t52);
-                const float s174 = (s98 * ((-(s171 * t55)) + (-(s172 * s69)) + (s173 * s92) + (s173 * s96)));
-                const float s175 = ((-s170) + (-(s169 * s74)) + (-(s174 * s87)) + (19.5f * s64 * s72 * s77 * s82 * s85 * t52 * t55));
-                const float s176 = (s79 * t52);
-                const float s177 = (s176 + (s103 * s169) + (s105 * s174) + (-(s105 * s107 * t52)));
-                const float s178 = (s14 * s161);
-                const float s179 = (-19.5f * s33);
-                const float s180 = (s112 * s113);
-                const float s181 = (s138 * t65);
-                const float s182 = (s159 * t66);
-                const float s183 = (s125 * s129);
-                const float s184 = (s123 * s150);
-                const float s185 = (380.25f * s157);
-                const float s186 = (s185 * t66);
-                const float s187 = (s130 * s150);
-                const float s188 = (s151 * ((-(s183 * t66)) + (-(s184 * s186)) + (-(s186 * s187)) + (-(s121 * s125 * t65))));
-                const float s189 = (380.25f * s112 * t15);
-                const float s190 = ((s14 * s166) + (-(s167 * s8)) + (s189 * s24) + (s189 * s25));
-                const float s191 = (2126.4595f * o0.y);
-                const float s192 = (s107 * t53);
-                const float s193 = (s94 * t53);
-                const float s194 = ((-(s171 * s69)) + (s172 * t55) + (s193 * s92) + (s193 * s96));
-                const float s195 = (s176 + (s191 * s74) + (s192 * s87) + (-(s194 * s87 * s98)));
-                const float s196 = (s170 + (-(s103 * s191)) + (-(s105 * s192)) + (19.5f * s194 * s69 * s77 * s97 * t62));
-                const float s197 = (s180 * t15);
-                const float s198 = (s159 * t65);
-                const float s199 = (s185 * t65);
-                const float s200 = (s151 * ((-(s183 * t65)) + (-(s184 * s199)) + (-(s187 * s199)) + (380.25f * s121 * s124 * t66)));
-                const float s201 = (s78 * t55);
-                const float s202 = (s69 * s78);
-                const float s203 = (t14 * t52);
-                const float s204 = ((-s203) + (-(t53 * t54)));
-                const float s205 = (s204 * s94);
-                const float s206 = (s98 * ((s205 * s92) + (s205 * s96) + (-(s89 * ((-2.0f * s66) + (2.0f * t52 * t54)))) + (-(s90 * ((-2.0f * s203) + (2.0f * s67 * t53))))));
-                const float s207 = ((-(s206 * s87)) + (-(s79 * s81)) + (19.5f * s204 * s64 * s72 * s77 * s82 * s85 * t55));
-                const float s208 = ((s105 * s206) + (s79 * ((-s203) + (s67 * t53))) + (-(s105 * s107 * s204)));
-                const float s209 = (s48 * s62);
-                const float s210 = ((-s11) + (t15 * t16));
-                const float s211 = ((-s13) + (s56 * t13));
-                const float s212 = ((-(s59 * ((-2.0f * s11) + (2.0f * t15 * t16)))) + (-(s60 * ((2.0f * s57) + (-2.0f * s7)))) + (380.25f * s15 * s211 * s23 * s55 * s58) + (380.25f * s211 * s23 * s55 * s58 * s9));
-                const float s213 = (s114 * s212);
-                const float s214 = (39.0f * s137);
-                const float s215 = (s67 * t65);
-                const float s216 = (s215 + (-(s119 * t66)));
-                const float s217 = (-s216);
-                const float s218 = (s151 * ((-(s148 * ((-2.0f * s126) + (2.0f * s142)))) + (-(s149 * ((-2.0f * s120) + (2.0f * s215)))) + (380.25f * s123 * s140 * s144 * s150 * s217) + (380.25f * s130 * s140 * s144 * s150 * s217)));
-                const float s219 = (s43 * s8);
-                const float s220 = (s48 * ((71.66437f * s219) + (19.349379f * s33) + (-19.349379f * s37) + (19.349379f * s39) + (-71.66437f * s14 * s45)));
-                const float s221 = (fdi_gen_heaviside((s83 + (-fmaxf(0.5f, s84)))) * fdi_gen_sign(o8.y));
-                const float s222 = (5.265f * s106 * s221);
-                const float s223 = (102.6675f * s221);
-                const float s224 = (s98 * ((-(s223 * s92)) + (-(s223 * s96)) + (-(s88 * ((-0.1458f * o8.y) + (0.54f * s66) + (0.54f * s68))))));
-                const float s225 = ((-(s222 * s86)) + (-(s224 * s87)));
-                const float s226 = ((-5.265f * s78) + (s104 * s222) + (s105 * s224));
-                const float s227 = (fdi_gen_heaviside((s141 + (-fmaxf(0.5f, s143)))) * fdi_gen_sign(o9.y));
-                const float s228 = (5.265f * s158 * s227);
-                const float s229 = (102.6675f * s227);
-                const float s230 = (s151 * ((-(s147 * ((-0.1458f * o9.y) + (0.54f * s126) + (0.54f * s127)))) + (-(s184 * s229)) + (-(s187 * s229))));
-                sens[0] = (s48 * ((s46 * ((-5.85f * s54) + (-(s27 * s52)) + (-(s31 * s61)) + (5.85f * s17 * s5 * s53 * s55 * s58 * s8 * t78))) + (-(s62 * ((-1054.0795f * o0.y) + (1729.8676f * o1.y) + (1046.0f * o2.y) + (s100 * s101) + (s100 * s102) + (-(s108 * s109)) + (s108 * s110) + (s116 * ((19.5f * s54) + (s111 * s8) + (s115 * s8) + (-(s112 * s113 * s53 * s8)))) + (s118 * ((-(s111 * s14)) + (-(s115 * s14)) + (-(s117 * ((-0.199f * t13) + (1.025f * t15)))) + (19.5f * s14 * s17 * s5 * s53 * s55 * s58 * t78))) + (s153 * ((-(s134 * s135)) + (-(s138 * ((-0.425f * t65) + (2.199f * t66)))) + (-(s146 * s152)) + (19.5f * s121 * s124 * s132 * s136 * s139 * s140 * s144))) + (-(s160 * ((s135 * s154) + (-(s138 * s139)) + (s152 * s156) + (-(s139 * s156 * s159)))))))))); /* f3 */
-                sens[1] = (s48 * ((s46 * ((1055.0172f * s162) + (-(s163 * t13)) + (s164 * s165) + (-(s168 * s31)))) + (-(s62 * ((1729.8676f * o0.y) + (s101 * s175) + (s102 * s175) + (-(s109 * s177)) + (s110 * s177) + (s116 * ((-3516.724f * s162) + (-(s113 * s165 * s8)) + (19.5f * s17 * s5 * t13 * t84) + (19.5f * s168 * s29 * s5 * s8 * t84))) + (s118 * ((3516.724f * s178) + s179 + (s180 * s38) + (-(s114 * s14 * s168)))) + (s153 * ((-s181) + (-(s134 * s169)) + (-(s146 * s182)) + (-(s146 * s188)))) + (-(s160 * ((s138 * t66) + (s154 * s169) + (s156 * s182) + (s156 * s188))))))))); /* f4 */
-                sens[2] = (s48 * ((s46 * ((637.93787f * s162) + (-5.85f * s33) + (-(s190 * s31)) + (s112 * s164 * t15))) + (-(s62 * ((1046.0f * o0.y) + (s101 * s195) + (s102 * s195) + (-(s109 * s196)) + (s110 * s196) + (s116 * ((-2126.4595f * s162) + (-s179) + (-(s197 * s8)) + (19.5f * s190 * s29 * s5 * s8 * t84))) + (s118 * ((2126.4595f * s178) + (s117 * t13) + (s14 * s197) + (-(s114 * s14 * s190)))) + (s153 * ((-(s134 * s191)) + (-(s146 * s198)) + (-(s146 * s200)) + (19.5f * s122 * s132 * s136 * t66))) + (-(s160 * (s181 + (s154 * s191) + (s156 * s198) + (s156 * s200))))))))); /* f5 */
-                sens[3] = (-(s209 * ((s101 * s207) + (s102 * s207) + (-(s109 * s208)) + (s110 * s208) + (-39.0f * s201 * t52) + (64.49793f * s201 * t53) + (64.49793f * s202 * t52) + (39.0f * s202 * t53)))); /* f6 */
-                sens[4] = (s48 * ((s46 * ((-(s163 * s210)) + (-(s212 * s31)) + (5.85f * s17 * s211 * s5 * s55 * s58 * s8 * t78))) + (-(s62 * ((s116 * ((s117 * s210) + (s213 * s8) + (-(s180 * s211 * s8)))) + (s118 * ((-(s117 * (s57 + (-s7)))) + (-(s14 * s213)) + (19.5f * s14 * s17 * s211 * s5 * s55 * s58 * t78))) + (s33 * s44) + (s19 * s40 * t13)))))); /* f7 */
-                sens[5] = (-(s209 * ((s153 * ((-(s138 * ((-s126) + s142))) + (-(s146 * s218)) + (19.5f * s121 * s124 * s132 * s136 * s140 * s144 * s217))) + (-(s160 * ((s138 * s216) + (s156 * s218) + (-(s156 * s159 * s217))))) + (-(s121 * s214 * t66)) + (s129 * s214 * t65)))); /* f8 */
-                sens[6] = s220; /* f11 */
-                sens[7] = s220; /* f15 */
-                sens[8] = (-(s209 * ((1.3075862f * t52) + (5.307586f * t53)))); /* f18 */
-                sens[9] = (s48 * ((-19.349379f * s219) + (-5.2243323f * s33) + (-5.2243323f * s39) + (-(s62 * (s116 + s118))) + (19.349379f * s14 * s26 * s29 * s5 * t13 * t84) + (5.2243323f * s17 * s5 * s8 * t15 * t78 * t88 * t89))); /* f19 */
-                sens[10] = (-(s209 * (s153 + (-s160)))); /* f20 */
-                sens[11] = (-(s209 * ((s101 * s225) + (s102 * s225) + (-(s109 * s226)) + (s110 * s226)))); /* f22 */
-                sens[12] = (-(s209 * ((s153 * ((-(s145 * s228)) + (-(s146 * s230)))) + (-(s160 * ((-5.265f * s137) + (s155 * s228) + (s156 * s230))))))); /* f24 */
-                st = fdi_gen_sens_finish(st, sens, 13U);
-            }
-#else
-            (void)sens;
-#endif
-        }
-    }
-    return st;
-}
-
 /* MSO2058: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
 static bool romo_gen_9_in_domain(const fdi_frame_t *in)
 {
     return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
-}
-
-/* MSO2065: B1 B2 B3 D.psidot K1 K2 D1 W1.FL W3.FL W4.FL W1.FS W3.FS W4.FS W1.Fx W3.Fx W4.Fx W1.Fy W3.Fy W4.Fy W4.dyn W4.D S2 S3 S4 S5 S.omega1 S.omega3
- * residual B1; derivative causality for dpsidot, dvx; observer for omega4 (integrates W4.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 11 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- */
-static fdi_status_t romo_gen_10(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                                float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_svf_out_t o2 = {0.0f, 0.0f};
-    fdi_svf_out_t o3 = {0.0f, 0.0f};
-    fdi_svf_out_t o4 = {0.0f, 0.0f};
-    fdi_svf_out_t o5 = {0.0f, 0.0f};
-    fdi_svf_out_t o6 = {0.0f, 0.0f};
-    fdi_svf_out_t o7 = {0.0f, 0.0f};
-    fdi_svf_out_t o8 = {0.0f, 0.0f};
-    fdi_svf_out_t o9 = {0.0f, 0.0f};
-    fdi_svf_out_t o10 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[ROMO_SIG_AY_M], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[ROMO_SIG_PSIDOT_M], reset, &o1));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->value[ROMO_SIG_VX_M], reset, &o2));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->value[ROMO_SIG_VY_M], reset, &o3));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, in->value[ROMO_SIG_DELTA1_M], reset, &o4));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, in->value[ROMO_SIG_DELTA3_M], reset, &o5));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, in->value[ROMO_SIG_DELTA4_M], reset, &o6));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 7U, in->value[ROMO_SIG_ITM4_M], reset, &o7));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 8U, in->value[ROMO_SIG_P_R_M], reset, &o8));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 9U, in->value[ROMO_SIG_OMEGA1_M], reset, &o9));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 10U, in->value[ROMO_SIG_OMEGA3_M], reset, &o10));
-    {
-        const float t0 = (-1.7777778f * o7.y);
-        const float t2 = (0.00010666667f * o8.y);
-        const float t3 = (180.34483f * o0.y);
-        const float t4 = (32.714764f * o1.dy);
-        const float t5 = (109.04921f * o2.dy);
-        const float t6 = (-o3.y);
-        const float t7 = (o1.y * ((-1.0f * o1.y) + (-t6)));
-        const float t8 = (-109.04921f * t7);
-        const float t9 = (2565.315f + t4 + t5 + t8);
-        const float t10 = (t3 + t9);
-        const float t11 = cosf(o6.y);
-        const float t12 = ((2.199f * o1.y) + t6);
-        const float t13 = (-t12);
-        const float t14 = sinf(o6.y);
-        const float t15 = ((1.025f * o1.y) + o2.y);
-        const float t16 = ((t11 * t13) + (-(t14 * t15)));
-        const float t17 = (t16 * t16);
-        const float t19 = (t11 * t15);
-        const float t20 = fabsf(((-t19) + (t12 * t14)));
-        const float t24 = (t13 * t14);
-        const float t25 = (t19 + t24);
-        const float t34 = (1.5795f * t10);
-        const float t36 = (-fmaxf(0.5f, t20));
-        const float t39 = ((0.54f * t19) + (0.54f * t24));
-        const float t40 = (102.6675f * t17);
-        const float t46 = (17.414442f * t14);
-        const float t47 = (17.414442f * t10 * t11 * t16);
-        const float t50 = sinf(o4.y);
-        const float t51 = cosf(o4.y);
-        const float t52 = ((0.199f * o1.y) + o3.y);
-        const float t53 = ((0.425f * o1.y) + (-o2.y));
-        const float t54 = ((t50 * t53) + (t51 * t52));
-        const float t55 = (t50 * t52);
-        const float t56 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o9.y)), fabsf(((-t55) + (t51 * t53)))));
-        const float t57 = (380.25f * (1.0f / (t56 * t56)));
-        const float t58 = (-t53);
-        const float t59 = ((0.27f * o9.y) + (-t55) + (-(t51 * t58)));
-        const float t60 = (39.0f * (1.0f / (t56)) * (1.0f / sqrtf((1.0f + ((t54 * t54) * t57) + (t57 * (t59 * t59))))) * (2565.315f + (-t3) + (-t4) + (-t5) + (-t8)));
-        const float t61 = sinf(o5.y);
-        const float t62 = cosf(o5.y);
-        const float t63 = ((t13 * t62) + (t53 * t61));
-        const float t64 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o10.y)), fabsf(((t12 * t61) + (t53 * t62)))));
-        const float t65 = (380.25f * (1.0f / (t64 * t64)));
-        const float t66 = ((0.27f * o10.y) + (-(t13 * t61)) + (-(t58 * t62)));
-        const float t67 = (1.0f / sqrtf((1.0f + ((t63 * t63) * t65) + (t65 * (t66 * t66)))));
-        const float t68 = (1.0f / (t64));
-        const float t69 = ((-t3) + t9);
-        const float t70 = (t66 * t67 * t68 * t69);
-        const float t71 = ((-1729.8676f * o0.y) + (1244.8207f * o1.dy) + (1046.0f * t7) + (-1046.0f * o2.dy) + (64.49793f * t61 * t70) + (39.0f * t62 * t70) + (t50 * t54 * t60) + (t51 * t59 * t60) + (39.0f * t61 * t63 * t67 * t68 * t69) + (-64.49793f * t62 * t63 * t67 * t68 * t69));
-        float xh = 0.0f;
-        if (reset)
-        {
-            const float x0 = in->value[ROMO_SIG_OMEGA4_M]; /* omega4 from its sensor outside the MSO set */
-            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;
-        }
-        else
-        {
-            const float xp = g->obs.xh;
-            const float t1 = tanhf((2.0f * xp));
-            const float t18 = (0.27f * fabsf(xp));
-            const float t21 = fmaxf(0.5f, fmaxf(t18, t20));
-            const float t22 = (1.0f / (t21 * t21));
-            const float t23 = (380.25f * t22);
-            const float t26 = ((-t25) + (0.27f * xp));
-            const float t27 = (t26 * t26);
-            const float t28 = (1.0f + (t17 * t23) + (t23 * t27));
-            const float t29 = (1.0f / sqrtf(t28));
-            const float t30 = (1.0f / (t21));
-            const float t31 = (t29 * t30);
-            const float t32 = (t10 * t31);
-            const float t33 = (5.85f * t26);
-            const float t35 = fdi_gen_sign(xp);
-            const float t37 = fdi_gen_heaviside((t18 + t36));
-            const float t38 = powf(t28, -1.5f);
-            const float t41 = (t35 * t37);
-            const float t42 = ((1.0f / (t21 * t21 * t21)) * t41);
-            const float t43 = ((-190.125f * t22 * ((-t39) + (0.1458f * xp))) + (102.6675f * t27 * t42) + (t40 * t42));
-            const float t44 = (t10 * t30 * t38 * t43);
-            const float t45 = ((t2 * (2.0f + (-2.0f * (t1 * t1)))) + (t31 * t34) + (t33 * t44) + (-1.5795f * t10 * t22 * t26 * t29 * t35 * t37));
-            const float t48 = (t14 * t26);
-            const float t49 = ((-(t32 * t46)) + (-64.49793f * t44 * t48) + (-(t22 * t29 * t41 * t47)) + (64.49793f * t10 * t11 * t16 * t30 * t38 * t43) + (17.414442f * t10 * t14 * t22 * t26 * t29 * t35 * t37));
-            const float f = ((-t0) + (-(t1 * t2)) + (-(t32 * t33)));
-            const float l = (-(t49 * (1.0f / ((316.84f + (t49 * t49)))) * fmaxf(0.0f, (12.566371f + (-t45)))));
-            const float a = (-t45);
-            const float c = t49;
-            const float e = ((-t71) + (-64.49793f * t32 * t48) + (64.49793f * t10 * t11 * t16 * t29 * t30));
-            xh = fdi_gen_obs_predict(g, par, f + (l * e), a + (l * c));
-        }
-        {
-            const float t72 = tanhf((2.0f * xh));
-            const float t73 = (0.27f * fabsf(xh));
-            const float t74 = fmaxf(0.5f, fmaxf(t20, t73));
-            const float t75 = (1.0f / (t74 * t74));
-            const float t76 = (380.25f * t75);
-            const float t77 = ((-t25) + (0.27f * xh));
-            const float t78 = (t77 * t77);
-            const float t79 = (1.0f + (t17 * t76) + (t76 * t78));
-            const float t80 = (1.0f / sqrtf(t79));
-            const float t81 = (1.0f / (t74));
-            const float t82 = (t80 * t81);
-            const float t83 = (t10 * t82);
-            const float t84 = (5.85f * t77);
-            const float t85 = fdi_gen_sign(xh);
-            const float t86 = fdi_gen_heaviside((t36 + t73));
-            const float t87 = powf(t79, -1.5f);
-            const float t88 = (t85 * t86);
-            const float t89 = ((1.0f / (t74 * t74 * t74)) * t88);
-            const float t90 = ((t40 * t89) + (-190.125f * t75 * ((-t39) + (0.1458f * xh))) + (102.6675f * t78 * t89));
-            const float t91 = (t10 * t81 * t87 * t90);
-            const float t92 = (t14 * t77);
-            const float t93 = ((-(t46 * t83)) + (-64.49793f * t91 * t92) + (-(t47 * t75 * t80 * t88)) + (64.49793f * t10 * t11 * t16 * t81 * t87 * t90) + (17.414442f * t10 * t14 * t75 * t77 * t80 * t85 * t86));
-            const float f = ((-t0) + (-(t2 * t72)) + (-(t83 * t84)));
-            const float l = (-(t93 * (1.0f / ((316.84f + (t93 * t93)))) * fmaxf(0.0f, (12.566371f + (-(t2 * (2.0f + (-2.0f * (t72 * t72))))) + (-(t34 * t82)) + (-(t84 * t91)) + (1.5795f * t10 * t75 * t77 * t80 * t85 * t86)))));
-            const float value = ((-t71) + (-64.49793f * t83 * t92) + (64.49793f * t10 * t11 * t16 * t80 * t81));
-            st = fdi_gen_status_worst(st, fdi_gen_obs_store(g, xh, f + (l * value)));
-            st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-            if (sens != NULL) /* d r / d f: f2 f3 f4 f5 f6 f8 f9 f13 f17 f18 f20 f21 f22 f24 */
-            {
-                const float s0 = (-o3.y);
-                const float s1 = (-109.04921f * o1.y * ((-1.0f * o1.y) + (-s0)));
-                const float s2 = (2565.315f + s1 + t4 + t5);
-                const float s3 = (s2 + t3);
-                const float s4 = (t11 * t15);
-                const float s5 = ((-2.199f * o1.y) + (-s0));
-                const float s6 = (s5 * t14);
-                const float s7 = ((-s4) + (-s6) + (0.27f * xh));
-                const float s8 = (s7 * s7);
-                const float s9 = (380.25f * t75);
-                const float s10 = (s5 * t11);
-                const float s11 = ((-1.025f * o1.y) + (-o2.y));
-                const float s12 = (s10 + (s11 * t14));
-                const float s13 = (s12 * s12);
-                const float s14 = (1.0f + (s13 * s9) + (s8 * s9));
-                const float s15 = (1.0f / sqrtf(s14));
-                const float s16 = (s15 * t81);
-                const float s17 = (s16 * s3);
-                const float s18 = (s17 * t14);
-                const float s19 = (t85 * t86);
-                const float s20 = (s15 * t75);
-                const float s21 = (s19 * s20);
-                const float s22 = (s12 * t11);
-                const float s23 = (s22 * s3);
-                const float s24 = (s7 * t14);
-                const float s25 = (190.125f * t75);
-                const float s26 = (102.6675f * s19);
-                const float s27 = (1.0f / (t74 * t74 * t74));
-                const float s28 = (s27 * s8);
-                const float s29 = (s13 * s27);
-                const float s30 = ((-(s25 * ((-0.54f * s4) + (-0.54f * s6) + (0.1458f * xh)))) + (s26 * s28) + (s26 * s29));
-                const float s31 = powf(s14, -1.5f);
-                const float s32 = (s31 * t81);
-                const float s33 = (s30 * s32);
-                const float s34 = (s3 * s33);
-                const float s35 = ((-17.414442f * s18) + (-17.414442f * s21 * s23) + (-64.49793f * s24 * s34) + (64.49793f * s12 * s3 * s30 * s31 * t11 * t81) + (17.414442f * s15 * s3 * s7 * t14 * t75 * t85 * t86));
-                const float s36 = (s16 * s7);
-                const float s37 = (s3 * s7);
-                const float s38 = (5.85f * s37);
-                const float s39 = ((1.5795f * s17) + (0.00010666667f * o8.y * (2.0f + (-2.0f * (t72 * t72)))) + (s33 * s38) + (-1.5795f * s15 * s3 * s7 * t75 * t85 * t86));
-                const float s40 = (-s39);
-                const float s41 = (1.0f / (t56));
-                const float s42 = (t54 * t54);
-                const float s43 = (1.0f / (t56 * t56));
-                const float s44 = (380.25f * s43);
-                const float s45 = (t50 * t52);
-                const float s46 = ((-0.425f * o1.y) + o2.y);
-                const float s47 = (s46 * t51);
-                const float s48 = ((0.27f * o9.y) + (-s45) + (-s47));
-                const float s49 = (s48 * s48);
-                const float s50 = (1.0f + (s42 * s44) + (s44 * s49));
-                const float s51 = (1.0f / sqrtf(s50));
-                const float s52 = (s41 * s51);
-                const float s53 = (7033.448f * s52);
-                const float s54 = (t50 * t54);
-                const float s55 = (s48 * t51);
-                const float s56 = (s5 * t62);
-                const float s57 = (s56 + (t53 * t61));
-                const float s58 = (s57 * s57);
-                const float s59 = (1.0f / (t64 * t64));
-                const float s60 = (380.25f * s59);
-                const float s61 = (s5 * t61);
-                const float s62 = (s46 * t62);
-                const float s63 = (s61 + s62);
-                const float s64 = ((0.27f * o10.y) + (-s63));
-                const float s65 = (s64 * s64);
-                const float s66 = (1.0f + (s58 * s60) + (s60 * s65));
-                const float s67 = (1.0f / sqrtf(s66));
-                const float s68 = (s67 * t68);
-                const float s69 = (7033.448f * s68);
-                const float s70 = (s57 * t61);
-                const float s71 = (s64 * t61);
-                const float s72 = (s64 * t62);
-                const float s73 = (s35 * s35);
-                const float s74 = (1.0f / (fminf(-0.1f, ((-s39) + (-(s73 * (1.0f / ((316.84f + s73))) * fmaxf(0.0f, (12.566371f + (-s39)))))))));
-                const float s75 = ((1.025f * t11) + (-2.199f * t14));
-                const float s76 = (s17 * s75);
-                const float s77 = ((218.09842f * o1.y) + (-109.04921f * o3.y));
-                const float s78 = (-s77);
-                const float s79 = (s36 * s78);
-                const float s80 = fdi_gen_heaviside((t20 + (-fmaxf(0.5f, t73))));
-                const float s81 = (s11 * t11);
-                const float s82 = ((-s6) + s81);
-                const float s83 = fdi_gen_sign(s82);
-                const float s84 = (s25 * s7);
-                const float s85 = (s12 * s25);
-                const float s86 = (s32 * ((-(s84 * ((2.05f * t11) + (-4.398f * t14)))) + (-(s85 * ((4.398f * t11) + (2.05f * t14)))) + (380.25f * s13 * s27 * s75 * s80 * s83) + (380.25f * s27 * s75 * s8 * s80 * s83)));
-                const float s87 = (s52 * t54);
-                const float s88 = (19.5f * s77);
-                const float s89 = (180.34483f * o0.y);
-                const float s90 = (2565.315f + (-32.714764f * o1.dy) + (-s1) + (-s89) + (-109.04921f * o2.dy));
-                const float s91 = (s52 * s90);
-                const float s92 = (19.5f * s91);
-                const float s93 = ((0.199f * t50) + (-0.425f * t51));
-                const float s94 = ((-s45) + (t51 * t53));
-                const float s95 = fdi_gen_sign(s94);
-                const float s96 = (0.27f * fabsf(o9.y));
-                const float s97 = fabsf(((-t55) + (t51 * t53)));
-                const float s98 = fdi_gen_heaviside((s97 + (-fmaxf(0.5f, s96))));
-                const float s99 = (s90 * t54);
-                const float s100 = (19.5f * s99);
-                const float s101 = (190.125f * s43);
-                const float s102 = (s101 * t54);
-                const float s103 = (s101 * s48);
-                const float s104 = (1.0f / (t56 * t56 * t56));
-                const float s105 = (s104 * s42);
-                const float s106 = (s95 * s98);
-                const float s107 = (380.25f * s106);
-                const float s108 = (s107 * s93);
-                const float s109 = (s104 * s49);
-                const float s110 = powf(s50, -1.5f);
-                const float s111 = (s110 * s41);
-                const float s112 = (s111 * ((-(s102 * ((-0.85f * t50) + (-0.398f * t51)))) + (-(s103 * ((0.398f * t50) + (-0.85f * t51)))) + (s105 * s108) + (s108 * s109)));
-                const float s113 = (s48 * s52);
-                const float s114 = (s48 * s90);
-                const float s115 = (19.5f * s114);
-                const float s116 = (s43 * s51);
-                const float s117 = (s106 * s116);
-                const float s118 = (2.0f * t51);
-                const float s119 = (s80 * s83);
-                const float s120 = (s119 * s20);
-                const float s121 = (19.5f * s86);
-                const float s122 = (3.3075862f * t14);
-                const float s123 = (19.5f * s17);
-                const float s124 = (19.5f * s78);
-                const float s125 = (s12 * s16);
-                const float s126 = (s12 * s3);
-                const float s127 = (3.3075862f * t11);
-                const float s128 = (s57 * s68);
-                const float s129 = (s2 + (-s89));
-                const float s130 = (s129 * s68);
-                const float s131 = (19.5f * s130);
-                const float s132 = ((2.199f * t61) + (0.425f * t62));
-                const float s133 = fdi_gen_sign(s63);
-                const float s134 = (0.27f * fabsf(o10.y));
-                const float s135 = (t53 * t62);
-                const float s136 = fabsf((s135 + (t12 * t61)));
-                const float s137 = fdi_gen_heaviside((s136 + (-fmaxf(0.5f, s134))));
-                const float s138 = (s129 * s57);
-                const float s139 = (19.5f * s138);
-                const float s140 = (190.125f * s59);
-                const float s141 = (s140 * s57);
-                const float s142 = (s140 * s64);
-                const float s143 = (1.0f / (t64 * t64 * t64));
-                const float s144 = (powf(s66, -1.5f) * t68);
-                const float s145 = (s144 * ((-(s141 * ((-0.85f * t61) + (4.398f * t62)))) + (-(s142 * ((-4.398f * t61) + (-0.85f * t62)))) + (380.25f * s132 * s133 * s137 * s143 * s58) + (380.25f * s132 * s133 * s137 * s143 * s65)));
-                const float s146 = ((-(s124 * s128)) + (-(s131 * ((-0.425f * t61) + (2.199f * t62)))) + (-(s139 * s145)) + (19.5f * s129 * s132 * s133 * s137 * s57 * s59 * s67));
-                const float s147 = (3.3075862f * t62);
-                const float s148 = (s64 * s68);
-                const float s149 = (s129 * s64);
-                const float s150 = (19.5f * s149);
-                const float s151 = (s133 * s137);
-                const float s152 = (s59 * s67);
-                const float s153 = (s151 * s152);
-                const float s154 = ((s124 * s148) + (-(s131 * s132)) + (s145 * s150) + (-(s132 * s150 * s153)));
-                const float s155 = (3.3075862f * t61);
-                const float s156 = (2.0f * t62);
-                const float s157 = (5.85f * s17);
-                const float s158 = (s9 * t11);
-                const float s159 = (s9 * t14);
-                const float s160 = (s32 * ((-(s12 * s159)) + (-(s158 * s7)) + (380.25f * s13 * s27 * s80 * s83 * t11) + (380.25f * s27 * s8 * s80 * s83 * t11)));
-                const float s161 = (s92 * t50);
-                const float s162 = (s44 * t54);
-                const float s163 = (s44 * s48);
-                const float s164 = (s111 * ((-(s162 * t50)) + (-(s163 * t51)) + (380.25f * s104 * s42 * s95 * s98 * t51) + (380.25f * s104 * s49 * s95 * s98 * t51)));
-                const float s165 = (s92 * t51);
-                const float s166 = (19.5f * s117 * s90);
-                const float s167 = (19.5f * s160);
-                const float s168 = (19.5f * s18);
-                const float s169 = (s131 * t61);
-                const float s170 = (s57 * t62);
-                const float s171 = (19.5f * s129 * s153);
-                const float s172 = (s60 * s64);
-                const float s173 = (s143 * s58);
-                const float s174 = (380.25f * s151);
-                const float s175 = (s174 * t62);
-                const float s176 = (s143 * s65);
-                const float s177 = (s144 * ((-(s172 * t62)) + (-(s173 * s175)) + (-(s175 * s176)) + (-(s57 * s60 * t61))));
-                const float s178 = ((-s169) + (-(s139 * s177)) + (-(s170 * s171)));
-                const float s179 = ((s131 * t62) + (s150 * s177) + (s171 * s72));
-                const float s180 = (o1.y * s36);
-                const float s181 = (380.25f * s119 * t14);
-                const float s182 = (s32 * ((s12 * s158) + (-(s159 * s7)) + (s181 * s28) + (s181 * s29)));
-                const float s183 = (2126.4595f * o1.y);
-                const float s184 = (s107 * t50);
-                const float s185 = ((s105 * s184) + (s109 * s184) + (s162 * t51) + (-(s163 * t50)));
-                const float s186 = (s115 * s117);
-                const float s187 = (s24 * s3);
-                const float s188 = (19.5f * s120);
-                const float s189 = (19.5f * s182);
-                const float s190 = (s174 * t61);
-                const float s191 = (s144 * ((-(s172 * t61)) + (-(s173 * s190)) + (-(s176 * s190)) + (380.25f * s57 * s59 * t62)));
-                const float s192 = ((-(s128 * s183)) + (-(s139 * s191)) + (-(s171 * s70)) + (19.5f * s129 * s67 * t62 * t68));
-                const float s193 = (s169 + (s148 * s183) + (s150 * s191) + (s171 * s71));
-                const float s194 = (39.0f * s91);
-                const float s195 = (t51 * t52);
-                const float s196 = ((-s195) + (-(t50 * t53)));
-                const float s197 = (s46 * t50);
-                const float s198 = (s107 * s196);
-                const float s199 = (s111 * ((-(s102 * ((-2.0f * s45) + (2.0f * t51 * t53)))) + (-(s103 * ((-2.0f * s195) + (2.0f * s197)))) + (s105 * s198) + (s109 * s198)));
-                const float s200 = (2.0f * t50);
-                const float s201 = (s40 * s74);
-                const float s202 = (64.49793f * s130);
-                const float s203 = (s46 * t61);
-                const float s204 = (s203 + (-(s5 * t62)));
-                const float s205 = (-s204);
-                const float s206 = (s144 * ((-(s141 * ((2.0f * s135) + (-2.0f * s61)))) + (-(s142 * ((2.0f * s203) + (-2.0f * s56)))) + (380.25f * s133 * s137 * s143 * s205 * s58) + (380.25f * s133 * s137 * s143 * s205 * s65)));
-                const float s207 = ((-(s131 * (s135 + (-s61)))) + (-(s139 * s206)) + (19.5f * s129 * s133 * s137 * s205 * s57 * s59 * s67));
-                const float s208 = ((s131 * s204) + (s150 * s206) + (-(s150 * s153 * s205)));
-                const float s209 = ((-s10) + (t14 * t15));
-                const float s210 = (-s12);
-                const float s211 = (s32 * ((-(s84 * ((-2.0f * s10) + (2.0f * t14 * t15)))) + (-(s85 * ((-2.0f * s6) + (2.0f * s81)))) + (380.25f * s13 * s210 * s27 * s80 * s83) + (380.25f * s210 * s27 * s8 * s80 * s83)));
-                const float s212 = (19.5f * s211);
-                const float s213 = (s74 * ((-19.349379f * s18) + (-19.349379f * s21 * s23) + (-71.66437f * s24 * s34) + (71.66437f * s12 * s3 * s30 * s31 * t11 * t81) + (19.349379f * s15 * s3 * s7 * t14 * t75 * t85 * t86)));
-                const float s214 = (5.2243323f * s21);
-                const float s215 = (19.349379f * s34);
-                const float s216 = (fdi_gen_heaviside((s96 + (-fmaxf(0.5f, s97)))) * fdi_gen_sign(o9.y));
-                const float s217 = (5.265f * s116 * s216);
-                const float s218 = (102.6675f * s216);
-                const float s219 = (s111 * ((-(s101 * ((-0.1458f * o9.y) + (0.54f * s45) + (0.54f * s47)))) + (-(s105 * s218)) + (-(s109 * s218))));
-                const float s220 = (fdi_gen_heaviside((s134 + (-fmaxf(0.5f, s136)))) * fdi_gen_sign(o10.y));
-                const float s221 = (5.265f * s152 * s220);
-                const float s222 = (102.6675f * s220);
-                const float s223 = (s144 * ((-(s140 * ((-0.1458f * o10.y) + (0.54f * s61) + (0.54f * s62)))) + (-(s173 * s222)) + (-(s176 * s222))));
-                const float s224 = ((-(s138 * s221)) + (-(s139 * s223)));
-                const float s225 = ((-5.265f * s130) + (s149 * s221) + (s150 * s223));
-                sens[0] = (s74 * ((1055.0172f * s35 * s36) + (-(s40 * (-1729.8676f + (-11631.868f * s16 * s22) + (-(s53 * s54)) + (-(s53 * s55)) + (-11631.868f * s68 * s71) + (-(s69 * s70)) + (-(s69 * s72)) + (11631.868f * s15 * s7 * t14 * t81) + (11631.868f * s57 * s67 * t62 * t68)))))); /* f2 */
-                sens[1] = (s74 * ((s35 * ((-5.85f * s76) + (-5.85f * s79) + (-(s38 * s86)) + (5.85f * s15 * s3 * s7 * s75 * s80 * s83 * t75))) + (-(s40 * ((-2092.0f * o1.y) + (1046.0f * o3.y) + (-(s118 * ((s112 * s115) + (s113 * s88) + (s92 * s93) + (-(s115 * s117 * s93))))) + (-(s122 * ((19.5f * s76) + (19.5f * s79) + (s121 * s37) + (-19.5f * s120 * s37 * s75)))) + (-(s127 * ((-(s121 * s126)) + (-(s123 * ((2.199f * t11) + (1.025f * t14)))) + (-(s124 * s125)) + (19.5f * s12 * s15 * s3 * s75 * s80 * s83 * t75)))) + (-(s146 * s147)) + (2.0f * s146 * t61) + (-(s154 * s155)) + (-(s154 * s156)) + (2.0f * t50 * ((-(s100 * s112)) + (-(s87 * s88)) + (-(s92 * ((-0.425f * t50) + (-0.199f * t51)))) + (19.5f * s43 * s51 * s90 * s93 * s95 * s98 * t54)))))))); /* f3 */
-                sens[2] = (s74 * ((s35 * ((-(s157 * t11)) + (-(s160 * s38)) + (5.85f * s15 * s3 * s7 * s80 * s83 * t11 * t75))) + (-(s40 * ((-(s118 * (s165 + (s115 * s164) + (-(s166 * s55))))) + (-(s122 * ((s123 * t11) + (s167 * s37) + (-19.5f * s120 * s37 * t11)))) + (-(s127 * ((-s168) + (-(s126 * s167)) + (19.5f * s12 * s15 * s3 * s80 * s83 * t11 * t75)))) + (-(s147 * s178)) + (-(s155 * s179)) + (-(s156 * s179)) + (2.0f * s178 * t61) + (2.0f * t50 * ((-s161) + (-(s100 * s164)) + (19.5f * s43 * s51 * s90 * s95 * s98 * t51 * t54)))))))); /* f4 */
-                sens[3] = (s74 * ((s35 * ((-5.85f * s18) + (-637.93787f * s180) + (-(s182 * s38)) + (5.85f * s15 * s3 * s7 * s80 * s83 * t14 * t75))) + (-(s40 * ((1046.0f * o1.y) + (-(s118 * (s161 + (-(s113 * s183)) + (-(s186 * t50)) + (19.5f * s110 * s185 * s41 * s48 * s90)))) + (-(s122 * (s168 + (2126.4595f * s180) + (-(s187 * s188)) + (s189 * s37)))) + (-(s127 * ((-(s125 * s183)) + (-(s126 * s189)) + (19.5f * s15 * s3 * t11 * t81) + (19.5f * s12 * s15 * s3 * s80 * s83 * t14 * t75)))) + (-(s147 * s192)) + (-(s155 * s193)) + (-(s156 * s193)) + (2.0f * s192 * t61) + (2.0f * t50 * (s165 + (s166 * s54) + (s183 * s87) + (-(s100 * s111 * s185))))))))); /* f5 */
-                sens[4] = (-(s201 * ((-(s118 * ((s115 * s199) + (-(s186 * s196)) + (s92 * ((-s195) + s197))))) + (s200 * ((-(s100 * s199)) + (-(s92 * s94)) + (19.5f * s196 * s43 * s51 * s90 * s95 * s98 * t54))) + (s194 * s48 * t50) + (-(s194 * t51 * t54))))); /* f6 */
-                sens[5] = (-(s201 * ((-39.0f * s130 * s170) + (-(s147 * s207)) + (-(s155 * s208)) + (-(s156 * s208)) + (-(s202 * s70)) + (-(s202 * s72)) + (2.0f * s207 * t61) + (39.0f * s129 * s64 * s67 * t61 * t68)))); /* f8 */
-                sens[6] = (s74 * ((s35 * ((-(s157 * s209)) + (-(s211 * s38)) + (5.85f * s15 * s210 * s3 * s7 * s80 * s83 * t75))) + (-(s40 * ((-64.49793f * s12 * s18) + (-(s122 * ((s123 * s209) + (s212 * s37) + (-(s188 * s210 * s37))))) + (-(s127 * ((-(s123 * s82)) + (-(s126 * s212)) + (19.5f * s12 * s15 * s210 * s3 * s80 * s83 * t75)))) + (-64.49793f * s17 * s7 * t11)))))); /* f9 */
-                sens[7] = s213; /* f13 */
-                sens[8] = s213; /* f17 */
-                sens[9] = (-(s201 * ((-s118) + s200))); /* f18 */
-                sens[10] = (-(s201 * ((-1.3075862f * t61) + (-5.307586f * t62)))); /* f20 */
-                sens[11] = (s74 * ((5.2243323f * s18) + (-(s187 * s214)) + (s214 * s23) + (-(s215 * s22)) + (s215 * s24) + (-(s40 * ((-s122) + (-s127)))))); /* f21 */
-                sens[12] = (-(s201 * ((-(s118 * ((-5.265f * s91) + (s114 * s217) + (s115 * s219)))) + (s200 * ((-(s100 * s219)) + (-(s217 * s99))))))); /* f22 */
-                sens[13] = (-(s201 * ((-(s147 * s224)) + (-(s155 * s225)) + (-(s156 * s225)) + (2.0f * s224 * t61)))); /* f24 */
-                st = fdi_gen_sens_finish(st, sens, 14U);
-            }
-#else
-            (void)sens;
-#endif
-        }
-    }
-    return st;
 }
 
 /* MSO2065: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
@@ -2223,791 +85,10 @@ static bool romo_gen_10_in_domain(const fdi_frame_t *in)
     return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
 }
 
-/* MSO2443: B1 B2 B3 D.psidot K1 K2 D1 D2 W2.FL W3.FL W4.FL W2.FS W3.FS W4.FS W2.Fx W3.Fx W4.Fx W2.Fy W3.Fy W4.Fy W3.dyn W3.D S3 S4 S5 S.omega2 S.omega4
- * residual B1; derivative causality for dpsidot, dvx, dvy; observer for omega3 (integrates W3.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 10 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- */
-static fdi_status_t romo_gen_11(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                                float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_svf_out_t o2 = {0.0f, 0.0f};
-    fdi_svf_out_t o3 = {0.0f, 0.0f};
-    fdi_svf_out_t o4 = {0.0f, 0.0f};
-    fdi_svf_out_t o5 = {0.0f, 0.0f};
-    fdi_svf_out_t o6 = {0.0f, 0.0f};
-    fdi_svf_out_t o7 = {0.0f, 0.0f};
-    fdi_svf_out_t o8 = {0.0f, 0.0f};
-    fdi_svf_out_t o9 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[ROMO_SIG_PSIDOT_M], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[ROMO_SIG_VX_M], reset, &o1));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->value[ROMO_SIG_VY_M], reset, &o2));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->value[ROMO_SIG_DELTA2_M], reset, &o3));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, in->value[ROMO_SIG_DELTA3_M], reset, &o4));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, in->value[ROMO_SIG_DELTA4_M], reset, &o5));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, in->value[ROMO_SIG_ITM3_M], reset, &o6));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 7U, in->value[ROMO_SIG_P_R_M], reset, &o7));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 8U, in->value[ROMO_SIG_OMEGA2_M], reset, &o8));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 9U, in->value[ROMO_SIG_OMEGA4_M], reset, &o9));
-    {
-        const float t0 = (-1.7777778f * o6.y);
-        const float t2 = (0.00010666667f * o7.y);
-        const float t3 = (109.04921f * o1.dy);
-        const float t4 = (-o2.y);
-        const float t5 = (o0.y * ((-1.0f * o0.y) + (-t4)));
-        const float t6 = (109.04921f * t5);
-        const float t7 = (o0.y * ((0.3f * o0.y) + o1.y));
-        const float t8 = ((180.34483f * t7) + (180.34483f * o2.dy));
-        const float t9 = ((-213.05959f * o0.dy) + (-t3) + t6 + t8);
-        const float t10 = (2565.315f + (-t9));
-        const float t11 = cosf(o4.y);
-        const float t12 = ((2.199f * o0.y) + t4);
-        const float t13 = (-t12);
-        const float t14 = sinf(o4.y);
-        const float t15 = ((0.425f * o0.y) + (-o1.y));
-        const float t16 = ((t11 * t13) + (t14 * t15));
-        const float t17 = (t16 * t16);
-        const float t19 = fabsf(((t11 * t15) + (t12 * t14)));
-        const float t23 = (-(t11 * t15));
-        const float t24 = (t13 * t14);
-        const float t25 = (t23 + t24);
-        const float t34 = (1.5795f * t10);
-        const float t36 = (-fmaxf(0.5f, t19));
-        const float t38 = ((0.54f * t23) + (0.54f * t24));
-        const float t39 = (102.6675f * t17);
-        const float t44 = (17.414442f * t14);
-        const float t46 = (t11 * t16);
-        const float t47 = (17.414442f * t10 * t46);
-        const float t48 = (t10 * t44);
-        const float t51 = sinf(o3.y);
-        const float t52 = cosf(o3.y);
-        const float t53 = ((0.199f * o0.y) + o2.y);
-        const float t54 = ((1.025f * o0.y) + o1.y);
-        const float t55 = (-t54);
-        const float t56 = ((t51 * t55) + (t52 * t53));
-        const float t57 = ((t51 * t53) + (t52 * t54));
-        const float t58 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o8.y)), fabsf(t57)));
-        const float t59 = (380.25f * (1.0f / (t58 * t58)));
-        const float t60 = ((0.27f * o8.y) + (-t57));
-        const float t61 = (39.0f * (1.0f / (t58)) * (2565.315f + t9) * (1.0f / sqrtf((1.0f + ((t56 * t56) * t59) + (t59 * (t60 * t60))))));
-        const float t62 = cosf(o5.y);
-        const float t63 = sinf(o5.y);
-        const float t64 = ((t13 * t62) + (t55 * t63));
-        const float t65 = (t54 * t62);
-        const float t66 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o9.y)), fabsf(((-t65) + (t12 * t63)))));
-        const float t67 = (380.25f * (1.0f / (t66 * t66)));
-        const float t68 = ((0.27f * o9.y) + (-t65) + (-(t13 * t63)));
-        const float t69 = (1.0f / sqrtf((1.0f + ((t64 * t64) * t67) + (t67 * (t68 * t68)))));
-        const float t70 = (1.0f / (t66));
-        const float t71 = (2565.315f + (-147.63007f * o0.dy) + t3 + (-t6) + t8);
-        const float t72 = (t62 * t69 * t70 * t71);
-        const float t73 = ((-3602.2883f * o0.dy) + (1046.0f * t5) + (1729.8676f * t7) + (-1046.0f * o1.dy) + (1729.8676f * o2.dy) + (64.49793f * t64 * t72) + (39.0f * t68 * t72) + (t51 * t56 * t61) + (t52 * t60 * t61) + (39.0f * t63 * t64 * t69 * t70 * t71) + (-64.49793f * t63 * t68 * t69 * t70 * t71));
-        float xh = 0.0f;
-        if (reset)
-        {
-            const float x0 = in->value[ROMO_SIG_OMEGA3_M]; /* omega3 from its sensor outside the MSO set */
-            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;
-        }
-        else
-        {
-            const float xp = g->obs.xh;
-            const float t1 = tanhf((2.0f * xp));
-            const float t18 = (0.27f * fabsf(xp));
-            const float t20 = fmaxf(0.5f, fmaxf(t18, t19));
-            const float t21 = (1.0f / (t20 * t20));
-            const float t22 = (380.25f * t21);
-            const float t26 = ((-t25) + (0.27f * xp));
-            const float t27 = (t26 * t26);
-            const float t28 = (1.0f + (t17 * t22) + (t22 * t27));
-            const float t29 = (1.0f / sqrtf(t28));
-            const float t30 = (1.0f / (t20));
-            const float t31 = (t29 * t30);
-            const float t32 = (t10 * t31);
-            const float t33 = (5.85f * t26);
-            const float t35 = fdi_gen_sign(xp);
-            const float t37 = fdi_gen_heaviside((t18 + t36));
-            const float t40 = (t35 * t37);
-            const float t41 = ((1.0f / (t20 * t20 * t20)) * t40);
-            const float t42 = (t10 * powf(t28, -1.5f) * t30 * ((-190.125f * t21 * ((-t38) + (0.1458f * xp))) + (102.6675f * t27 * t41) + (t39 * t41)));
-            const float t43 = ((t2 * (2.0f + (-2.0f * (t1 * t1)))) + (t31 * t34) + (t33 * t42) + (-1.5795f * t10 * t21 * t26 * t29 * t35 * t37));
-            const float t45 = (t21 * t29 * t40);
-            const float t49 = (64.49793f * t42);
-            const float t50 = ((t32 * t44) + (t45 * t47) + (-(t46 * t49)) + (t14 * t26 * t49) + (-(t26 * t45 * t48)));
-            const float f = ((-t0) + (-(t1 * t2)) + (-(t32 * t33)));
-            const float l = (-(t50 * (1.0f / ((132.25f + (t50 * t50)))) * fmaxf(0.0f, (12.566371f + (-t43)))));
-            const float a = (-t43);
-            const float c = t50;
-            const float e = ((-t73) + (-64.49793f * t32 * t46) + (64.49793f * t10 * t14 * t26 * t29 * t30));
-            xh = fdi_gen_obs_predict(g, par, f + (l * e), a + (l * c));
-        }
-        {
-            const float t74 = tanhf((2.0f * xh));
-            const float t75 = (0.27f * fabsf(xh));
-            const float t76 = fmaxf(0.5f, fmaxf(t19, t75));
-            const float t77 = (1.0f / (t76 * t76));
-            const float t78 = (380.25f * t77);
-            const float t79 = ((-t25) + (0.27f * xh));
-            const float t80 = (t79 * t79);
-            const float t81 = (1.0f + (t17 * t78) + (t78 * t80));
-            const float t82 = (1.0f / sqrtf(t81));
-            const float t83 = (1.0f / (t76));
-            const float t84 = (t82 * t83);
-            const float t85 = (t10 * t84);
-            const float t86 = (5.85f * t79);
-            const float t87 = fdi_gen_sign(xh);
-            const float t88 = fdi_gen_heaviside((t36 + t75));
-            const float t89 = (t87 * t88);
-            const float t90 = ((1.0f / (t76 * t76 * t76)) * t89);
-            const float t91 = (t10 * powf(t81, -1.5f) * t83 * ((t39 * t90) + (-190.125f * t77 * ((-t38) + (0.1458f * xh))) + (102.6675f * t80 * t90)));
-            const float t92 = (t77 * t82 * t89);
-            const float t93 = (64.49793f * t91);
-            const float t94 = ((t44 * t85) + (-(t46 * t93)) + (t47 * t92) + (t14 * t79 * t93) + (-(t48 * t79 * t92)));
-            const float f = ((-t0) + (-(t2 * t74)) + (-(t85 * t86)));
-            const float l = (-(t94 * (1.0f / ((132.25f + (t94 * t94)))) * fmaxf(0.0f, (12.566371f + (-(t2 * (2.0f + (-2.0f * (t74 * t74))))) + (-(t34 * t84)) + (-(t86 * t91)) + (1.5795f * t10 * t77 * t79 * t82 * t87 * t88)))));
-            const float value = ((-t73) + (-64.49793f * t46 * t85) + (64.49793f * t10 * t14 * t79 * t82 * t83));
-            st = fdi_gen_status_worst(st, fdi_gen_obs_store(g, xh, f + (l * value)));
-            st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-            if (sens != NULL) /* d r / d f: f3 f4 f5 f7 f8 f9 f12 f16 f19 f20 f21 f23 f25 */
-            {
-                const float s0 = (-o2.y);
-                const float s1 = (109.04921f * o0.y * ((-1.0f * o0.y) + (-s0)));
-                const float s2 = ((180.34483f * o2.dy) + (180.34483f * o0.y * ((0.3f * o0.y) + o1.y)));
-                const float s3 = ((-213.05959f * o0.dy) + s1 + s2);
-                const float s4 = (2565.315f + (-s3) + t3);
-                const float s5 = ((-2.199f * o0.y) + (-s0));
-                const float s6 = (s5 * t11);
-                const float s7 = (s6 + (t14 * t15));
-                const float s8 = (s7 * s7);
-                const float s9 = (380.25f * t77);
-                const float s10 = ((-0.425f * o0.y) + o1.y);
-                const float s11 = (s10 * t11);
-                const float s12 = (s5 * t14);
-                const float s13 = (s11 + s12);
-                const float s14 = ((-s13) + (0.27f * xh));
-                const float s15 = (s14 * s14);
-                const float s16 = (1.0f + (s15 * s9) + (s8 * s9));
-                const float s17 = (1.0f / sqrtf(s16));
-                const float s18 = (s17 * t83);
-                const float s19 = (s18 * s4);
-                const float s20 = (1.0f / (t76 * t76 * t76));
-                const float s21 = (s20 * s8);
-                const float s22 = (t87 * t88);
-                const float s23 = (102.6675f * s22);
-                const float s24 = (190.125f * t77);
-                const float s25 = (s15 * s20);
-                const float s26 = ((s21 * s23) + (s23 * s25) + (-(s24 * ((-0.54f * s11) + (-0.54f * s12) + (0.1458f * xh)))));
-                const float s27 = (5.85f * s14);
-                const float s28 = (s27 * s4);
-                const float s29 = powf(s16, -1.5f);
-                const float s30 = (s29 * t83);
-                const float s31 = (s28 * s30);
-                const float s32 = ((1.5795f * s19) + (0.00010666667f * o7.y * (2.0f + (-2.0f * (t74 * t74)))) + (s26 * s31) + (-1.5795f * s14 * s17 * s4 * t77 * t87 * t88));
-                const float s33 = (s19 * t14);
-                const float s34 = (s17 * t77);
-                const float s35 = (s34 * s4);
-                const float s36 = (s22 * s35);
-                const float s37 = (s7 * t11);
-                const float s38 = (s36 * s37);
-                const float s39 = (s14 * s36 * t14);
-                const float s40 = (64.49793f * s7);
-                const float s41 = (s30 * s4);
-                const float s42 = (s26 * s41);
-                const float s43 = (s42 * t11);
-                const float s44 = (64.49793f * s14);
-                const float s45 = (s42 * t14);
-                const float s46 = ((17.414442f * s33) + (17.414442f * s38) + (-17.414442f * s39) + (-(s40 * s43)) + (s44 * s45));
-                const float s47 = (s46 * s46);
-                const float s48 = (1.0f / (fminf(-0.1f, ((-s32) + (-(s47 * (1.0f / ((132.25f + s47))) * fmaxf(0.0f, (12.566371f + (-s32)))))))));
-                const float s49 = (180.34483f * o1.y);
-                const float s50 = (109.04921f * o2.y);
-                const float s51 = ((-109.89152f * o0.y) + s49 + s50);
-                const float s52 = (s18 * s51);
-                const float s53 = ((0.425f * t11) + (2.199f * t14));
-                const float s54 = (-(s19 * s53));
-                const float s55 = fdi_gen_heaviside((t19 + (-fmaxf(0.5f, t75))));
-                const float s56 = fdi_gen_sign(s13);
-                const float s57 = (s24 * s7);
-                const float s58 = (s14 * s24);
-                const float s59 = ((-(s57 * ((4.398f * t11) + (-0.85f * t14)))) + (-(s58 * ((-0.85f * t11) + (-4.398f * t14)))) + (380.25f * s15 * s20 * s53 * s55 * s56) + (380.25f * s20 * s53 * s55 * s56 * s8));
-                const float s60 = (-s32);
-                const float s61 = (19.5f * s52);
-                const float s62 = (19.5f * s19);
-                const float s63 = (19.5f * s41);
-                const float s64 = (s59 * s63);
-                const float s65 = (3.3075862f * t11);
-                const float s66 = (-19.5f * s51);
-                const float s67 = (t51 * t53);
-                const float s68 = (t52 * t54);
-                const float s69 = ((0.27f * o8.y) + (-s67) + (-s68));
-                const float s70 = (1.0f / (t58));
-                const float s71 = (s69 * s69);
-                const float s72 = (1.0f / (t58 * t58));
-                const float s73 = (380.25f * s72);
-                const float s74 = (t52 * t53);
-                const float s75 = ((-1.025f * o0.y) + (-o1.y));
-                const float s76 = (s75 * t51);
-                const float s77 = (s74 + s76);
-                const float s78 = (s77 * s77);
-                const float s79 = (1.0f + (s71 * s73) + (s73 * s78));
-                const float s80 = (1.0f / sqrtf(s79));
-                const float s81 = (s70 * s80);
-                const float s82 = (s69 * s81);
-                const float s83 = ((0.199f * t51) + (1.025f * t52));
-                const float s84 = (2565.315f + s3 + (-109.04921f * o1.dy));
-                const float s85 = (s81 * s84);
-                const float s86 = (19.5f * s85);
-                const float s87 = (s69 * s84);
-                const float s88 = (19.5f * s87);
-                const float s89 = fabsf(t57);
-                const float s90 = (0.27f * fabsf(o8.y));
-                const float s91 = fdi_gen_heaviside((s89 + (-fmaxf(0.5f, s90))));
-                const float s92 = ((-0.199f * o0.y) + t4);
-                const float s93 = fdi_gen_sign(((s75 * t52) + (s92 * t51)));
-                const float s94 = (s91 * s93);
-                const float s95 = (s72 * s80);
-                const float s96 = (s94 * s95);
-                const float s97 = (190.125f * s72);
-                const float s98 = (s69 * s97);
-                const float s99 = (s77 * s97);
-                const float s100 = (1.0f / (t58 * t58 * t58));
-                const float s101 = powf(s79, -1.5f);
-                const float s102 = (s101 * s70);
-                const float s103 = (s102 * ((-(s98 * ((0.398f * t51) + (2.05f * t52)))) + (-(s99 * ((2.05f * t51) + (-0.398f * t52)))) + (380.25f * s100 * s71 * s83 * s91 * s93) + (380.25f * s100 * s78 * s83 * s91 * s93)));
-                const float s104 = (2.0f * t52);
-                const float s105 = (s55 * s56);
-                const float s106 = (19.5f * s35);
-                const float s107 = (3.3075862f * t14);
-                const float s108 = (s77 * s81);
-                const float s109 = (s77 * s84);
-                const float s110 = (19.5f * s109);
-                const float s111 = (2.0f * t51);
-                const float s112 = ((-6362.9536f * o0.y) + (-19.5f * s49) + (19.5f * s50));
-                const float s113 = (t54 * t62);
-                const float s114 = (s5 * t63);
-                const float s115 = ((0.27f * o9.y) + (-s113) + (-s114));
-                const float s116 = (s115 * s115);
-                const float s117 = (1.0f / (t66 * t66));
-                const float s118 = (380.25f * s117);
-                const float s119 = (s5 * t62);
-                const float s120 = (s119 + (s75 * t63));
-                const float s121 = (s120 * s120);
-                const float s122 = (1.0f + (s116 * s118) + (s118 * s121));
-                const float s123 = (1.0f / sqrtf(s122));
-                const float s124 = (s123 * t70);
-                const float s125 = (s115 * s124);
-                const float s126 = ((1.025f * t62) + (-2.199f * t63));
-                const float s127 = (2565.315f + (-147.63007f * o0.dy) + (-s1) + s2 + t3);
-                const float s128 = (s124 * s127);
-                const float s129 = (19.5f * s128);
-                const float s130 = (s115 * s127);
-                const float s131 = (19.5f * s130);
-                const float s132 = (0.27f * fabsf(o9.y));
-                const float s133 = fabsf(((-t65) + (t12 * t63)));
-                const float s134 = fdi_gen_heaviside((s133 + (-fmaxf(0.5f, s132))));
-                const float s135 = (s75 * t62);
-                const float s136 = ((-s114) + s135);
-                const float s137 = fdi_gen_sign(s136);
-                const float s138 = (s134 * s137);
-                const float s139 = (s117 * s123);
-                const float s140 = (s138 * s139);
-                const float s141 = (190.125f * s117);
-                const float s142 = (s115 * s141);
-                const float s143 = (s120 * s141);
-                const float s144 = (1.0f / (t66 * t66 * t66));
-                const float s145 = powf(s122, -1.5f);
-                const float s146 = (s145 * t70);
-                const float s147 = (s146 * ((-(s142 * ((2.05f * t62) + (-4.398f * t63)))) + (-(s143 * ((4.398f * t62) + (2.05f * t63)))) + (380.25f * s116 * s126 * s134 * s137 * s144) + (380.25f * s121 * s126 * s134 * s137 * s144)));
-                const float s148 = ((s112 * s125) + (s126 * s129) + (s131 * s147) + (-(s126 * s131 * s140)));
-                const float s149 = (2.0f * t62);
-                const float s150 = (3.3075862f * t63);
-                const float s151 = (s120 * s124);
-                const float s152 = (s120 * s127);
-                const float s153 = (19.5f * s152);
-                const float s154 = ((-(s112 * s151)) + (-(s129 * ((2.199f * t62) + (1.025f * t63)))) + (-(s147 * s153)) + (19.5f * s117 * s120 * s123 * s126 * s127 * s134 * s137));
-                const float s155 = (3.3075862f * t62);
-                const float s156 = (2.0f * t63);
-                const float s157 = (o0.y * s18);
-                const float s158 = (s14 * s157);
-                const float s159 = (5.85f * s19);
-                const float s160 = (s28 * s34);
-                const float s161 = (s105 * t11);
-                const float s162 = (s9 * t14);
-                const float s163 = (380.25f * s105);
-                const float s164 = (s163 * t11);
-                const float s165 = ((-(s162 * s7)) + (-(s164 * s21)) + (-(s164 * s25)) + (-(s14 * s9 * t11)));
-                const float s166 = (s157 * s7);
-                const float s167 = (19.5f * s33);
-                const float s168 = (s105 * s106);
-                const float s169 = (s165 * s63);
-                const float s170 = (3516.724f * o0.y);
-                const float s171 = (s96 * t52);
-                const float s172 = (s69 * s73);
-                const float s173 = (s73 * s77);
-                const float s174 = ((-(s172 * t52)) + (-(s173 * t51)) + (380.25f * s100 * s71 * s91 * s93 * t52) + (380.25f * s100 * s78 * s91 * s93 * t52));
-                const float s175 = (-(s86 * t51));
-                const float s176 = (-19.5f * s123 * s127 * t62 * t70);
-                const float s177 = (s140 * t62);
-                const float s178 = (s118 * t62);
-                const float s179 = (s118 * t63);
-                const float s180 = ((-(s115 * s178)) + (-(s120 * s179)) + (380.25f * s116 * s134 * s137 * s144 * t62) + (380.25f * s121 * s134 * s137 * s144 * t62));
-                const float s181 = ((-s176) + (-(s125 * s170)) + (-(s131 * s177)) + (19.5f * s115 * s127 * s145 * s180 * t70));
-                const float s182 = (s129 * t63);
-                const float s183 = ((-s182) + (s151 * s170) + (s153 * s177) + (-(s146 * s153 * s180)));
-                const float s184 = (s163 * t14);
-                const float s185 = ((-(s14 * s162)) + (-(s184 * s21)) + (-(s184 * s25)) + (380.25f * s7 * t11 * t77));
-                const float s186 = (s168 * t14);
-                const float s187 = (s185 * s63);
-                const float s188 = (2126.4595f * o0.y);
-                const float s189 = (s96 * t51);
-                const float s190 = (s100 * s71);
-                const float s191 = (380.25f * s94 * t51);
-                const float s192 = (s100 * s78);
-                const float s193 = ((-(s172 * t51)) + (s173 * t52) + (s190 * s191) + (s191 * s192));
-                const float s194 = (s116 * s144);
-                const float s195 = (380.25f * s138 * t63);
-                const float s196 = (s121 * s144);
-                const float s197 = (s146 * ((-(s115 * s179)) + (s120 * s178) + (s194 * s195) + (s195 * s196)));
-                const float s198 = (s182 + (s125 * s188) + (s131 * s197) + (-(s131 * s140 * t63)));
-                const float s199 = ((-s176) + (-(s151 * s188)) + (-(s153 * s197)) + (19.5f * s117 * s120 * s123 * s127 * s134 * s137 * t63));
-                const float s200 = (39.0f * s85);
-                const float s201 = (t51 * t54);
-                const float s202 = ((-s76) + (s92 * t52));
-                const float s203 = (s102 * ((-(s98 * ((2.0f * s201) + (-2.0f * s74)))) + (-(s99 * ((-2.0f * s67) + (2.0f * s75 * t52)))) + (380.25f * s100 * s202 * s71 * s91 * s93) + (380.25f * s100 * s202 * s78 * s91 * s93)));
-                const float s204 = (s48 * s60);
-                const float s205 = (s6 + (-(s10 * t14)));
-                const float s206 = (-s205);
-                const float s207 = (t11 * t15);
-                const float s208 = ((-(s57 * ((-2.0f * s12) + (2.0f * s207)))) + (-(s58 * ((-2.0f * s6) + (2.0f * s10 * t14)))) + (380.25f * s15 * s20 * s205 * s55 * s56) + (380.25f * s20 * s205 * s55 * s56 * s8));
-                const float s209 = (s208 * s63);
-                const float s210 = (s115 * s128);
-                const float s211 = (s120 * s128);
-                const float s212 = (t54 * t63);
-                const float s213 = (-s120);
-                const float s214 = (s146 * ((-(s142 * ((-2.0f * s119) + (2.0f * s212)))) + (-(s143 * ((-2.0f * s114) + (2.0f * s135)))) + (380.25f * s116 * s134 * s137 * s144 * s213) + (380.25f * s121 * s134 * s137 * s144 * s213)));
-                const float s215 = ((s129 * ((-s119) + s212)) + (s131 * s214) + (-(s131 * s140 * s213)));
-                const float s216 = ((-(s129 * s136)) + (-(s153 * s214)) + (19.5f * s117 * s120 * s123 * s127 * s134 * s137 * s213));
-                const float s217 = (s14 * s45);
-                const float s218 = (s48 * ((71.66437f * s217) + (19.349379f * s33) + (19.349379f * s38) + (-19.349379f * s39) + (-71.66437f * s43 * s7)));
-                const float s219 = (fdi_gen_heaviside((s90 + (-fmaxf(0.5f, s89)))) * fdi_gen_sign(o8.y));
-                const float s220 = (5.265f * s219 * s95);
-                const float s221 = (102.6675f * s219);
-                const float s222 = (s102 * ((-(s190 * s221)) + (-(s192 * s221)) + (-(s97 * ((-0.1458f * o8.y) + (0.54f * s67) + (0.54f * s68))))));
-                const float s223 = (fdi_gen_heaviside((s132 + (-fmaxf(0.5f, s133)))) * fdi_gen_sign(o9.y));
-                const float s224 = (5.265f * s139 * s223);
-                const float s225 = (102.6675f * s223);
-                const float s226 = (s146 * ((-(s141 * ((-0.1458f * o9.y) + (0.54f * s113) + (0.54f * s114)))) + (-(s194 * s225)) + (-(s196 * s225))));
-                const float s227 = ((-(s152 * s224)) + (-(s153 * s226)));
-                const float s228 = ((-5.265f * s128) + (s130 * s224) + (s131 * s226));
-                sens[0] = (s48 * ((s46 * ((-5.85f * s54) + (-(s27 * s52)) + (-(s31 * s59)) + (5.85f * s14 * s17 * s4 * s53 * s55 * s56 * t77))) + (-(s60 * ((-1054.0795f * o0.y) + (1729.8676f * o1.y) + (1046.0f * o2.y) + (-(s104 * ((s103 * s88) + (s66 * s82) + (s83 * s86) + (-(s83 * s88 * s96))))) + (s107 * ((19.5f * s54) + (s14 * s61) + (s14 * s64) + (-(s105 * s106 * s14 * s53)))) + (s111 * ((-(s103 * s110)) + (-(s108 * s66)) + (-(s86 * ((1.025f * t51) + (-0.199f * t52)))) + (19.5f * s72 * s77 * s80 * s83 * s84 * s91 * s93))) + (-(s148 * s149)) + (s148 * s150) + (s154 * s155) + (s154 * s156) + (s65 * ((-(s61 * s7)) + (-(s62 * ((2.199f * t11) + (-0.425f * t14)))) + (-(s64 * s7)) + (19.5f * s17 * s4 * s53 * s55 * s56 * s7 * t77)))))))); /* f3 */
-                sens[1] = (s48 * ((s46 * ((-1055.0172f * s158) + (-(s159 * t11)) + (-(s160 * s161)) + (-(s165 * s31)))) + (-(s60 * ((1729.8676f * o0.y) + (-(s104 * ((-(s170 * s82)) + (-(s171 * s88)) + (19.5f * s70 * s80 * s84 * t52) + (19.5f * s101 * s174 * s69 * s70 * s84)))) + (s107 * ((3516.724f * s158) + (s14 * s169) + (s62 * t11) + (s106 * s14 * s161))) + (s111 * (s175 + (s108 * s170) + (s110 * s171) + (-(s102 * s110 * s174)))) + (-(s149 * s181)) + (s150 * s181) + (s155 * s183) + (s156 * s183) + (s65 * ((-3516.724f * s166) + (-s167) + (-(s168 * s37)) + (-(s169 * s7))))))))); /* f4 */
-                sens[2] = (s48 * ((s46 * ((-637.93787f * s158) + (-5.85f * s33) + (-(s185 * s31)) + (-(s105 * s160 * t14)))) + (-(s60 * ((1046.0f * o0.y) + (-(s104 * ((-s175) + (-(s188 * s82)) + (-(s189 * s88)) + (19.5f * s101 * s193 * s69 * s70 * s84)))) + (s107 * ((2126.4595f * s158) + s167 + (s14 * s186) + (s14 * s187))) + (s111 * ((s108 * s188) + (s110 * s189) + (s86 * t52) + (-(s102 * s110 * s193)))) + (-(s149 * s198)) + (s150 * s198) + (s155 * s199) + (s156 * s199) + (s65 * ((-2126.4595f * s166) + (-(s186 * s7)) + (-(s187 * s7)) + (19.5f * s17 * s4 * t11 * t83)))))))); /* f5 */
-                sens[3] = (-(s204 * ((-(s104 * ((s203 * s88) + (s86 * (s201 + (-s74))) + (-(s202 * s88 * s96))))) + (s111 * ((-(s110 * s203)) + (-(s86 * ((-s67) + (s75 * t52)))) + (19.5f * s202 * s72 * s77 * s80 * s84 * s91 * s93))) + (s200 * s69 * t51) + (-(s200 * s77 * t52))))); /* f7 */
-                sens[4] = (s48 * ((s46 * ((-(s159 * s206)) + (-(s208 * s31)) + (5.85f * s14 * s17 * s205 * s4 * s55 * s56 * t77))) + (-(s60 * ((s107 * ((s14 * s209) + (s206 * s62) + (-(s14 * s168 * s205)))) + (s33 * s40) + (s65 * ((-(s209 * s7)) + (-(s62 * ((-s12) + s207))) + (19.5f * s17 * s205 * s4 * s55 * s56 * s7 * t77))) + (s19 * s44 * t11)))))); /* f8 */
-                sens[5] = (-(s204 * ((-(s149 * s215)) + (s150 * s215) + (s155 * s216) + (s156 * s216) + (64.49793f * s210 * t62) + (39.0f * s210 * t63) + (-39.0f * s211 * t62) + (64.49793f * s211 * t63)))); /* f9 */
-                sens[6] = s218; /* f12 */
-                sens[7] = s218; /* f16 */
-                sens[8] = (-(s204 * ((-s104) + s111))); /* f19 */
-                sens[9] = (s48 * ((-19.349379f * s217) + (-5.2243323f * s33) + (-5.2243323f * s38) + (-(s60 * (s107 + s65))) + (19.349379f * s26 * s29 * s4 * s7 * t11 * t83) + (5.2243323f * s14 * s17 * s4 * t14 * t77 * t87 * t88))); /* f20 */
-                sens[10] = (-(s204 * ((1.3075862f * t62) + (5.307586f * t63)))); /* f21 */
-                sens[11] = (-(s204 * ((-(s104 * ((-5.265f * s85) + (s220 * s87) + (s222 * s88)))) + (s111 * ((-(s109 * s220)) + (-(s110 * s222))))))); /* f23 */
-                sens[12] = (-(s204 * ((-(s149 * s228)) + (s150 * s228) + (s155 * s227) + (s156 * s227)))); /* f25 */
-                st = fdi_gen_sens_finish(st, sens, 13U);
-            }
-#else
-            (void)sens;
-#endif
-        }
-    }
-    return st;
-}
-
 /* MSO2443: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
 static bool romo_gen_11_in_domain(const fdi_frame_t *in)
 {
     return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
-}
-
-/* MSO3805: B1 B2 B3 D.psidot K1 K2 D1 D2 W1.FL W4.FL W1.FS W2.FS W4.FS W1.Fx W2.Fx W4.Fx W1.Fy W2.Fy W4.Fy W1.dyn W2.dyn W1.D W2.D S3 S4 S5 S.omega2 S.omega4
- * residual B1; derivative causality for dpsidot, dvx, dvy, domega2; observer for omega1 (integrates W1.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 11 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- */
-static fdi_status_t romo_gen_12(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                                float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_svf_out_t o2 = {0.0f, 0.0f};
-    fdi_svf_out_t o3 = {0.0f, 0.0f};
-    fdi_svf_out_t o4 = {0.0f, 0.0f};
-    fdi_svf_out_t o5 = {0.0f, 0.0f};
-    fdi_svf_out_t o6 = {0.0f, 0.0f};
-    fdi_svf_out_t o7 = {0.0f, 0.0f};
-    fdi_svf_out_t o8 = {0.0f, 0.0f};
-    fdi_svf_out_t o9 = {0.0f, 0.0f};
-    fdi_svf_out_t o10 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[ROMO_SIG_PSIDOT_M], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[ROMO_SIG_VX_M], reset, &o1));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->value[ROMO_SIG_VY_M], reset, &o2));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->value[ROMO_SIG_DELTA1_M], reset, &o3));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, in->value[ROMO_SIG_DELTA2_M], reset, &o4));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, in->value[ROMO_SIG_DELTA4_M], reset, &o5));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, in->value[ROMO_SIG_ITM1_M], reset, &o6));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 7U, in->value[ROMO_SIG_ITM2_M], reset, &o7));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 8U, in->value[ROMO_SIG_P_F_M], reset, &o8));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 9U, in->value[ROMO_SIG_OMEGA2_M], reset, &o9));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 10U, in->value[ROMO_SIG_OMEGA4_M], reset, &o10));
-    {
-        const float t0 = (-1.7777778f * o6.y);
-        const float t2 = (0.00010666667f * o8.y);
-        const float t3 = (147.63007f * o0.dy);
-        const float t4 = (180.34483f * o2.dy);
-        const float t5 = ((0.3f * o0.y) + o1.y);
-        const float t6 = (180.34483f * o0.y * t5);
-        const float t7 = (109.04921f * o1.dy);
-        const float t8 = (-o2.y);
-        const float t9 = (o0.y * ((-1.0f * o0.y) + (-t8)));
-        const float t10 = (109.04921f * t9);
-        const float t11 = (2565.315f + t10 + (-t7));
-        const float t12 = (t11 + t3 + (-t4) + (-t6));
-        const float t13 = cosf(o3.y);
-        const float t14 = ((0.199f * o0.y) + o2.y);
-        const float t15 = sinf(o3.y);
-        const float t16 = ((0.425f * o0.y) + (-o1.y));
-        const float t17 = ((t13 * t14) + (t15 * t16));
-        const float t18 = (t17 * t17);
-        const float t20 = (t14 * t15);
-        const float t21 = fabsf(((-t20) + (t13 * t16)));
-        const float t25 = (-(t13 * t16));
-        const float t26 = (t20 + t25);
-        const float t35 = (1.5795f * t12);
-        const float t37 = (-fmaxf(0.5f, t21));
-        const float t40 = ((0.54f * t20) + (0.54f * t25));
-        const float t41 = (102.6675f * t18);
-        const float t47 = (17.414442f * t15);
-        const float t48 = (17.414442f * t12 * t13 * t17);
-        const float t51 = cosf(o4.y);
-        const float t52 = ((5.9259257f * o7.y) + (-3.3333333f * o9.dy) + (-0.00035555556f * o8.y * tanhf((2.0f * o9.y))));
-        const float t53 = sinf(o4.y);
-        const float t54 = ((1.025f * o0.y) + o1.y);
-        const float t55 = (-t54);
-        const float t56 = ((t14 * t51) + (t53 * t55));
-        const float t57 = ((t14 * t53) + (t51 * t54));
-        const float t58 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o9.y)), fabsf(t57)));
-        const float t59 = (380.25f * (1.0f / (t58 * t58)));
-        const float t60 = (1.0f / sqrtf((1.0f + ((t56 * t56) * t59) + (t59 * (((0.27f * o9.y) + (-t57)) * ((0.27f * o9.y) + (-t57)))))));
-        const float t61 = (1.0f / (t58));
-        const float t62 = (t4 + t6);
-        const float t63 = ((-213.05959f * o0.dy) + t11 + t62);
-        const float t64 = sinf(o5.y);
-        const float t65 = cosf(o5.y);
-        const float t66 = ((2.199f * o0.y) + t8);
-        const float t67 = (-t66);
-        const float t68 = ((t55 * t64) + (t65 * t67));
-        const float t69 = (t54 * t65);
-        const float t70 = fmaxf(0.5f, fmaxf((0.27f * fabsf(o10.y)), fabsf(((-t69) + (t64 * t66)))));
-        const float t71 = (380.25f * (1.0f / (t70 * t70)));
-        const float t72 = ((0.27f * o10.y) + (-t69) + (-(t64 * t67)));
-        const float t73 = (39.0f * (1.0f / (t70)) * (1.0f / sqrtf((1.0f + ((t68 * t68) * t71) + (t71 * (t72 * t72))))) * (2565.315f + (-t10) + (-t3) + t62 + t7));
-        const float t74 = ((-142.5531f * o0.dy) + (1046.0f * t9) + (-1046.0f * o1.dy) + (-1729.8676f * o2.dy) + (-1729.8676f * o0.y * t5) + (2.0f * t51 * t52) + (3.3075862f * t52 * t53) + (t64 * t68 * t73) + (t65 * t72 * t73) + (-64.49793f * t51 * t56 * t60 * t61 * t63) + (39.0f * t53 * t56 * t60 * t61 * t63));
-        float xh = 0.0f;
-        if (reset)
-        {
-            const float x0 = in->value[ROMO_SIG_OMEGA1_M]; /* omega1 from its sensor outside the MSO set */
-            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;
-        }
-        else
-        {
-            const float xp = g->obs.xh;
-            const float t1 = tanhf((2.0f * xp));
-            const float t19 = (0.27f * fabsf(xp));
-            const float t22 = fmaxf(0.5f, fmaxf(t19, t21));
-            const float t23 = (1.0f / (t22 * t22));
-            const float t24 = (380.25f * t23);
-            const float t27 = ((-t26) + (0.27f * xp));
-            const float t28 = (t27 * t27);
-            const float t29 = (1.0f + (t18 * t24) + (t24 * t28));
-            const float t30 = (1.0f / sqrtf(t29));
-            const float t31 = (1.0f / (t22));
-            const float t32 = (t30 * t31);
-            const float t33 = (t12 * t32);
-            const float t34 = (5.85f * t27);
-            const float t36 = fdi_gen_sign(xp);
-            const float t38 = fdi_gen_heaviside((t19 + t37));
-            const float t39 = powf(t29, -1.5f);
-            const float t42 = (t36 * t38);
-            const float t43 = ((1.0f / (t22 * t22 * t22)) * t42);
-            const float t44 = ((-190.125f * t23 * ((-t40) + (0.1458f * xp))) + (102.6675f * t28 * t43) + (t41 * t43));
-            const float t45 = (t12 * t31 * t39 * t44);
-            const float t46 = ((t2 * (2.0f + (-2.0f * (t1 * t1)))) + (t32 * t35) + (t34 * t45) + (-1.5795f * t12 * t23 * t27 * t30 * t36 * t38));
-            const float t49 = (t15 * t27);
-            const float t50 = ((-(t33 * t47)) + (-64.49793f * t45 * t49) + (-(t23 * t30 * t42 * t48)) + (64.49793f * t12 * t13 * t17 * t31 * t39 * t44) + (17.414442f * t12 * t15 * t23 * t27 * t30 * t36 * t38));
-            const float f = ((-t0) + (-(t1 * t2)) + (-(t33 * t34)));
-            const float l = (-(t50 * (1.0f / ((34.5744f + (t50 * t50)))) * fmaxf(0.0f, (12.566371f + (-t46)))));
-            const float a = (-t46);
-            const float c = t50;
-            const float e = ((-t74) + (-64.49793f * t33 * t49) + (64.49793f * t12 * t13 * t17 * t30 * t31));
-            xh = fdi_gen_obs_predict(g, par, f + (l * e), a + (l * c));
-        }
-        {
-            const float t75 = tanhf((2.0f * xh));
-            const float t76 = (0.27f * fabsf(xh));
-            const float t77 = fmaxf(0.5f, fmaxf(t21, t76));
-            const float t78 = (1.0f / (t77 * t77));
-            const float t79 = (380.25f * t78);
-            const float t80 = ((-t26) + (0.27f * xh));
-            const float t81 = (t80 * t80);
-            const float t82 = (1.0f + (t18 * t79) + (t79 * t81));
-            const float t83 = (1.0f / sqrtf(t82));
-            const float t84 = (1.0f / (t77));
-            const float t85 = (t83 * t84);
-            const float t86 = (t12 * t85);
-            const float t87 = (5.85f * t80);
-            const float t88 = fdi_gen_sign(xh);
-            const float t89 = fdi_gen_heaviside((t37 + t76));
-            const float t90 = powf(t82, -1.5f);
-            const float t91 = (t88 * t89);
-            const float t92 = ((1.0f / (t77 * t77 * t77)) * t91);
-            const float t93 = ((t41 * t92) + (-190.125f * t78 * ((-t40) + (0.1458f * xh))) + (102.6675f * t81 * t92));
-            const float t94 = (t12 * t84 * t90 * t93);
-            const float t95 = (t15 * t80);
-            const float t96 = ((-(t47 * t86)) + (-64.49793f * t94 * t95) + (-(t48 * t78 * t83 * t91)) + (64.49793f * t12 * t13 * t17 * t84 * t90 * t93) + (17.414442f * t12 * t15 * t78 * t80 * t83 * t88 * t89));
-            const float f = ((-t0) + (-(t2 * t75)) + (-(t86 * t87)));
-            const float l = (-(t96 * (1.0f / ((34.5744f + (t96 * t96)))) * fmaxf(0.0f, (12.566371f + (-(t2 * (2.0f + (-2.0f * (t75 * t75))))) + (-(t35 * t85)) + (-(t87 * t94)) + (1.5795f * t12 * t78 * t80 * t83 * t88 * t89)))));
-            const float value = ((-t74) + (-64.49793f * t86 * t95) + (64.49793f * t12 * t13 * t17 * t83 * t84));
-            st = fdi_gen_status_worst(st, fdi_gen_obs_store(g, xh, f + (l * value)));
-            st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-            if (sens != NULL) /* d r / d f: f3 f4 f5 f6 f7 f9 f10 f11 f14 f15 f18 f19 f21 f23 f25 */
-            {
-                const float s0 = (109.04921f * o1.dy);
-                const float s1 = (-o2.y);
-                const float s2 = (109.04921f * o0.y * ((-1.0f * o0.y) + (-s1)));
-                const float s3 = (-s2);
-                const float s4 = (2565.315f + (-s0) + (-s3) + t3 + (-180.34483f * o2.dy) + (-180.34483f * o0.y * t5));
-                const float s5 = fabsf(t26);
-                const float s6 = fmaxf(0.5f, fmaxf(s5, t76));
-                const float s7 = (1.0f / (s6 * s6));
-                const float s8 = (380.25f * s7);
-                const float s9 = (t14 * t15);
-                const float s10 = ((-0.425f * o0.y) + o1.y);
-                const float s11 = (s10 * t13);
-                const float s12 = ((-s11) + (-s9) + (0.27f * xh));
-                const float s13 = (s12 * s12);
-                const float s14 = (1.0f + (s13 * s8) + (s8 * t18));
-                const float s15 = (1.0f / sqrtf(s14));
-                const float s16 = (1.0f / (s6));
-                const float s17 = (s15 * s16);
-                const float s18 = (s17 * s4);
-                const float s19 = fdi_gen_heaviside((t76 + (-fmaxf(0.5f, s5))));
-                const float s20 = (1.0f / (s6 * s6 * s6));
-                const float s21 = (s20 * t18);
-                const float s22 = (s19 * t88);
-                const float s23 = (102.6675f * s22);
-                const float s24 = (190.125f * s7);
-                const float s25 = (s13 * s20);
-                const float s26 = ((s21 * s23) + (s23 * s25) + (-(s24 * ((-0.54f * s11) + (-0.54f * s9) + (0.1458f * xh)))));
-                const float s27 = (5.85f * s12);
-                const float s28 = (s27 * s4);
-                const float s29 = powf(s14, -1.5f);
-                const float s30 = (s16 * s29);
-                const float s31 = (s28 * s30);
-                const float s32 = ((1.5795f * s18) + (0.00010666667f * o8.y * (2.0f + (-2.0f * (t75 * t75)))) + (s26 * s31) + (-1.5795f * s12 * s15 * s19 * s4 * s7 * t88));
-                const float s33 = (s18 * t15);
-                const float s34 = (s15 * s7);
-                const float s35 = (s34 * s4);
-                const float s36 = (s22 * s35);
-                const float s37 = (t13 * t17);
-                const float s38 = (s30 * s4);
-                const float s39 = (s26 * s38);
-                const float s40 = (s12 * t15);
-                const float s41 = (s39 * s40);
-                const float s42 = ((-17.414442f * s33) + (-64.49793f * s41) + (-17.414442f * s36 * s37) + (64.49793f * s16 * s26 * s29 * s4 * t13 * t17) + (17.414442f * s12 * s15 * s19 * s4 * s7 * t15 * t88));
-                const float s43 = (s42 * s42);
-                const float s44 = (1.0f / (fminf(-0.1f, ((-s32) + (-(s43 * (1.0f / ((34.5744f + s43))) * fmaxf(0.0f, (12.566371f + (-s32)))))))));
-                const float s45 = (180.34483f * o1.y);
-                const float s46 = (109.04921f * o2.y);
-                const float s47 = ((326.3053f * o0.y) + s45 + (-s46));
-                const float s48 = (s17 * s47);
-                const float s49 = ((-0.425f * t13) + (0.199f * t15));
-                const float s50 = (s18 * s49);
-                const float s51 = (t13 * t16);
-                const float s52 = (s51 + (-s9));
-                const float s53 = fdi_gen_sign(s52);
-                const float s54 = fdi_gen_heaviside((s5 + (-fmaxf(0.5f, t76))));
-                const float s55 = (s24 * t17);
-                const float s56 = (s12 * s24);
-                const float s57 = ((-(s55 * ((-0.398f * t13) + (-0.85f * t15)))) + (-(s56 * ((-0.85f * t13) + (0.398f * t15)))) + (380.25f * s13 * s20 * s49 * s53 * s54) + (380.25f * s20 * s49 * s53 * s54 * t18));
-                const float s58 = (-s32);
-                const float s59 = (19.5f * s48);
-                const float s60 = (19.5f * s18);
-                const float s61 = (19.5f * s38);
-                const float s62 = (s57 * s61);
-                const float s63 = (3.3075862f * t13);
-                const float s64 = (s53 * s54);
-                const float s65 = (19.5f * s35);
-                const float s66 = (3.3075862f * t15);
-                const float s67 = (t14 * t51);
-                const float s68 = ((-1.025f * o0.y) + (-o1.y));
-                const float s69 = (s68 * t53);
-                const float s70 = (s67 + s69);
-                const float s71 = (t14 * t53);
-                const float s72 = (t51 * t54);
-                const float s73 = ((0.27f * o9.y) + (-s71) + (-s72));
-                const float s74 = (s73 * s73);
-                const float s75 = (1.0f / (t58 * t58));
-                const float s76 = (380.25f * s75);
-                const float s77 = (s70 * s70);
-                const float s78 = (1.0f + (s74 * s76) + (s76 * s77));
-                const float s79 = (1.0f / sqrtf(s78));
-                const float s80 = (s79 * t61);
-                const float s81 = (19.5f * s80);
-                const float s82 = (2565.315f + t4 + t6);
-                const float s83 = ((-213.05959f * o0.dy) + (-s0) + s2 + s82);
-                const float s84 = (s81 * s83);
-                const float s85 = ((1.025f * t51) + (0.199f * t53));
-                const float s86 = fabsf(t57);
-                const float s87 = (0.27f * fabsf(o9.y));
-                const float s88 = fdi_gen_heaviside((s86 + (-fmaxf(0.5f, s87))));
-                const float s89 = ((-0.199f * o0.y) + t8);
-                const float s90 = fdi_gen_sign(((s68 * t51) + (s89 * t53)));
-                const float s91 = (190.125f * s75);
-                const float s92 = (s73 * s91);
-                const float s93 = (s70 * s91);
-                const float s94 = (1.0f / (t58 * t58 * t58));
-                const float s95 = (s70 * s83);
-                const float s96 = (19.5f * s95);
-                const float s97 = (powf(s78, -1.5f) * s96 * t61);
-                const float s98 = ((-(s84 * ((-0.199f * t51) + (1.025f * t53)))) + (-(s97 * ((-(s92 * ((2.05f * t51) + (0.398f * t53)))) + (-(s93 * ((-0.398f * t51) + (2.05f * t53)))) + (380.25f * s74 * s85 * s88 * s90 * s94) + (380.25f * s77 * s85 * s88 * s90 * s94)))) + (-(s70 * s81 * ((109.89152f * o0.y) + (-s45) + (-s46)))) + (19.5f * s70 * s75 * s79 * s83 * s85 * s88 * s90));
-                const float s99 = (3.3075862f * t51);
-                const float s100 = ((-2.199f * t64) + (1.025f * t65));
-                const float s101 = ((-147.63007f * o0.dy) + s3 + s82 + t7);
-                const float s102 = (1.0f / (t70));
-                const float s103 = (t54 * t65);
-                const float s104 = ((-2.199f * o0.y) + (-s1));
-                const float s105 = (s104 * t64);
-                const float s106 = ((0.27f * o10.y) + (-s103) + (-s105));
-                const float s107 = (s106 * s106);
-                const float s108 = (1.0f / (t70 * t70));
-                const float s109 = (380.25f * s108);
-                const float s110 = (s104 * t65);
-                const float s111 = (s110 + (s68 * t64));
-                const float s112 = (s111 * s111);
-                const float s113 = (1.0f + (s107 * s109) + (s109 * s112));
-                const float s114 = (1.0f / sqrtf(s113));
-                const float s115 = (s102 * s114);
-                const float s116 = (s101 * s115);
-                const float s117 = (19.5f * s116);
-                const float s118 = (-19.5f * s47);
-                const float s119 = (s106 * s115);
-                const float s120 = (s101 * s106);
-                const float s121 = (19.5f * s120);
-                const float s122 = (0.27f * fabsf(o10.y));
-                const float s123 = fabsf(((-t69) + (t64 * t66)));
-                const float s124 = fdi_gen_heaviside((s123 + (-fmaxf(0.5f, s122))));
-                const float s125 = ((-s105) + (s68 * t65));
-                const float s126 = fdi_gen_sign(s125);
-                const float s127 = (s124 * s126);
-                const float s128 = (s108 * s114);
-                const float s129 = (s127 * s128);
-                const float s130 = (190.125f * s108);
-                const float s131 = (s106 * s130);
-                const float s132 = (s111 * s130);
-                const float s133 = (1.0f / (t70 * t70 * t70));
-                const float s134 = powf(s113, -1.5f);
-                const float s135 = (s102 * s134);
-                const float s136 = (s135 * ((-(s131 * ((-4.398f * t64) + (2.05f * t65)))) + (-(s132 * ((2.05f * t64) + (4.398f * t65)))) + (380.25f * s100 * s107 * s124 * s126 * s133) + (380.25f * s100 * s112 * s124 * s126 * s133)));
-                const float s137 = (2.0f * t65);
-                const float s138 = (s111 * s115);
-                const float s139 = (s101 * s111);
-                const float s140 = (19.5f * s139);
-                const float s141 = (o0.y * s17);
-                const float s142 = (s12 * s141);
-                const float s143 = (5.85f * s18);
-                const float s144 = (s8 * t15);
-                const float s145 = (s8 * t13);
-                const float s146 = (380.25f * s64);
-                const float s147 = (s146 * t13);
-                const float s148 = ((-(s12 * s145)) + (-(s144 * t17)) + (s147 * s21) + (s147 * s25));
-                const float s149 = (s141 * t17);
-                const float s150 = (19.5f * s33);
-                const float s151 = (s148 * s61);
-                const float s152 = (s60 * t13);
-                const float s153 = (3516.724f * o0.y);
-                const float s154 = (s70 * s80);
-                const float s155 = (s88 * s90);
-                const float s156 = (s75 * s79);
-                const float s157 = (s155 * s156 * s96);
-                const float s158 = (s76 * t51);
-                const float s159 = (s76 * t53);
-                const float s160 = ((s153 * s154) + (s157 * t51) + (-(s84 * t53)) + (-(s97 * ((-(s158 * s73)) + (-(s159 * s70)) + (380.25f * s74 * s88 * s90 * s94 * t51) + (380.25f * s77 * s88 * s90 * s94 * t51)))));
-                const float s161 = (-19.5f * s101 * s102 * s114 * t65);
-                const float s162 = (s129 * t65);
-                const float s163 = (s106 * s109);
-                const float s164 = (s109 * s111);
-                const float s165 = ((-(s163 * t65)) + (-(s164 * t64)) + (380.25f * s107 * s124 * s126 * s133 * t65) + (380.25f * s112 * s124 * s126 * s133 * t65));
-                const float s166 = (s117 * t64);
-                const float s167 = (s146 * t15);
-                const float s168 = ((-(s12 * s144)) + (s145 * t17) + (s167 * s21) + (s167 * s25));
-                const float s169 = (s64 * s65);
-                const float s170 = (2126.4595f * o0.y);
-                const float s171 = (s74 * s94);
-                const float s172 = (380.25f * s155 * t53);
-                const float s173 = (s77 * s94);
-                const float s174 = ((s154 * s170) + (s157 * t53) + (s84 * t51) + (-(s97 * ((s158 * s70) + (-(s159 * s73)) + (s171 * s172) + (s172 * s173)))));
-                const float s175 = (s107 * s133);
-                const float s176 = (380.25f * s127 * t64);
-                const float s177 = (s112 * s133);
-                const float s178 = (s135 * ((-(s163 * t64)) + (s164 * t65) + (s175 * s176) + (s176 * s177)));
-                const float s179 = (t13 * t14);
-                const float s180 = ((-s179) + (s10 * t15));
-                const float s181 = ((-s179) + (-(t15 * t16)));
-                const float s182 = ((-(s55 * ((2.0f * s51) + (-2.0f * s9)))) + (-(s56 * ((-2.0f * s179) + (2.0f * s10 * t15)))) + (380.25f * s13 * s181 * s20 * s53 * s54) + (380.25f * s181 * s20 * s53 * s54 * t18));
-                const float s183 = (s182 * s61);
-                const float s184 = (s154 * s83);
-                const float s185 = ((-s69) + (s89 * t51));
-                const float s186 = ((-(s84 * ((-s71) + (s68 * t51)))) + (-(s97 * ((-(s92 * ((-2.0f * s67) + (2.0f * t53 * t54)))) + (-(s93 * ((-2.0f * s71) + (2.0f * s68 * t51)))) + (380.25f * s185 * s74 * s88 * s90 * s94) + (380.25f * s185 * s77 * s88 * s90 * s94)))) + (19.5f * s185 * s70 * s75 * s79 * s83 * s88 * s90));
-                const float s187 = (s44 * s58);
-                const float s188 = (39.0f * s116);
-                const float s189 = (t54 * t64);
-                const float s190 = (-s111);
-                const float s191 = (s135 * ((-(s131 * ((-2.0f * s110) + (2.0f * s189)))) + (-(s132 * ((-2.0f * s105) + (2.0f * s68 * t65)))) + (380.25f * s107 * s124 * s126 * s133 * s190) + (380.25f * s112 * s124 * s126 * s133 * s190)));
-                const float s192 = (2.0f * t64);
-                const float s193 = (s44 * ((-19.349379f * s33) + (-71.66437f * s41) + (-19.349379f * s36 * s37) + (71.66437f * s16 * s26 * s29 * s4 * t13 * t17) + (19.349379f * s12 * s15 * s19 * s4 * s7 * t15 * t88)));
-                const float s194 = (-(s187 * ((-7.4074073f * t51) + (-12.2503195f * t53))));
-                const float s195 = (5.2243323f * s36);
-                const float s196 = (o8.y * (2.0f + (-2.0f * (tanhf((2.0f * o9.y)) * tanhf((2.0f * o9.y))))));
-                const float s197 = (fdi_gen_heaviside((s87 + (-fmaxf(0.5f, s86)))) * fdi_gen_sign(o9.y));
-                const float s198 = (102.6675f * s197);
-                const float s199 = ((-(s97 * ((-(s171 * s198)) + (-(s173 * s198)) + (-(s91 * ((-0.1458f * o9.y) + (0.54f * s71) + (0.54f * s72))))))) + (-5.265f * s156 * s197 * s95));
-                const float s200 = (fdi_gen_heaviside((s122 + (-fmaxf(0.5f, s123)))) * fdi_gen_sign(o10.y));
-                const float s201 = (5.265f * s128 * s200);
-                const float s202 = (102.6675f * s200);
-                const float s203 = (s135 * ((-(s130 * ((-0.1458f * o10.y) + (0.54f * s103) + (0.54f * s105)))) + (-(s175 * s202)) + (-(s177 * s202))));
-                sens[0] = (s44 * ((s42 * ((-5.85f * s50) + (-(s27 * s48)) + (-(s31 * s57)) + (5.85f * s12 * s15 * s4 * s49 * s53 * s54 * s7))) + (-(s58 * ((-3129.9207f * o0.y) + (-1729.8676f * o1.y) + (1046.0f * o2.y) + (-(s137 * ((s100 * s117) + (s118 * s119) + (s121 * s136) + (-(s100 * s121 * s129))))) + (-(s63 * ((-(s59 * t17)) + (-(s60 * ((-0.199f * t13) + (-0.425f * t15)))) + (-(s62 * t17)) + (19.5f * s15 * s4 * s49 * s53 * s54 * s7 * t17)))) + (-(s66 * ((19.5f * s50) + (s12 * s59) + (s12 * s62) + (-(s12 * s49 * s64 * s65))))) + (-(s98 * s99)) + (2.0f * s98 * t53) + (2.0f * t64 * ((-(s117 * ((1.025f * t64) + (2.199f * t65)))) + (-(s118 * s138)) + (-(s136 * s140)) + (19.5f * s100 * s101 * s108 * s111 * s114 * s124 * s126)))))))); /* f3 */
-                sens[1] = (s44 * ((s42 * ((-1055.0172f * s142) + (-(s143 * t13)) + (-(s148 * s31)) + (5.85f * s12 * s15 * s4 * s53 * s54 * s7 * t13))) + (-(s58 * ((-1729.8676f * o0.y) + (-(s137 * ((-s161) + (-(s119 * s153)) + (-(s121 * s162)) + (19.5f * s101 * s102 * s106 * s134 * s165)))) + (-(s160 * s99)) + (2.0f * s160 * t53) + (-(s63 * ((-3516.724f * s149) + (-s150) + (-(s151 * t17)) + (19.5f * s15 * s4 * s53 * s54 * s7 * t13 * t17)))) + (-(s66 * ((3516.724f * s142) + s152 + (s12 * s151) + (-(s12 * s64 * s65 * t13))))) + (2.0f * t64 * ((-s166) + (s138 * s153) + (s140 * s162) + (-(s135 * s140 * s165))))))))); /* f4 */
-                sens[2] = (s44 * ((s42 * ((637.93787f * s142) + (-5.85f * s33) + (-(s168 * s31)) + (s28 * s34 * s64 * t15))) + (-(s58 * ((1046.0f * o0.y) + (-(s137 * (s166 + (s119 * s170) + (s121 * s178) + (-(s121 * s129 * t64))))) + (-(s174 * s99)) + (2.0f * s174 * t53) + (-(s63 * ((2126.4595f * s149) + s152 + (-(s168 * s61 * t17)) + (s169 * t15 * t17)))) + (-(s66 * ((-2126.4595f * s142) + s150 + (-(s169 * s40)) + (19.5f * s12 * s16 * s168 * s29 * s4)))) + (2.0f * t64 * ((-s161) + (-(s138 * s170)) + (-(s140 * s178)) + (19.5f * s101 * s108 * s111 * s114 * s124 * s126 * t64)))))))); /* f5 */
-                sens[3] = (s44 * ((s42 * ((-(s143 * s180)) + (-(s182 * s31)) + (5.85f * s12 * s15 * s181 * s4 * s53 * s54 * s7))) + (-(s58 * ((-64.49793f * s33 * t17) + (-(s63 * ((-(s183 * t17)) + (-(s52 * s60)) + (19.5f * s15 * s181 * s4 * s53 * s54 * s7 * t17)))) + (-(s66 * ((s12 * s183) + (s180 * s60) + (-(s12 * s169 * s181))))) + (-64.49793f * s12 * s18 * t13)))))); /* f6 */
-                sens[4] = (-(s187 * ((-39.0f * s184 * t51) + (-64.49793f * s184 * t53) + (-(s186 * s99)) + (2.0f * s186 * t53) + (-(s99 * t52)) + (2.0f * t52 * t53)))); /* f7 */
-                sens[5] = (-(s187 * ((-(s137 * ((s117 * ((-s110) + s189)) + (s121 * s191) + (-(s121 * s129 * s190))))) + (s192 * ((-(s117 * s125)) + (-(s140 * s191)) + (19.5f * s101 * s108 * s111 * s114 * s124 * s126 * s190))) + (s106 * s188 * t64) + (-(s111 * s188 * t65))))); /* f9 */
-                sens[6] = s193; /* f10 */
-                sens[7] = s194; /* f11 */
-                sens[8] = s193; /* f14 */
-                sens[9] = s194; /* f15 */
-                sens[10] = (s44 * ((5.2243323f * s33) + (19.349379f * s41) + (s195 * s37) + (-(s195 * s40)) + (-(s58 * ((-s63) + (-s66)))) + (-19.349379f * s39 * t13 * t17))); /* f18 */
-                sens[11] = (-(s187 * ((-s99) + (2.0f * t53)))); /* f19 */
-                sens[12] = (-(s187 * ((-s137) + s192))); /* f21 */
-                sens[13] = (-(s187 * ((-0.0007111111f * s196 * t51) + (-0.0011760306f * s196 * t53) + (-(s199 * s99)) + (2.0f * s199 * t53)))); /* f23 */
-                sens[14] = (-(s187 * ((-(s137 * ((-5.265f * s116) + (s120 * s201) + (s121 * s203)))) + (s192 * ((-(s139 * s201)) + (-(s140 * s203))))))); /* f25 */
-                st = fdi_gen_sens_finish(st, sens, 15U);
-            }
-#else
-            (void)sens;
-#endif
-        }
-    }
-    return st;
 }
 
 /* MSO3805: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
@@ -3016,450 +97,3195 @@ static bool romo_gen_12_in_domain(const fdi_frame_t *in)
     return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
 }
 
-/* MSO4195: B1 B2 B3 D.psidot K1 K2 D1 D2 W3.FL W2.FS W3.FS W4.FS W2.Fx W3.Fx W4.Fx W2.Fy W3.Fy W4.Fy W2.dyn W4.dyn W2.D W4.D S2 S3 S4 S.omega2 S.omega3 S.omega4
- * residual B1; derivative causality for dpsidot, dvx, domega2, domega4; observer for vy (integrates D2, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 13 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- */
-static fdi_status_t romo_gen_13(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                                float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_svf_out_t o2 = {0.0f, 0.0f};
-    fdi_svf_out_t o3 = {0.0f, 0.0f};
-    fdi_svf_out_t o4 = {0.0f, 0.0f};
-    fdi_svf_out_t o5 = {0.0f, 0.0f};
-    fdi_svf_out_t o6 = {0.0f, 0.0f};
-    fdi_svf_out_t o7 = {0.0f, 0.0f};
-    fdi_svf_out_t o8 = {0.0f, 0.0f};
-    fdi_svf_out_t o9 = {0.0f, 0.0f};
-    fdi_svf_out_t o10 = {0.0f, 0.0f};
-    fdi_svf_out_t o11 = {0.0f, 0.0f};
-    fdi_svf_out_t o12 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[ROMO_SIG_AY_M], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[ROMO_SIG_PSIDOT_M], reset, &o1));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->value[ROMO_SIG_VX_M], reset, &o2));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->value[ROMO_SIG_DELTA2_M], reset, &o3));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 4U, in->value[ROMO_SIG_DELTA3_M], reset, &o4));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 5U, in->value[ROMO_SIG_DELTA4_M], reset, &o5));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 6U, in->value[ROMO_SIG_ITM2_M], reset, &o6));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 7U, in->value[ROMO_SIG_ITM4_M], reset, &o7));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 8U, in->value[ROMO_SIG_P_F_M], reset, &o8));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 9U, in->value[ROMO_SIG_P_R_M], reset, &o9));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 10U, in->value[ROMO_SIG_OMEGA2_M], reset, &o10));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 11U, in->value[ROMO_SIG_OMEGA3_M], reset, &o11));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 12U, in->value[ROMO_SIG_OMEGA4_M], reset, &o12));
-    {
-        const float t0 = (o0.y + (-(o1.y * ((0.3f * o1.y) + o2.y))));
-        const float t1 = (13144.424f * o1.y);
-        const float t2 = (0.27f * fabsf(o10.y));
-        const float t3 = cosf(o3.y);
-        const float t4 = ((1.025f * o1.y) + o2.y);
-        const float t5 = (t3 * t4);
-        const float t6 = sinf(o3.y);
-        const float t7 = (1.199f * o1.y);
-        const float t13 = (-t4);
-        const float t14 = (t13 * t6);
-        const float t19 = (-0.27f * o10.y);
-        const float t24 = (109.04921f * o1.y);
-        const float t26 = (180.34483f * o0.y);
-        const float t27 = (32.714764f * o1.dy);
-        const float t28 = (109.04921f * o2.dy);
-        const float t29 = (2565.315f + t26 + (-t27) + (-t28));
-        const float t33 = (t3 * t6);
-        const float t34 = (490.08844f * t33);
-        const float t38 = (53443.758f * o1.y);
-        const float t39 = (2565.315f + t27 + t28);
-        const float t42 = cosf(o5.y);
-        const float t45 = sinf(o5.y);
-        const float t46 = (t13 * t45);
-        const float t49 = (0.27f * fabsf(o12.y));
-        const float t50 = (t4 * t42);
-        const float t56 = ((-0.27f * o12.y) + t50);
-        const float t64 = (t42 * t42);
-        const float t65 = (810.5049f * t64);
-        const float t66 = (t42 * t45);
-        const float t67 = (490.08844f * t66);
-        const float t68 = sinf(o4.y);
-        const float t69 = (t68 * t68);
-        const float t70 = (-t26);
-        const float t72 = cosf(o4.y);
-        const float t73 = ((0.425f * o1.y) + (-o2.y));
-        const float t74 = (t68 * t73);
-        const float t77 = (0.27f * fabsf(o11.y));
-        const float t78 = (t72 * t73);
-        const float t84 = ((-0.27f * o11.y) + (-(t72 * t73)));
-        const float t93 = (t72 * t72);
-        const float t94 = (810.5049f * t93);
-        const float t97 = (88384.914f * o1.y);
-        const float t101 = (-fmaxf(0.5f, t2));
-        const float t105 = (t6 * t6);
-        const float t106 = (490.08844f * t105);
-        const float t108 = (t45 * t45);
-        const float t109 = (-fmaxf(0.5f, t49));
-        const float t116 = (-fmaxf(0.5f, t77));
-        const float t123 = (380.25f * t6);
-        const float t126 = (380.25f * t45);
-        const float t132 = (380.25f * t68);
-        const float t137 = (1046.0f * o1.y);
-        const float t138 = (39.0f * t33);
-        const float t139 = (4252.919f * o1.y);
-        const float t140 = (64.49793f * t64);
-        const float t142 = (64.49793f * t93);
-        const float t143 = (7033.448f * o1.y);
-        const float t147 = ((5.9259257f * o7.y) + (-3.3333333f * o12.dy) + (-0.00035555556f * o9.y * tanhf((2.0f * o12.y))));
-        const float t148 = ((1729.8676f * o0.y) + (-1872.4207f * o1.dy) + (-1046.0f * o2.dy) + (2.0f * t147 * t42) + (-3.3075862f * t147 * t45) + (2.0f * t3 * ((5.9259257f * o6.y) + (-3.3333333f * o10.dy) + (-0.00035555556f * o8.y * tanhf((2.0f * o10.y))))));
-        float xh = 0.0f;
-        if (reset)
-        {
-            const float x0 = ((-1.0f * in->value[ROMO_SIG_PSIDOT_M]) + in->value[ROMO_SIG_VY_M]); /* vy from its sensor outside the MSO set */
-            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;
-        }
-        else
-        {
-            const float xp = g->obs.xh;
-            const float t8 = (t7 + xp);
-            const float t9 = (t5 + (t6 * t8));
-            const float t10 = fabsf(t9);
-            const float t11 = fmaxf(0.5f, fmaxf(t10, t2));
-            const float t12 = (1.0f / (t11));
-            const float t15 = (t14 + (t3 * t8));
-            const float t16 = (t15 * t15);
-            const float t17 = (1.0f / (t11 * t11));
-            const float t18 = (380.25f * t17);
-            const float t20 = ((-t19) + (-t9));
-            const float t21 = (t20 * t20);
-            const float t22 = (1.0f + (t16 * t18) + (t18 * t21));
-            const float t23 = (1.0f / sqrtf(t22));
-            const float t25 = (t24 * xp);
-            const float t30 = (t25 + t29);
-            const float t31 = (t23 * t30);
-            const float t32 = (t12 * t31);
-            const float t35 = (t15 * t6);
-            const float t36 = (t12 * t35);
-            const float t37 = (t23 * t36);
-            const float t40 = ((-t25) + t39);
-            const float t41 = (t26 + t40);
-            const float t43 = (t7 + (-xp));
-            const float t44 = (-t43);
-            const float t47 = (t46 + (t42 * t44));
-            const float t48 = (t47 * t47);
-            const float t51 = (t50 + (-(t43 * t45)));
-            const float t52 = fabsf(t51);
-            const float t53 = fmaxf(0.5f, fmaxf(t49, t52));
-            const float t54 = (1.0f / (t53 * t53));
-            const float t55 = (380.25f * t54);
-            const float t57 = ((-t56) + (-(t44 * t45)));
-            const float t58 = (t57 * t57);
-            const float t59 = (1.0f + (t48 * t55) + (t55 * t58));
-            const float t60 = (1.0f / sqrtf(t59));
-            const float t61 = (1.0f / (t53));
-            const float t62 = (t60 * t61);
-            const float t63 = (t41 * t62);
-            const float t71 = (t40 + t70);
-            const float t75 = (t74 + (t44 * t72));
-            const float t76 = (t75 * t75);
-            const float t79 = (t78 + (t43 * t68));
-            const float t80 = fabsf(t79);
-            const float t81 = fmaxf(0.5f, fmaxf(t77, t80));
-            const float t82 = (1.0f / (t81 * t81));
-            const float t83 = (380.25f * t82);
-            const float t85 = ((-t84) + (-(t44 * t68)));
-            const float t86 = (t85 * t85);
-            const float t87 = (1.0f + (t76 * t83) + (t83 * t86));
-            const float t88 = (1.0f / sqrtf(t87));
-            const float t89 = (1.0f / (t81));
-            const float t90 = (t88 * t89);
-            const float t91 = (t71 * t90);
-            const float t92 = (t69 * t91);
-            const float t95 = (t45 * t47);
-            const float t96 = (t42 * t47);
-            const float t98 = (t72 * t75);
-            const float t99 = (t90 * t97);
-            const float t100 = (t68 * t85);
-            const float t102 = fdi_gen_heaviside((t10 + t101));
-            const float t103 = fdi_gen_sign(t9);
-            const float t104 = (t102 * t103);
-            const float t107 = (490.08844f * t41);
-            const float t110 = fdi_gen_heaviside((t109 + t52));
-            const float t111 = fdi_gen_sign(t51);
-            const float t112 = (t110 * t111);
-            const float t113 = (t112 * t54 * t60);
-            const float t114 = (810.5049f * t96);
-            const float t115 = (810.5049f * t71);
-            const float t117 = fdi_gen_heaviside((t116 + t80));
-            const float t118 = fdi_gen_sign(t79);
-            const float t119 = (t117 * t118);
-            const float t120 = (t119 * t82 * t88);
-            const float t121 = (t115 * t120);
-            const float t122 = (t68 * t98);
-            const float t124 = (t104 * (1.0f / (t11 * t11 * t11)) * t123);
-            const float t125 = (powf(t22, -1.5f) * t30 * t36 * ((t124 * t16) + (t124 * t21) + (-(t15 * t18 * t3)) + (t18 * t20 * t6)));
-            const float t127 = (t112 * t126 * (1.0f / (t53 * t53 * t53)));
-            const float t128 = (powf(t59, -1.5f) * t61 * ((t127 * t48) + (t127 * t58) + (-(t55 * t96)) + (t45 * t55 * t57)));
-            const float t129 = (t128 * t95);
-            const float t130 = (t128 * t41);
-            const float t131 = powf(t87, -1.5f);
-            const float t133 = (t119 * t132 * (1.0f / (t81 * t81 * t81)));
-            const float t134 = ((-(t133 * t76)) + (-(t133 * t86)) + (-(t83 * t98)) + (380.25f * t68 * t82 * t85));
-            const float t135 = (t131 * t134 * t89);
-            const float t136 = (t115 * t135);
-            const float t141 = (39.0f * t63);
-            const float t144 = (64.49793f * t71);
-            const float t145 = (64.49793f * t96);
-            const float t146 = ((-39.0f * t125) + (-t137) + (-64.49793f * t92) + (-39.0f * t129 * t41) + (-(t130 * t145)) + (-(t138 * t32)) + (-(t139 * t37)) + (-(t140 * t63)) + (-(t141 * t66)) + (-(t142 * t91)) + (-(t100 * t143 * t90)) + (-(t120 * t122 * t144)) + (-(t135 * t144 * t98)) + (7033.448f * o1.y * t42 * t47 * t60 * t61) + (4252.919f * o1.y * t45 * t47 * t60 * t61) + (7033.448f * o1.y * t72 * t75 * t88 * t89) + (64.49793f * t131 * t134 * t68 * t71 * t85 * t89) + (39.0f * t102 * t103 * t105 * t15 * t17 * t23 * t30) + (39.0f * t108 * t110 * t111 * t41 * t47 * t54 * t60) + (64.49793f * t117 * t118 * t69 * t71 * t82 * t85 * t88) + (64.49793f * t110 * t111 * t41 * t42 * t45 * t47 * t54 * t60));
-            const float f = t0;
-            const float l = ((1.0f / ((5522500.0f + (t146 * t146)))) * (t1 + (490.08844f * t125) + (810.5049f * t92) + (-(t100 * t136)) + (t100 * t99) + (t107 * t129) + (t114 * t130) + (t121 * t122) + (t136 * t98) + (t32 * t34) + (t37 * t38) + (t63 * t65) + (t63 * t67) + (t91 * t94) + (-(t98 * t99)) + (-(t121 * t69 * t85)) + (-(t38 * t62 * t95)) + (-(t62 * t96 * t97)) + (-(t107 * t108 * t113 * t47)) + (-(t113 * t114 * t41 * t45)) + (-(t104 * t106 * t15 * t17 * t31))));
-            const float a = 0.0f;
-            const float c = t146;
-            const float e = ((-t148) + (-(t137 * xp)) + (-(t141 * t95)) + (-(t145 * t63)) + (-39.0f * t32 * t35) + (-64.49793f * t91 * t98) + (64.49793f * t68 * t71 * t85 * t88 * t89));
-            xh = fdi_gen_obs_predict(g, par, f + (l * e), a + (l * c));
-        }
-        {
-            const float t149 = (t24 * xh);
-            const float t150 = (t149 + t29);
-            const float t151 = (t7 + xh);
-            const float t152 = (t14 + (t151 * t3));
-            const float t153 = (t152 * t152);
-            const float t154 = (t5 + (t151 * t6));
-            const float t155 = fabsf(t154);
-            const float t156 = fmaxf(0.5f, fmaxf(t155, t2));
-            const float t157 = (1.0f / (t156 * t156));
-            const float t158 = (380.25f * t157);
-            const float t159 = ((-t154) + (-t19));
-            const float t160 = (t159 * t159);
-            const float t161 = (1.0f + (t153 * t158) + (t158 * t160));
-            const float t162 = (1.0f / sqrtf(t161));
-            const float t163 = (1.0f / (t156));
-            const float t164 = (t162 * t163);
-            const float t165 = (t150 * t164);
-            const float t166 = (t152 * t6);
-            const float t167 = (t164 * t166);
-            const float t168 = ((-t149) + t39);
-            const float t169 = (t168 + t26);
-            const float t170 = (t7 + (-xh));
-            const float t171 = (-t170);
-            const float t172 = (t46 + (t171 * t42));
-            const float t173 = (t172 * t172);
-            const float t174 = (t50 + (-(t170 * t45)));
-            const float t175 = fabsf(t174);
-            const float t176 = fmaxf(0.5f, fmaxf(t175, t49));
-            const float t177 = (1.0f / (t176 * t176));
-            const float t178 = (380.25f * t177);
-            const float t179 = ((-t56) + (-(t171 * t45)));
-            const float t180 = (t179 * t179);
-            const float t181 = (1.0f + (t173 * t178) + (t178 * t180));
-            const float t182 = (1.0f / sqrtf(t181));
-            const float t183 = (1.0f / (t176));
-            const float t184 = (t182 * t183);
-            const float t185 = (t169 * t184);
-            const float t186 = (t168 + t70);
-            const float t187 = (t74 + (t171 * t72));
-            const float t188 = (t187 * t187);
-            const float t189 = (t78 + (t170 * t68));
-            const float t190 = fabsf(t189);
-            const float t191 = fmaxf(0.5f, fmaxf(t190, t77));
-            const float t192 = (1.0f / (t191 * t191));
-            const float t193 = (380.25f * t192);
-            const float t194 = ((-t84) + (-(t171 * t68)));
-            const float t195 = (t194 * t194);
-            const float t196 = (1.0f + (t188 * t193) + (t193 * t195));
-            const float t197 = (1.0f / sqrtf(t196));
-            const float t198 = (1.0f / (t191));
-            const float t199 = (t197 * t198);
-            const float t200 = (t186 * t199);
-            const float t201 = (t200 * t69);
-            const float t202 = (t172 * t45);
-            const float t203 = (t172 * t42);
-            const float t204 = (t187 * t72);
-            const float t205 = (t199 * t97);
-            const float t206 = (t194 * t68);
-            const float t207 = fdi_gen_heaviside((t101 + t155));
-            const float t208 = fdi_gen_sign(t154);
-            const float t209 = (t207 * t208);
-            const float t210 = (490.08844f * t169);
-            const float t211 = fdi_gen_heaviside((t109 + t175));
-            const float t212 = fdi_gen_sign(t174);
-            const float t213 = (t211 * t212);
-            const float t214 = (t177 * t182 * t213);
-            const float t215 = (810.5049f * t203);
-            const float t216 = (810.5049f * t186);
-            const float t217 = fdi_gen_heaviside((t116 + t190));
-            const float t218 = fdi_gen_sign(t189);
-            const float t219 = (t217 * t218);
-            const float t220 = (t192 * t197 * t219);
-            const float t221 = (t216 * t220);
-            const float t222 = (t204 * t68);
-            const float t223 = (t123 * (1.0f / (t156 * t156 * t156)) * t209);
-            const float t224 = (t150 * powf(t161, -1.5f) * t163 * ((t153 * t223) + (t160 * t223) + (-(t152 * t158 * t3)) + (t158 * t159 * t6)));
-            const float t225 = (t126 * (1.0f / (t176 * t176 * t176)) * t213);
-            const float t226 = (powf(t181, -1.5f) * t183 * ((t173 * t225) + (-(t178 * t203)) + (t180 * t225) + (t178 * t179 * t45)));
-            const float t227 = (t202 * t226);
-            const float t228 = (t169 * t226);
-            const float t229 = powf(t196, -1.5f);
-            const float t230 = (t132 * (1.0f / (t191 * t191 * t191)) * t219);
-            const float t231 = ((-(t188 * t230)) + (-(t193 * t204)) + (-(t195 * t230)) + (380.25f * t192 * t194 * t68));
-            const float t232 = (t198 * t229 * t231);
-            const float t233 = (t216 * t232);
-            const float t234 = (39.0f * t185);
-            const float t235 = (64.49793f * t186);
-            const float t236 = (39.0f * t166);
-            const float t237 = (64.49793f * t203);
-            const float f = t0;
-            const float l = ((1.0f / ((5522500.0f + (((-t137) + (-64.49793f * t201) + (-(t138 * t165)) + (-(t139 * t167)) + (-(t140 * t185)) + (-(t142 * t200)) + (-39.0f * t169 * t227) + (-(t224 * t236)) + (-(t228 * t237)) + (-(t234 * t66)) + (-(t143 * t199 * t206)) + (-(t204 * t232 * t235)) + (-(t220 * t222 * t235)) + (7033.448f * o1.y * t172 * t182 * t183 * t42) + (4252.919f * o1.y * t172 * t182 * t183 * t45) + (7033.448f * o1.y * t187 * t197 * t198 * t72) + (64.49793f * t186 * t194 * t198 * t229 * t231 * t68) + (39.0f * t105 * t150 * t152 * t157 * t162 * t207 * t208) + (39.0f * t108 * t169 * t172 * t177 * t182 * t211 * t212) + (64.49793f * t186 * t192 * t194 * t197 * t217 * t218 * t69) + (64.49793f * t169 * t172 * t177 * t182 * t211 * t212 * t42 * t45)) * ((-t137) + (-64.49793f * t201) + (-(t138 * t165)) + (-(t139 * t167)) + (-(t140 * t185)) + (-(t142 * t200)) + (-39.0f * t169 * t227) + (-(t224 * t236)) + (-(t228 * t237)) + (-(t234 * t66)) + (-(t143 * t199 * t206)) + (-(t204 * t232 * t235)) + (-(t220 * t222 * t235)) + (7033.448f * o1.y * t172 * t182 * t183 * t42) + (4252.919f * o1.y * t172 * t182 * t183 * t45) + (7033.448f * o1.y * t187 * t197 * t198 * t72) + (64.49793f * t186 * t194 * t198 * t229 * t231 * t68) + (39.0f * t105 * t150 * t152 * t157 * t162 * t207 * t208) + (39.0f * t108 * t169 * t172 * t177 * t182 * t211 * t212) + (64.49793f * t186 * t192 * t194 * t197 * t217 * t218 * t69) + (64.49793f * t169 * t172 * t177 * t182 * t211 * t212 * t42 * t45)))))) * (t1 + (810.5049f * t201) + (t165 * t34) + (490.08844f * t166 * t224) + (t167 * t38) + (t185 * t65) + (t185 * t67) + (t200 * t94) + (-(t204 * t205)) + (t204 * t233) + (t205 * t206) + (-(t206 * t233)) + (t210 * t227) + (t215 * t228) + (t221 * t222) + (-(t184 * t202 * t38)) + (-(t184 * t203 * t97)) + (-(t194 * t221 * t69)) + (-(t108 * t172 * t210 * t214)) + (-(t169 * t214 * t215 * t45)) + (-(t106 * t150 * t152 * t157 * t162 * t209))));
-            const float value = ((-t148) + (-(t137 * xh)) + (-(t165 * t236)) + (-(t185 * t237)) + (-64.49793f * t200 * t204) + (-(t202 * t234)) + (64.49793f * t186 * t194 * t197 * t198 * t68));
-            st = fdi_gen_status_worst(st, fdi_gen_obs_store(g, xh, f + (l * value)));
-            st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-            if (sens != NULL) /* d r / d f: f2 f3 f4 f7 f8 f9 f11 f13 f15 f17 f19 f20 f21 f23 f24 f25 */
-            {
-                const float s0 = (2565.315f + t26);
-                const float s1 = (109.04921f * o1.y * xh);
-                const float s2 = ((-s1) + t27 + t28);
-                const float s3 = (s0 + s2);
-                const float s4 = ((-1.199f * o1.y) + xh);
-                const float s5 = ((0.27f * o12.y) + (-(s4 * t45)) + (-(t4 * t42)));
-                const float s6 = (s5 * s5);
-                const float s7 = (380.25f * t177);
-                const float s8 = ((-1.025f * o1.y) + (-o2.y));
-                const float s9 = ((s4 * t42) + (s8 * t45));
-                const float s10 = (s9 * s9);
-                const float s11 = (1.0f + (s10 * s7) + (s6 * s7));
-                const float s12 = (1.0f / sqrtf(s11));
-                const float s13 = (s12 * t183);
-                const float s14 = (s13 * s3);
-                const float s15 = (s14 * t64);
-                const float s16 = (2565.315f + (-180.34483f * o0.y) + s2);
-                const float s17 = (t74 + (s4 * t72));
-                const float s18 = (s17 * s17);
-                const float s19 = (380.25f * t192);
-                const float s20 = ((0.27f * o11.y) + (-(s4 * t68)) + (-(t72 * ((-0.425f * o1.y) + o2.y))));
-                const float s21 = (s20 * s20);
-                const float s22 = (1.0f + (s18 * s19) + (s19 * s21));
-                const float s23 = (1.0f / sqrtf(s22));
-                const float s24 = (s23 * t198);
-                const float s25 = (s16 * s24);
-                const float s26 = (64.49793f * s25);
-                const float s27 = ((0.27f * o10.y) + (-(t151 * t6)) + (-(t3 * t4)));
-                const float s28 = (s27 * s27);
-                const float s29 = (380.25f * t157);
-                const float s30 = ((s8 * t6) + (t151 * t3));
-                const float s31 = (s30 * s30);
-                const float s32 = (1.0f + (s28 * s29) + (s29 * s31));
-                const float s33 = (1.0f / sqrtf(s32));
-                const float s34 = ((-32.714764f * o1.dy) + s0 + s1 + (-109.04921f * o2.dy));
-                const float s35 = (s33 * s34);
-                const float s36 = (39.0f * s35);
-                const float s37 = (t163 * t6);
-                const float s38 = (s37 * t3);
-                const float s39 = (s14 * t42 * t45);
-                const float s40 = (s20 * t68);
-                const float s41 = (7033.448f * o1.y);
-                const float s42 = (s24 * s41);
-                const float s43 = (4252.919f * o1.y);
-                const float s44 = (s30 * s37);
-                const float s45 = (s33 * s44);
-                const float s46 = (s9 * t42);
-                const float s47 = (s13 * s46);
-                const float s48 = (s17 * t72);
-                const float s49 = (s9 * t45);
-                const float s50 = (s13 * s49);
-                const float s51 = (t207 * t208);
-                const float s52 = (380.25f * s51 * (1.0f / (t156 * t156 * t156)) * t6);
-                const float s53 = (powf(s32, -1.5f) * s34 * s44 * ((s28 * s52) + (s31 * s52) + (s27 * s29 * t6) + (-(s29 * s30 * t3))));
-                const float s54 = (39.0f * s3);
-                const float s55 = (t211 * t212);
-                const float s56 = (s55 * t45);
-                const float s57 = (380.25f * s56 * (1.0f / (t176 * t176 * t176)));
-                const float s58 = (powf(s11, -1.5f) * t183 * ((s10 * s57) + (-(s46 * s7)) + (s57 * s6) + (s5 * s7 * t45)));
-                const float s59 = (s49 * s58);
-                const float s60 = (s3 * s46);
-                const float s61 = (s58 * s60);
-                const float s62 = (64.49793f * s16);
-                const float s63 = (t217 * t218);
-                const float s64 = (s63 * t68);
-                const float s65 = (380.25f * s64 * (1.0f / (t191 * t191 * t191)));
-                const float s66 = (powf(s22, -1.5f) * t198 * ((-(s18 * s65)) + (-(s19 * s48)) + (-(s21 * s65)) + (380.25f * s20 * t192 * t68)));
-                const float s67 = (s62 * s66);
-                const float s68 = (s30 * s51 * t105 * t157);
-                const float s69 = (s12 * t177);
-                const float s70 = (s55 * s69 * s9 * t108);
-                const float s71 = (s23 * t192);
-                const float s72 = (s62 * s71);
-                const float s73 = (s20 * s63 * t69);
-                const float s74 = (s48 * s64);
-                const float s75 = (s56 * s60 * s69);
-                const float s76 = ((64.49793f * s15) + (39.0f * s39) + (39.0f * s53) + (64.49793f * s61) + (-64.49793f * s75) + (s26 * t69) + (s26 * t93) + (s36 * s38) + (-(s36 * s68)) + (s40 * s42) + (-(s40 * s67)) + (-(s41 * s47)) + (-(s42 * s48)) + (s43 * s45) + (-(s43 * s50)) + (s48 * s67) + (s54 * s59) + (-(s54 * s70)) + (-(s72 * s73)) + (s72 * s74));
-                const float s77 = (490.08844f * s35);
-                const float s78 = (810.5049f * s25);
-                const float s79 = (88384.914f * o1.y);
-                const float s80 = (s24 * s79);
-                const float s81 = (53443.758f * o1.y);
-                const float s82 = (810.5049f * s16);
-                const float s83 = (s71 * s82);
-                const float s84 = (490.08844f * s3);
-                const float s85 = (s66 * s82);
-                const float s86 = ((-1046.0f * o1.y) + (-s76));
-                const float s87 = (1.0f / (fminf(-0.1f, (s86 * (1.0f / ((5522500.0f + (s86 * s86)))) * ((810.5049f * s15) + (490.08844f * s39) + (490.08844f * s53) + (810.5049f * s61) + (-810.5049f * s75) + t1 + (s38 * s77) + (s40 * s80) + (-(s40 * s85)) + (s45 * s81) + (-(s47 * s79)) + (-(s48 * s80)) + (s48 * s85) + (-(s50 * s81)) + (s59 * s84) + (-(s68 * s77)) + (-(s70 * s84)) + (-(s73 * s83)) + (s74 * s83) + (s78 * t69) + (s78 * t93))))));
-                const float s88 = (s86 * s87);
-                sens[0] = (s87 * (s76 + t137)); /* f2 */
-                sens[1] = (s88 * ((0.6f * o1.y) + o2.y)); /* f3 */
-                sens[2] = (o1.y * s88); /* f4 */
-                sens[3] = 0.0f; /* f7 */
-                sens[4] = 0.0f; /* f8 */
-                sens[5] = 0.0f; /* f9 */
-                sens[6] = 0.0f; /* f11 */
-                sens[7] = 0.0f; /* f13 */
-                sens[8] = 0.0f; /* f15 */
-                sens[9] = 0.0f; /* f17 */
-                sens[10] = 0.0f; /* f19 */
-                sens[11] = 0.0f; /* f20 */
-                sens[12] = 0.0f; /* f21 */
-                sens[13] = 0.0f; /* f23 */
-                sens[14] = 0.0f; /* f24 */
-                sens[15] = 0.0f; /* f25 */
-                st = fdi_gen_sens_finish(st, sens, 16U);
-            }
-#else
-            (void)sens;
-#endif
-        }
-    }
-    return st;
-}
-
 /* MSO4195: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
 static bool romo_gen_13_in_domain(const fdi_frame_t *in)
 {
     return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
 }
 
-/* name, step, domain, signals read, sensitivities (bit j = fault j, ascending), filters, observer states */
+
+static void romo_gen_step(fdi_gen_io_t *io);
+
+/* name, step (NULL: the set's), domain, signals read, sensitivities (bit j = fault j, ascending), filters, observer
+   states, set, slot */
 const fdi_gen_desc_t fdi_romo_generators[FDI_ROMO_N_GENERATORS] = {
-    {"MSO1", romo_gen_1, NULL, ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
-     FDI_GEN_SENS_MASK(0x00000015U), 4U, 0U}, /* sensitivities f1 f3 f5 */
-    {"MSO2", romo_gen_2, NULL, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
-     FDI_GEN_SENS_MASK(0x0000000EU), 4U, 0U}, /* sensitivities f2 f3 f4 */
-    {"MSO12", romo_gen_3, romo_gen_3_in_domain, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M,
-     FDI_GEN_SENS_MASK(0x0022223BU), 8U, 1U}, /* sensitivities f1 f2 f4 f5 f6 f10 f14 f18 f22 */
-    {"MSO39", romo_gen_4, romo_gen_4_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M,
-     FDI_GEN_SENS_MASK(0x0022223CU), 7U, 0U}, /* sensitivities f3 f4 f5 f6 f10 f14 f18 f22 */
-    {"MSO49", romo_gen_5, romo_gen_5_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M,
-     FDI_GEN_SENS_MASK(0x0044445CU), 7U, 0U}, /* sensitivities f3 f4 f5 f7 f11 f15 f19 f23 */
-    {"MSO59", romo_gen_6, romo_gen_6_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA3_M,
-     FDI_GEN_SENS_MASK(0x0088889CU), 7U, 0U}, /* sensitivities f3 f4 f5 f8 f12 f16 f20 f24 */
-    {"MSO1670", romo_gen_7, romo_gen_7_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M | ROMO_SIGM_OMEGA4_M,
-     FDI_GEN_SENS_MASK(0x01DF77FEU), 16U, 1U}, /* sensitivities f2 f3 f4 f5 f6 f7 f8 f9 f10 f11 f13 f14 f15 f17 f18 f19 f20 f21 f23 f24 f25 */
-    {"MSO1958", romo_gen_8, romo_gen_8_in_domain, ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M,
-     FDI_GEN_SENS_MASK(0x0077117DU), 11U, 1U}, /* sensitivities f1 f3 f4 f5 f6 f7 f9 f13 f17 f18 f19 f21 f22 f23 */
-    {"MSO2058", romo_gen_9, romo_gen_9_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA3_M,
-     FDI_GEN_SENS_MASK(0x00AE44FCU), 10U, 1U}, /* sensitivities f3 f4 f5 f6 f7 f8 f11 f15 f18 f19 f20 f22 f24 */
-    {"MSO2065", romo_gen_10, romo_gen_10_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA3_M,
-     FDI_GEN_SENS_MASK(0x00BB11BEU), 11U, 1U}, /* sensitivities f2 f3 f4 f5 f6 f8 f9 f13 f17 f18 f20 f21 f22 f24 */
-    {"MSO2443", romo_gen_11, romo_gen_11_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA4_M,
-     FDI_GEN_SENS_MASK(0x015C89DCU), 10U, 1U}, /* sensitivities f3 f4 f5 f7 f8 f9 f12 f16 f19 f20 f21 f23 f25 */
-    {"MSO3805", romo_gen_12, romo_gen_12_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA4_M,
-     FDI_GEN_SENS_MASK(0x0156677CU), 11U, 1U}, /* sensitivities f3 f4 f5 f6 f7 f9 f10 f11 f14 f15 f18 f19 f21 f23 f25 */
-    {"MSO4195", romo_gen_13, romo_gen_13_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M | ROMO_SIGM_OMEGA4_M,
-     FDI_GEN_SENS_MASK(0x01DD55CEU), 13U, 1U}, /* sensitivities f2 f3 f4 f7 f8 f9 f11 f13 f15 f17 f19 f20 f21 f23 f24 f25 */
+    {"MSO1", NULL, NULL, ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
+     FDI_GEN_SENS_MASK(0x00000015U), 0U, 0U, &fdi_romo_gen_set, 0U}, /* sensitivities f1 f3 f5 */
+    {"MSO2", NULL, NULL, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
+     FDI_GEN_SENS_MASK(0x0000000EU), 0U, 0U, &fdi_romo_gen_set, 1U}, /* sensitivities f2 f3 f4 */
+    {"MSO12", NULL, romo_gen_3_in_domain, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M,
+     FDI_GEN_SENS_MASK(0x0022223BU), 0U, 1U, &fdi_romo_gen_set, 2U}, /* sensitivities f1 f2 f4 f5 f6 f10 f14 f18 f22 */
+    {"MSO39", NULL, romo_gen_4_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M,
+     FDI_GEN_SENS_MASK(0x0022223CU), 0U, 0U, &fdi_romo_gen_set, 3U}, /* sensitivities f3 f4 f5 f6 f10 f14 f18 f22 */
+    {"MSO49", NULL, romo_gen_5_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M,
+     FDI_GEN_SENS_MASK(0x0044445CU), 0U, 0U, &fdi_romo_gen_set, 4U}, /* sensitivities f3 f4 f5 f7 f11 f15 f19 f23 */
+    {"MSO59", NULL, romo_gen_6_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA3_M,
+     FDI_GEN_SENS_MASK(0x0088889CU), 0U, 0U, &fdi_romo_gen_set, 5U}, /* sensitivities f3 f4 f5 f8 f12 f16 f20 f24 */
+    {"MSO1670", NULL, romo_gen_7_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M | ROMO_SIGM_OMEGA4_M,
+     FDI_GEN_SENS_MASK(0x01DF77FEU), 0U, 1U, &fdi_romo_gen_set, 6U}, /* sensitivities f2 f3 f4 f5 f6 f7 f8 f9 f10 f11 f13 f14 f15 f17 f18 f19 f20 f21 f23 f24 f25 */
+    {"MSO1958", NULL, romo_gen_8_in_domain, ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M,
+     FDI_GEN_SENS_MASK(0x0077117DU), 0U, 1U, &fdi_romo_gen_set, 7U}, /* sensitivities f1 f3 f4 f5 f6 f7 f9 f13 f17 f18 f19 f21 f22 f23 */
+    {"MSO2058", NULL, romo_gen_9_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA3_M,
+     FDI_GEN_SENS_MASK(0x00AE44FCU), 0U, 1U, &fdi_romo_gen_set, 8U}, /* sensitivities f3 f4 f5 f6 f7 f8 f11 f15 f18 f19 f20 f22 f24 */
+    {"MSO2065", NULL, romo_gen_10_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA3_M,
+     FDI_GEN_SENS_MASK(0x00BB11BEU), 0U, 1U, &fdi_romo_gen_set, 9U}, /* sensitivities f2 f3 f4 f5 f6 f8 f9 f13 f17 f18 f20 f21 f22 f24 */
+    {"MSO2443", NULL, romo_gen_11_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA4_M,
+     FDI_GEN_SENS_MASK(0x015C89DCU), 0U, 1U, &fdi_romo_gen_set, 10U}, /* sensitivities f3 f4 f5 f7 f8 f9 f12 f16 f19 f20 f21 f23 f25 */
+    {"MSO3805", NULL, romo_gen_12_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA4_M,
+     FDI_GEN_SENS_MASK(0x0156677CU), 0U, 1U, &fdi_romo_gen_set, 11U}, /* sensitivities f3 f4 f5 f6 f7 f9 f10 f11 f14 f15 f18 f19 f21 f23 f25 */
+    {"MSO4195", NULL, romo_gen_13_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M | ROMO_SIGM_OMEGA4_M,
+     FDI_GEN_SENS_MASK(0x01DD55CEU), 0U, 1U, &fdi_romo_gen_set, 12U}, /* sensitivities f2 f3 f4 f7 f8 f9 f11 f13 f15 f17 f19 f20 f21 f23 f24 f25 */
 };
+
+const fdi_gen_set_t fdi_romo_gen_set = {"romo", romo_gen_step, romo_bank, 19U, FDI_ROMO_N_GENERATORS};
+
+/* Every slot of io->run in one pass (fdi_gen.h): the terms shared by several slots once, then each slot. */
+static void romo_gen_step(fdi_gen_io_t *io)
+{
+    const fdi_svf_t *const b = io->bank;
+    const fdi_frame_t *const in = io->in;
+    const uint32_t run = io->run;
+    float t0 = 0.0f;
+    float t1 = 0.0f;
+    float t2 = 0.0f;
+    float t3 = 0.0f;
+    float t8 = 0.0f;
+    float t9 = 0.0f;
+    float t11 = 0.0f;
+    float t12 = 0.0f;
+    float t13 = 0.0f;
+    float t23 = 0.0f;
+    float t29 = 0.0f;
+    float t46 = 0.0f;
+    float t47 = 0.0f;
+    float t70 = 0.0f;
+    float t71 = 0.0f;
+    float t72 = 0.0f;
+    float t73 = 0.0f;
+    float t74 = 0.0f;
+    float t75 = 0.0f;
+    float t76 = 0.0f;
+    float t77 = 0.0f;
+    float t78 = 0.0f;
+    float t79 = 0.0f;
+    float t80 = 0.0f;
+    float t81 = 0.0f;
+    float t82 = 0.0f;
+    float t83 = 0.0f;
+    float t85 = 0.0f;
+    float t86 = 0.0f;
+    float t87 = 0.0f;
+    float t84 = 0.0f;
+    float t88 = 0.0f;
+    float t90 = 0.0f;
+    float t91 = 0.0f;
+    float t92 = 0.0f;
+    float t93 = 0.0f;
+    float t94 = 0.0f;
+    float t95 = 0.0f;
+    float t96 = 0.0f;
+    float t97 = 0.0f;
+    float t98 = 0.0f;
+    float t99 = 0.0f;
+    float t104 = 0.0f;
+    float t100 = 0.0f;
+    float t101 = 0.0f;
+    float t103 = 0.0f;
+    float t105 = 0.0f;
+    float t106 = 0.0f;
+    float t102 = 0.0f;
+    float t109 = 0.0f;
+    float t107 = 0.0f;
+    float t110 = 0.0f;
+    float t111 = 0.0f;
+    float t112 = 0.0f;
+    float t113 = 0.0f;
+    float t114 = 0.0f;
+    float t115 = 0.0f;
+    float t116 = 0.0f;
+    float t117 = 0.0f;
+    float t118 = 0.0f;
+    float t119 = 0.0f;
+    float t120 = 0.0f;
+    float t121 = 0.0f;
+    float t122 = 0.0f;
+    float t123 = 0.0f;
+    float t124 = 0.0f;
+    float t136 = 0.0f;
+    float t125 = 0.0f;
+    float t126 = 0.0f;
+    float t127 = 0.0f;
+    float t133 = 0.0f;
+    float t137 = 0.0f;
+    float t128 = 0.0f;
+    float t129 = 0.0f;
+    float t130 = 0.0f;
+    float t131 = 0.0f;
+    float t134 = 0.0f;
+    float t135 = 0.0f;
+    float t138 = 0.0f;
+    float t132 = 0.0f;
+    float t139 = 0.0f;
+    float t141 = 0.0f;
+    float t142 = 0.0f;
+    float t143 = 0.0f;
+    float t144 = 0.0f;
+    float t145 = 0.0f;
+    float t146 = 0.0f;
+    float t168 = 0.0f;
+    float t170 = 0.0f;
+    float t171 = 0.0f;
+    float t148 = 0.0f;
+    float t149 = 0.0f;
+    float t150 = 0.0f;
+    float t151 = 0.0f;
+    float t186 = 0.0f;
+    float t189 = 0.0f;
+    float t153 = 0.0f;
+    float t190 = 0.0f;
+    float t193 = 0.0f;
+    float t194 = 0.0f;
+    float t176 = 0.0f;
+    float t191 = 0.0f;
+    float t181 = 0.0f;
+    float t182 = 0.0f;
+    float t183 = 0.0f;
+    float t195 = 0.0f;
+    float t196 = 0.0f;
+    float t201 = 0.0f;
+    float t184 = 0.0f;
+    float t185 = 0.0f;
+    float t187 = 0.0f;
+    float t188 = 0.0f;
+    float t192 = 0.0f;
+    float t197 = 0.0f;
+    float t199 = 0.0f;
+    float t202 = 0.0f;
+    float t206 = 0.0f;
+    float t207 = 0.0f;
+    float t198 = 0.0f;
+    float t200 = 0.0f;
+    float t205 = 0.0f;
+    float t203 = 0.0f;
+    float t208 = 0.0f;
+    float t209 = 0.0f;
+    float t210 = 0.0f;
+    float t211 = 0.0f;
+    float t212 = 0.0f;
+    float t213 = 0.0f;
+    float t214 = 0.0f;
+    float t237 = 0.0f;
+    float t257 = 0.0f;
+    float t259 = 0.0f;
+    float t260 = 0.0f;
+    float t239 = 0.0f;
+    float t273 = 0.0f;
+    float t274 = 0.0f;
+    float t275 = 0.0f;
+    float t329 = 0.0f;
+    float t330 = 0.0f;
+    float t331 = 0.0f;
+    float t333 = 0.0f;
+    float t334 = 0.0f;
+    float t379 = 0.0f;
+    float t383 = 0.0f;
+    float t438 = 0.0f;
+    float t439 = 0.0f;
+    float t440 = 0.0f;
+    float t441 = 0.0f;
+    float t491 = 0.0f;
+    if ((run & 0x00000FF9U) != 0U)
+    {
+        t0 = (-b[4].x1);
+    }
+    if ((run & 0x00000F79U) != 0U)
+    {
+        t1 = (b[2].x1 * ((-1.0f * b[2].x1) + (-t0)));
+    }
+    if ((run & 0x00001DBAU) != 0U)
+    {
+        t2 = (b[2].x1 * ((0.3f * b[2].x1) + b[3].x1));
+    }
+    if ((run & 0x00001002U) != 0U)
+    {
+        t3 = (b[1].x1 + (-t2));
+    }
+    if ((run & 0x00000BCCU) != 0U)
+    {
+        t8 = sinf(b[5].x1);
+        t9 = cosf(b[5].x1);
+    }
+    if ((run & 0x00000084U) != 0U)
+    {
+        t11 = (109.04921f * b[0].x1);
+    }
+    if ((run & 0x00001244U) != 0U)
+    {
+        t12 = (180.34483f * b[1].x1);
+    }
+    if ((run & 0x00000244U) != 0U)
+    {
+        t13 = (-2565.315f + t12);
+    }
+    if ((run & 0x0000038CU) != 0U)
+    {
+        t23 = (0.27f * fabsf(b[15].x1));
+        t29 = (-0.27f * b[15].x1);
+    }
+    if ((run & 0x0000185CU) != 0U)
+    {
+        t46 = (0.00035555556f * b[13].x1);
+    }
+    if ((run & 0x0000000CU) != 0U)
+    {
+        t47 = ((-5.9259257f * b[9].x1) + (3.3333333f * b[15].x2) + (t46 * tanhf((2.0f * b[15].x1))));
+    }
+    if ((run & 0x00000D08U) != 0U)
+    {
+        t70 = (147.63007f * b[2].x2);
+    }
+    if ((run & 0x00000DB8U) != 0U)
+    {
+        t71 = (180.34483f * b[4].x2);
+        t72 = (180.34483f * t2);
+    }
+    if ((run & 0x00001F78U) != 0U)
+    {
+        t73 = (109.04921f * b[3].x2);
+    }
+    if ((run & 0x00001D78U) != 0U)
+    {
+        t74 = (-t73);
+    }
+    if ((run & 0x00000F78U) != 0U)
+    {
+        t75 = (109.04921f * t1);
+    }
+    if ((run & 0x00000D78U) != 0U)
+    {
+        t76 = (t74 + t75);
+    }
+    if ((run & 0x00000908U) != 0U)
+    {
+        t77 = (2565.315f + t70 + (-t71) + (-t72) + t76);
+    }
+    if ((run & 0x00000FD8U) != 0U)
+    {
+        t78 = ((0.199f * b[2].x1) + b[4].x1);
+    }
+    if ((run & 0x00000BC8U) != 0U)
+    {
+        t79 = (t78 * t8);
+    }
+    if ((run & 0x00001FE8U) != 0U)
+    {
+        t80 = ((0.425f * b[2].x1) + (-b[3].x1));
+        t81 = (-t80);
+    }
+    if ((run & 0x00000BC8U) != 0U)
+    {
+        t82 = (t81 * t9);
+        t83 = (t79 + t82);
+        t85 = ((t78 * t9) + (t8 * t80));
+        t86 = (t85 * t85);
+        t87 = fabsf((t79 + (-(t80 * t9))));
+    }
+    if ((run & 0x00000388U) != 0U)
+    {
+        t84 = ((-t29) + (-t83));
+        t88 = fdi_gen_max(0.5f, fdi_gen_max(t23, t87));
+        const float t89 = (380.25f * (1.0f / (t88 * t88)));
+        t90 = (1.0f / (sqrtf((1.0f + ((t84 * t84) * t89) + (t86 * t89)))));
+        t91 = (1.0f / (t88));
+        t92 = (t90 * t91);
+        t93 = (t84 * t92);
+    }
+    if ((run & 0x00000108U) != 0U)
+    {
+        t94 = (t77 * t93);
+    }
+    if ((run & 0x00001DD0U) != 0U)
+    {
+        t95 = cosf(b[6].x1);
+        t96 = sinf(b[6].x1);
+    }
+    if ((run & 0x00001FD0U) != 0U)
+    {
+        t97 = ((1.025f * b[2].x1) + b[3].x1);
+        t98 = (-t97);
+    }
+    if ((run & 0x00001DD0U) != 0U)
+    {
+        t99 = (t96 * t98);
+        t104 = (t95 * t97);
+    }
+    if ((run & 0x00000DD0U) != 0U)
+    {
+        t100 = (t99 + (t78 * t95));
+        t101 = (t100 * t100);
+        t103 = (t78 * t96);
+        t105 = (t103 + t104);
+        t106 = fabsf(t105);
+    }
+    if ((run & 0x00001CD0U) != 0U)
+    {
+        t102 = (0.27f * fabsf(b[16].x1));
+        t109 = (-0.27f * b[16].x1);
+    }
+    if ((run & 0x00000CD0U) != 0U)
+    {
+        t107 = fdi_gen_max(0.5f, fdi_gen_max(t102, t106));
+        const float t108 = (380.25f * (1.0f / (t107 * t107)));
+        t110 = ((-t105) + (-t109));
+        t111 = (1.0f / (sqrtf((1.0f + (t101 * t108) + (t108 * (t110 * t110))))));
+        t112 = (1.0f / (t107));
+        t113 = (t111 * t112);
+    }
+    if ((run & 0x00000050U) != 0U)
+    {
+        t114 = (19.5f * t113);
+    }
+    if ((run & 0x00000DB0U) != 0U)
+    {
+        t115 = (t71 + t72);
+    }
+    if ((run & 0x00000D90U) != 0U)
+    {
+        t116 = (2565.315f + t115);
+    }
+    if ((run & 0x00000D30U) != 0U)
+    {
+        t117 = ((-213.05959f * b[2].x2) + t76);
+    }
+    if ((run & 0x00000D10U) != 0U)
+    {
+        t118 = (t116 + t117);
+    }
+    if ((run & 0x00000410U) != 0U)
+    {
+        t119 = (t110 * t118);
+    }
+    if ((run & 0x00001850U) != 0U)
+    {
+        t120 = ((-5.9259257f * b[10].x1) + (3.3333333f * b[16].x2) + (t46 * tanhf((2.0f * b[16].x1))));
+    }
+    if ((run & 0x00001060U) != 0U)
+    {
+        t121 = (0.00035555556f * b[14].x1);
+    }
+    if ((run & 0x000005A0U) != 0U)
+    {
+        t122 = (-2565.315f + t115);
+    }
+    if ((run & 0x00000520U) != 0U)
+    {
+        t123 = ((-t117) + (-t122));
+    }
+    if ((run & 0x00001360U) != 0U)
+    {
+        t124 = (-0.27f * b[17].x1);
+        t136 = (0.27f * fabsf(b[17].x1));
+    }
+    if ((run & 0x00001760U) != 0U)
+    {
+        t125 = cosf(b[7].x1);
+        t126 = (t125 * t81);
+        t127 = sinf(b[7].x1);
+        t133 = (t127 * t80);
+        t137 = (t125 * t80);
+    }
+    if ((run & 0x00000FE0U) != 0U)
+    {
+        t128 = ((2.199f * b[2].x1) + t0);
+        t129 = (-t128);
+    }
+    if ((run & 0x00000760U) != 0U)
+    {
+        t130 = (t127 * t129);
+        t131 = (t126 + t130);
+        t134 = (t133 + (t125 * t129));
+        t135 = (t134 * t134);
+        t138 = fabsf((t137 + (t127 * t128)));
+    }
+    if ((run & 0x00000360U) != 0U)
+    {
+        t132 = ((-t124) + (-t131));
+        t139 = fdi_gen_max(0.5f, fdi_gen_max(t136, t138));
+        const float t140 = (380.25f * (1.0f / (t139 * t139)));
+        t141 = (1.0f / (sqrtf((1.0f + ((t132 * t132) * t140) + (t135 * t140)))));
+        t142 = (1.0f / (t139));
+        t143 = (t141 * t142);
+    }
+    if ((run & 0x00000060U) != 0U)
+    {
+        t144 = (19.5f * t143);
+        t145 = (t132 * t144);
+    }
+    if ((run & 0x00000840U) != 0U)
+    {
+        t146 = (-1.7777778f * b[9].x1);
+        t168 = (-fdi_gen_max(0.5f, t87));
+        t170 = ((0.54f * t79) + (0.54f * t82));
+        t171 = (102.6675f * t86);
+    }
+    if ((run & 0x00000940U) != 0U)
+    {
+        t148 = (0.00010666667f * b[13].x1);
+    }
+    if ((run & 0x00000E40U) != 0U)
+    {
+        t149 = (-t75);
+    }
+    if ((run & 0x00001240U) != 0U)
+    {
+        t150 = (32.714764f * b[2].x2);
+        t151 = (t150 + t73);
+        t186 = (2565.315f + t12);
+        t189 = (2565.315f + (-t12));
+    }
+    if ((run & 0x00000240U) != 0U)
+    {
+        const float t152 = (t149 + t151);
+        t153 = ((-t13) + (-t152));
+        t190 = (t152 + t189);
+        t193 = (t125 * t190);
+        t194 = (t152 + t186);
+    }
+    if ((run & 0x00000340U) != 0U)
+    {
+        t176 = (t8 * t85);
+        t191 = (t127 * t134);
+    }
+    if ((run & 0x00001840U) != 0U)
+    {
+        t181 = (-t120);
+        t182 = (t181 * t95);
+    }
+    if ((run & 0x00001EC0U) != 0U)
+    {
+        t183 = cosf(b[8].x1);
+        t195 = sinf(b[8].x1);
+        t196 = (t195 * t98);
+        t201 = (t183 * t97);
+    }
+    if ((run & 0x00001040U) != 0U)
+    {
+        t184 = ((5.9259257f * b[12].x1) + (-3.3333333f * b[18].x2) + (-(t121 * tanhf((2.0f * b[18].x1)))));
+        t185 = (t183 * t184);
+        t187 = ((-t150) + t186);
+    }
+    if ((run & 0x00000CC0U) != 0U)
+    {
+        t188 = (t100 * t96);
+    }
+    if ((run & 0x00000240U) != 0U)
+    {
+        t192 = (t190 * t191);
+    }
+    if ((run & 0x00000EC0U) != 0U)
+    {
+        t197 = (t196 + (t129 * t183));
+        t199 = (t197 * t197);
+        t202 = fabsf(((-t201) + (t128 * t195)));
+        t206 = (t129 * t195);
+        t207 = (t201 + t206);
+    }
+    if ((run & 0x00000CC0U) != 0U)
+    {
+        t198 = (t195 * t197);
+    }
+    if ((run & 0x00001C40U) != 0U)
+    {
+        t200 = (0.27f * fabsf(b[18].x1));
+        t205 = (-0.27f * b[18].x1);
+    }
+    if ((run & 0x00000C40U) != 0U)
+    {
+        t203 = fdi_gen_max(0.5f, fdi_gen_max(t200, t202));
+        const float t204 = (380.25f * (1.0f / (t203 * t203)));
+        t208 = ((-t205) + (-t207));
+        t209 = (1.0f / (sqrtf((1.0f + (t199 * t204) + (t204 * (t208 * t208))))));
+        t210 = (1.0f / (t203));
+        t211 = (t209 * t210);
+        t212 = (t198 * t211);
+    }
+    if ((run & 0x00001F40U) != 0U)
+    {
+        t213 = (-1046.0f * b[3].x2);
+    }
+    if ((run & 0x00000F40U) != 0U)
+    {
+        t214 = ((1046.0f * t1) + t213);
+    }
+    if ((run & 0x00000280U) != 0U)
+    {
+        t237 = (-1.7777778f * b[12].x1);
+        t257 = (-fdi_gen_max(0.5f, t202));
+        t259 = ((0.54f * t201) + (0.54f * t206));
+        t260 = (102.6675f * t199);
+    }
+    if ((run & 0x00000680U) != 0U)
+    {
+        t239 = (0.00010666667f * b[14].x1);
+    }
+    if ((run & 0x00000D80U) != 0U)
+    {
+        t273 = (1729.8676f * b[4].x2);
+        t274 = (1729.8676f * t2);
+    }
+    if ((run & 0x00000880U) != 0U)
+    {
+        t275 = ((-t273) + (-t274));
+    }
+    if ((run & 0x00000300U) != 0U)
+    {
+        t329 = (39.0f * t176 * t92);
+        t330 = (39.0f * t9);
+        t331 = (39.0f * t143);
+    }
+    if ((run & 0x00000900U) != 0U)
+    {
+        t333 = (t85 * t9);
+    }
+    if ((run & 0x00000500U) != 0U)
+    {
+        t334 = (t214 + t273 + t274);
+    }
+    if ((run & 0x00000600U) != 0U)
+    {
+        t379 = (t183 * t197);
+    }
+    if ((run & 0x00001200U) != 0U)
+    {
+        t383 = (1729.8676f * b[1].x1);
+    }
+    if ((run & 0x00000C00U) != 0U)
+    {
+        t438 = (39.0f * t113);
+        t439 = (t116 + t149 + (-t70) + t73);
+    }
+    if ((run & 0x00001C00U) != 0U)
+    {
+        t440 = (39.0f * t183);
+    }
+    if ((run & 0x00000C00U) != 0U)
+    {
+        t441 = ((39.0f * t212 * t439) + (t118 * t188 * t438) + (t208 * t211 * t439 * t440));
+    }
+    if ((run & 0x00001800U) != 0U)
+    {
+        t491 = (2.0f * t182);
+    }
+    if ((run & 0x00000001U) != 0U) /* MSO1: K1 D1 S1 S3 S4 S5 */
+    {
+        const float value = (b[0].x1 + (-0.3f * b[2].x2) + t1 + (-b[3].x2));
+        io->r[io->at[0]] = value;
+        if (!fdi_float_is_finite(value))
+        {
+            io->failed |= 0x00000001U;
+        }
+#if FDI_GEN_SENSITIVITIES
+        if ((io->sens_mask & 0x00000001U) != 0U) /* d r / d f: f1 f3 f5 */
+        {
+            float *const sv = &io->sens[io->sens_at[0]];
+            sv[0] = 1.0f; /* f1 */
+            sv[1] = ((-2.0f * b[2].x1) + b[4].x1); /* f3 */
+            sv[2] = b[2].x1; /* f5 */
+        }
+#endif
+    }
+    if ((run & 0x00000002U) != 0U) /* MSO2: K2 D2 S2 S3 S4 S5 */
+    {
+        const float value = ((1.0f * b[2].x2) + t3 + (-b[4].x2));
+        io->r[io->at[1]] = value;
+        if (!fdi_float_is_finite(value))
+        {
+            io->failed |= 0x00000002U;
+        }
+#if FDI_GEN_SENSITIVITIES
+        if ((io->sens_mask & 0x00000002U) != 0U) /* d r / d f: f2 f3 f4 */
+        {
+            float *const sv = &io->sens[io->sens_at[1]];
+            sv[0] = 1.0f; /* f2 */
+            sv[1] = ((-0.6f * b[2].x1) + (-b[3].x1)); /* f3 */
+            sv[2] = (-b[2].x1); /* f4 */
+        }
+#endif
+    }
+    if ((run & 0x00000004U) != 0U) /* MSO12: K1 D1 W1.FL W1.dyn W1.D S1 S2 S4 S5 S.omega1 */
+    {
+        fdi_obs_t *const o = &io->obs[io->at[2]];
+        const float t4 = (3.3333333f * b[3].x1);
+        const float t6 = ((22.222221f * b[3].x1) + (3.3333333f * b[4].x1));
+        const float t10 = ((0.66333336f * t8) + (-1.4166666f * t9));
+        const float t14 = ((-t11) + (-t13));
+        const float t15 = (19.5f * t14);
+        const float t16 = (-(t10 * t15));
+        const float t17 = (2.4166667f * b[3].x1);
+        const float t19 = ((-0.66333336f * b[3].x1) + b[4].x1);
+        const float t37 = (-fdi_gen_max(0.5f, t23));
+        const float t39 = ((2.8333333f * t8) + (1.3266667f * t9));
+        const float t41 = ((-1.3266667f * t8) + (2.8333333f * t9));
+        const float t42 = (380.25f * t10);
+        float xh = 0.0f;
+        if ((io->restart & 0x00000004U) != 0U)
+        {
+            const float x0 = ((0.3f * in->value[ROMO_SIG_PSIDOT_M]) + in->value[ROMO_SIG_VX_M]); /* vx from its sensor outside the MSO set */
+            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;
+        }
+        else
+        {
+            const float xp = o->xh;
+            const float t5 = (t4 + (-3.3333333f * xp));
+            const float t7 = (t6 + (-22.222221f * xp));
+            const float t18 = (t17 + (-1.4166666f * xp));
+            const float t20 = (t19 + (0.66333336f * xp));
+            const float t21 = ((-(t18 * t8)) + (t20 * t9));
+            const float t22 = (t21 * t21);
+            const float t24 = ((t18 * t9) + (t20 * t8));
+            const float t25 = fabsf(t24);
+            const float t26 = fdi_gen_max(0.5f, fdi_gen_max(t23, t25));
+            const float t27 = (1.0f / (t26 * t26));
+            const float t28 = (380.25f * t27);
+            const float t30 = ((-t24) + (-t29));
+            const float t31 = (t30 * t30);
+            const float t32 = (1.0f + (t22 * t28) + (t28 * t31));
+            const float t33 = (1.0f / (sqrtf(t32)));
+            const float t34 = (1.0f / (t26));
+            const float t35 = (t33 * t34);
+            const float t36 = fdi_gen_sign(t24);
+            const float t38 = fdi_gen_heaviside((t25 + t37));
+            const float t40 = (190.125f * t27);
+            const float t43 = ((1.0f / (t26 * t26 * t26)) * t36 * t38 * t42);
+            const float t44 = (t15 * t30);
+            const float t45 = ((-(t16 * t35)) + (-((1.0f / (t32 * sqrtf(t32))) * t34 * t44 * ((t22 * t43) + (t31 * t43) + (-(t21 * t39 * t40)) + (-(t30 * t40 * t41))))) + (19.5f * t10 * t14 * t27 * t30 * t33 * t36 * t38));
+            const float f = (b[0].x1 + (-(t5 * (t5 + b[4].x1))));
+            const float l = (-(t45 * (1.0f / (191844.0f + (t45 * t45))) * fdi_gen_max(0.0f, (12.566371f + t7))));
+            const float a = t7;
+            const float c = t45;
+            const float e = ((-t47) + (-(t35 * t44)));
+            xh = fdi_gen_obs_predict(o, io->par, f + (l * e), a + (l * c));
+        }
+        {
+            const float t48 = (t4 + (-3.3333333f * xh));
+            const float t49 = (t17 + (-1.4166666f * xh));
+            const float t50 = (t19 + (0.66333336f * xh));
+            const float t51 = ((-(t49 * t8)) + (t50 * t9));
+            const float t52 = (t51 * t51);
+            const float t53 = ((t49 * t9) + (t50 * t8));
+            const float t54 = fabsf(t53);
+            const float t55 = fdi_gen_max(0.5f, fdi_gen_max(t23, t54));
+            const float t56 = (1.0f / (t55 * t55));
+            const float t57 = (380.25f * t56);
+            const float t58 = ((-t29) + (-t53));
+            const float t59 = (t58 * t58);
+            const float t60 = (1.0f + (t52 * t57) + (t57 * t59));
+            const float t61 = (1.0f / (sqrtf(t60)));
+            const float t62 = (1.0f / (t55));
+            const float t63 = (t61 * t62);
+            const float t64 = fdi_gen_sign(t53);
+            const float t65 = fdi_gen_heaviside((t37 + t54));
+            const float t66 = (190.125f * t56);
+            const float t67 = (t42 * (1.0f / (t55 * t55 * t55)) * t64 * t65);
+            const float t68 = (t15 * t58);
+            const float t69 = ((-(t16 * t63)) + (-((1.0f / (t60 * sqrtf(t60))) * t62 * t68 * ((t52 * t67) + (t59 * t67) + (-(t39 * t51 * t66)) + (-(t41 * t58 * t66))))) + (19.5f * t10 * t14 * t56 * t58 * t61 * t64 * t65));
+            const float f = (b[0].x1 + (-(t48 * (t48 + b[4].x1))));
+            const float l = (-(t69 * (1.0f / (191844.0f + (t69 * t69))) * fdi_gen_max(0.0f, (12.566371f + t6 + (-22.222221f * xh)))));
+            const float value = ((-t47) + (-(t63 * t68)));
+            io->r[io->at[2]] = value;
+            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, f + (l * value)) != FDI_OK))
+            {
+                io->failed |= 0x00000004U;
+            }
+#if FDI_GEN_SENSITIVITIES
+            if ((io->sens_mask & 0x00000004U) != 0U) /* d r / d f: f1 f2 f4 f5 f6 f10 f14 f18 f22 */
+            {
+                float *const sv = &io->sens[io->sens_at[2]];
+                const float s0 = ((22.222221f * b[3].x1) + (3.3333333f * b[4].x1) + (-22.222221f * xh));
+                const float s1 = (t49 * t9);
+                const float s2 = ((-0.66333336f * b[3].x1) + b[4].x1 + (0.66333336f * xh));
+                const float s3 = (s2 * t8);
+                const float s4 = (s1 + s3);
+                const float s5 = ((0.27f * b[15].x1) + (-s4));
+                const float s6 = (s5 * s5);
+                const float s7 = fabsf(s4);
+                const float s8 = fdi_gen_max(0.5f, fdi_gen_max(s7, t23));
+                const float s9 = (1.0f / (s8 * s8));
+                const float s10 = (380.25f * s9);
+                const float s11 = ((-2.4166667f * b[3].x1) + (1.4166666f * xh));
+                const float s12 = (s2 * t9);
+                const float s13 = (s12 + (s11 * t8));
+                const float s14 = (s13 * s13);
+                const float s15 = (1.0f + (s10 * s14) + (s10 * s6));
+                const float s16 = (1.0f / (sqrtf(s15)));
+                const float s17 = (1.0f / (s8));
+                const float s18 = (s16 * s17);
+                const float s19 = (s18 * s5);
+                const float s20 = (0.66333336f * t8);
+                const float s21 = (2565.315f + (-109.04921f * b[0].x1) + (-180.34483f * b[1].x1));
+                const float s22 = (s18 * s21);
+                const float s23 = (19.5f * s22);
+                const float s24 = (t10 * fdi_gen_sign(s4));
+                const float s25 = (s21 * s5);
+                const float s26 = (19.5f * s25);
+                const float s27 = fdi_gen_heaviside((s7 + t37));
+                const float s28 = (s16 * s9);
+                const float s29 = (190.125f * s9);
+                const float s30 = (s29 * s5);
+                const float s31 = (s13 * s29);
+                const float s32 = (1.0f / (s8 * s8 * s8));
+                const float s33 = (s32 * s6);
+                const float s34 = (380.25f * s27);
+                const float s35 = (s33 * s34);
+                const float s36 = (s14 * s32);
+                const float s37 = (s34 * s36);
+                const float s38 = ((1.0f / (s15 * sqrtf(s15))) * s17 * s26);
+                const float s39 = ((s23 * ((-s20) + (1.4166666f * t9))) + (s38 * ((s24 * s35) + (s24 * s37) + (-(s30 * t41)) + (-(s31 * t39)))) + (-(s24 * s26 * s27 * s28)));
+                const float s40 = (-s39);
+                const float s41 = (s40 * s40);
+                const float s42 = (1.0f / (fdi_gen_min(-0.1f, (s0 + (-(s41 * (1.0f / (191844.0f + s41)) * fdi_gen_max(0.0f, (12.566371f + s0))))))));
+                const float s43 = (s0 * s42);
+                const float s44 = ((-s20) + (2.4166667f * t9));
+                const float s45 = fdi_gen_sign(((-s3) + (s11 * t9)));
+                const float s46 = (s45 * t8);
+                const float s47 = (t49 * t8);
+                const float s48 = (-s13);
+                const float s49 = (s42 * ((-82.30453f * b[3].x1) + (-12.345679f * b[4].x1) + (82.30453f * xh)));
+                const float s50 = (fdi_gen_heaviside((t23 + (-fdi_gen_max(0.5f, s7)))) * fdi_gen_sign(b[15].x1));
+                const float s51 = (102.6675f * s50);
+                sv[0] = (s42 * (s39 + (2126.4595f * s0 * s19))); /* f1 */
+                sv[1] = (3516.724f * s19 * s43); /* f2 */
+                sv[2] = (s42 * ((s0 * s40) + (-(s0 * ((-(s23 * s44)) + (-(s38 * ((-(s30 * ((-1.3266667f * t8) + (4.8333335f * t9)))) + (-(s31 * ((4.8333335f * t8) + (1.3266667f * t9)))) + (380.25f * s14 * s27 * s32 * s44 * s45) + (380.25f * s27 * s32 * s44 * s45 * s6)))) + (19.5f * s16 * s21 * s27 * s44 * s45 * s5 * s9)))))); /* f4 */
+                sv[3] = (s42 * ((-(s0 * ((-(s23 * t8)) + (-(s38 * ((s35 * s46) + (s37 * s46) + (s10 * s13 * t9) + (-(s10 * s5 * t8))))) + (19.5f * s16 * s21 * s27 * s45 * s5 * s9 * t8)))) + (s40 * t48))); /* f5 */
+                sv[4] = (-(s43 * ((-(s23 * ((-s12) + s47))) + (-(s38 * ((-(s30 * ((-2.0f * s12) + (2.0f * s47)))) + (-(s31 * ((-2.0f * s3) + (2.0f * s11 * t9)))) + (380.25f * s14 * s27 * s32 * s45 * s48) + (380.25f * s27 * s32 * s45 * s48 * s6)))) + (19.5f * s16 * s21 * s27 * s45 * s48 * s5 * s9)))); /* f6 */
+                sv[5] = s49; /* f10 */
+                sv[6] = s49; /* f14 */
+                sv[7] = s43; /* f18 */
+                sv[8] = (-(s43 * ((5.265f * s22) + (0.00035555556f * b[13].x1 * (2.0f + (-2.0f * (tanhf((2.0f * b[15].x1)) * tanhf((2.0f * b[15].x1)))))) + (-(s38 * ((-(s29 * ((-0.1458f * b[15].x1) + (0.54f * s1) + (0.54f * s3)))) + (-(s33 * s51)) + (-(s36 * s51))))) + (-5.265f * s25 * s28 * s50)))); /* f22 */
+            }
+#endif
+        }
+    }
+    if ((run & 0x00000008U) != 0U) /* MSO39: K1 K2 D1 D2 W1.FL W1.dyn W1.D S3 S4 S5 S.omega1 */
+    {
+        const float value = ((-t47) + (-19.5f * t94));
+        io->r[io->at[3]] = value;
+        if (!fdi_float_is_finite(value))
+        {
+            io->failed |= 0x00000008U;
+        }
+#if FDI_GEN_SENSITIVITIES
+        if ((io->sens_mask & 0x00000008U) != 0U) /* d r / d f: f3 f4 f5 f6 f10 f14 f18 f22 */
+        {
+            float *const sv = &io->sens[io->sens_at[3]];
+            const float s0 = (t78 * t8);
+            const float s1 = ((-0.425f * b[2].x1) + b[3].x1);
+            const float s2 = (s1 * t9);
+            const float s3 = ((0.27f * b[15].x1) + (-s0) + (-s2));
+            const float s4 = (1.0f / (t88 * t88));
+            const float s5 = (380.25f * s4);
+            const float s6 = (s3 * s3);
+            const float s7 = (1.0f + (s5 * s6) + (s5 * t86));
+            const float s8 = (1.0f / (sqrtf(s7)));
+            const float s9 = (s8 * t91);
+            const float s10 = (s3 * s9);
+            const float s11 = ((0.199f * t8) + (-0.425f * t9));
+            const float s12 = (2565.315f + t70 + (-109.04921f * b[3].x2) + (-180.34483f * b[4].x2) + (109.04921f * b[2].x1 * ((-1.0f * b[2].x1) + b[4].x1)) + (-180.34483f * b[2].x1 * ((0.3f * b[2].x1) + b[3].x1)));
+            const float s13 = (s12 * s9);
+            const float s14 = (19.5f * s13);
+            const float s15 = fdi_gen_heaviside((t87 + (-fdi_gen_max(0.5f, t23))));
+            const float s16 = fdi_gen_sign(((-s0) + (t80 * t9)));
+            const float s17 = (s15 * s16);
+            const float s18 = (19.5f * s12 * s3);
+            const float s19 = (s17 * s18 * s4 * s8);
+            const float s20 = (190.125f * s4);
+            const float s21 = (s20 * t85);
+            const float s22 = (s20 * s3);
+            const float s23 = (1.0f / (t88 * t88 * t88));
+            const float s24 = (1.0f / (s7 * sqrtf(s7)));
+            const float s25 = (s18 * s24 * t91);
+            const float s26 = (b[2].x1 * s10);
+            const float s27 = (s5 * t85);
+            const float s28 = (s3 * s5);
+            const float s29 = (s23 * t86);
+            const float s30 = (380.25f * s17 * t8);
+            const float s31 = (s23 * s6);
+            const float s32 = (t78 * t9);
+            const float s33 = ((-s32) + (-(t8 * t80)));
+            const float s34 = fdi_gen_sign(b[15].x1);
+            const float s35 = fdi_gen_heaviside((t23 + (-fdi_gen_max(0.5f, t87))));
+            const float s36 = (102.6675f * s34 * s35);
+            sv[0] = ((19.5f * s10 * ((326.3053f * b[2].x1) + (180.34483f * b[3].x1) + (-109.04921f * b[4].x1))) + (s11 * s14) + (-(s11 * s19)) + (s25 * ((-(s21 * ((-0.85f * t8) + (-0.398f * t9)))) + (-(s22 * ((0.398f * t8) + (-0.85f * t9)))) + (380.25f * s11 * s15 * s16 * s23 * s6) + (380.25f * s11 * s15 * s16 * s23 * t86)))); /* f3 */
+            sv[1] = ((3516.724f * s26) + (s14 * t9) + (-(s19 * t9)) + (s25 * ((-(s27 * t8)) + (-(s28 * t9)) + (380.25f * s15 * s16 * s23 * s6 * t9) + (380.25f * s15 * s16 * s23 * t86 * t9)))); /* f4 */
+            sv[2] = ((-2126.4595f * s26) + (-(s19 * t8)) + (19.5f * s12 * s8 * t8 * t91) + (19.5f * s12 * s24 * s3 * t91 * ((s27 * t9) + (-(s28 * t8)) + (s29 * s30) + (s30 * s31)))); /* f5 */
+            sv[3] = ((s14 * ((-s32) + (s1 * t8))) + (-(s19 * s33)) + (s25 * ((-(s21 * ((-2.0f * s0) + (2.0f * t80 * t9)))) + (-(s22 * ((-2.0f * s32) + (2.0f * s1 * t8)))) + (380.25f * s15 * s16 * s23 * s33 * s6) + (380.25f * s15 * s16 * s23 * s33 * t86)))); /* f6 */
+            sv[4] = -3.7037036f; /* f10 */
+            sv[5] = -3.7037036f; /* f14 */
+            sv[6] = 1.0f; /* f18 */
+            sv[7] = ((-5.265f * s13) + (-0.00035555556f * b[13].x1 * (2.0f + (-2.0f * (tanhf((2.0f * b[15].x1)) * tanhf((2.0f * b[15].x1)))))) + (19.5f * s12 * s24 * s3 * t91 * ((-(s20 * ((-0.1458f * b[15].x1) + (0.54f * s0) + (0.54f * s2)))) + (-(s29 * s36)) + (-(s31 * s36)))) + (5.265f * s12 * s3 * s34 * s35 * s4 * s8)); /* f22 */
+        }
+#endif
+    }
+    if ((run & 0x00000010U) != 0U) /* MSO49: K1 K2 D1 D2 W2.FL W2.dyn W2.D S3 S4 S5 S.omega2 */
+    {
+        const float value = ((-t120) + (-(t114 * t119)));
+        io->r[io->at[4]] = value;
+        if (!fdi_float_is_finite(value))
+        {
+            io->failed |= 0x00000010U;
+        }
+#if FDI_GEN_SENSITIVITIES
+        if ((io->sens_mask & 0x00000010U) != 0U) /* d r / d f: f3 f4 f5 f7 f11 f15 f19 f23 */
+        {
+            float *const sv = &io->sens[io->sens_at[4]];
+            const float s0 = (t78 * t96);
+            const float s1 = (t95 * t97);
+            const float s2 = ((0.27f * b[16].x1) + (-s0) + (-s1));
+            const float s3 = (s2 * s2);
+            const float s4 = (1.0f / (t107 * t107));
+            const float s5 = (380.25f * s4);
+            const float s6 = (t78 * t95);
+            const float s7 = ((-1.025f * b[2].x1) + (-b[3].x1));
+            const float s8 = (s7 * t96);
+            const float s9 = (s6 + s8);
+            const float s10 = (s9 * s9);
+            const float s11 = (1.0f + (s10 * s5) + (s3 * s5));
+            const float s12 = (1.0f / (sqrtf(s11)));
+            const float s13 = (s12 * t112);
+            const float s14 = (s13 * s2);
+            const float s15 = ((1.025f * t95) + (0.199f * t96));
+            const float s16 = (2565.315f + (-213.05959f * b[2].x2) + t71 + (-109.04921f * b[3].x2) + (109.04921f * b[2].x1 * ((-1.0f * b[2].x1) + b[4].x1)) + (180.34483f * b[2].x1 * ((0.3f * b[2].x1) + b[3].x1)));
+            const float s17 = (s13 * s16);
+            const float s18 = (19.5f * s17);
+            const float s19 = fdi_gen_heaviside((t106 + (-fdi_gen_max(0.5f, t102))));
+            const float s20 = ((-0.199f * b[2].x1) + t0);
+            const float s21 = fdi_gen_sign(((s20 * t96) + (s7 * t95)));
+            const float s22 = (s19 * s21);
+            const float s23 = (19.5f * s16 * s2);
+            const float s24 = (s12 * s22 * s23 * s4);
+            const float s25 = (190.125f * s4);
+            const float s26 = (s2 * s25);
+            const float s27 = (s25 * s9);
+            const float s28 = (1.0f / (t107 * t107 * t107));
+            const float s29 = (1.0f / (s11 * sqrtf(s11)));
+            const float s30 = (s23 * s29 * t112);
+            const float s31 = (b[2].x1 * s14);
+            const float s32 = (s5 * t95);
+            const float s33 = (s5 * t96);
+            const float s34 = (s28 * s3);
+            const float s35 = (380.25f * s22 * t96);
+            const float s36 = (s10 * s28);
+            const float s37 = ((-s8) + (s20 * t95));
+            const float s38 = fdi_gen_sign(b[16].x1);
+            const float s39 = fdi_gen_heaviside((t102 + (-fdi_gen_max(0.5f, t106))));
+            const float s40 = (102.6675f * s38 * s39);
+            sv[0] = ((19.5f * s14 * ((109.89152f * b[2].x1) + (-180.34483f * b[3].x1) + (-109.04921f * b[4].x1))) + (s15 * s18) + (-(s15 * s24)) + (s30 * ((-(s26 * ((2.05f * t95) + (0.398f * t96)))) + (-(s27 * ((-0.398f * t95) + (2.05f * t96)))) + (380.25f * s10 * s15 * s19 * s21 * s28) + (380.25f * s15 * s19 * s21 * s28 * s3)))); /* f3 */
+            sv[1] = ((-3516.724f * s31) + (-(s24 * t95)) + (19.5f * s12 * s16 * t112 * t95) + (19.5f * s16 * s2 * s29 * t112 * ((-(s2 * s32)) + (-(s33 * s9)) + (380.25f * s10 * s19 * s21 * s28 * t95) + (380.25f * s19 * s21 * s28 * s3 * t95)))); /* f4 */
+            sv[2] = ((-2126.4595f * s31) + (-(s24 * t96)) + (19.5f * s12 * s16 * t112 * t96) + (19.5f * s16 * s2 * s29 * t112 * ((-(s2 * s33)) + (s32 * s9) + (s34 * s35) + (s35 * s36)))); /* f5 */
+            sv[3] = ((s18 * ((-s6) + (t96 * t97))) + (-(s24 * s37)) + (s30 * ((-(s26 * ((-2.0f * s6) + (2.0f * t96 * t97)))) + (-(s27 * ((-2.0f * s0) + (2.0f * s7 * t95)))) + (380.25f * s10 * s19 * s21 * s28 * s37) + (380.25f * s19 * s21 * s28 * s3 * s37)))); /* f7 */
+            sv[4] = -3.7037036f; /* f11 */
+            sv[5] = -3.7037036f; /* f15 */
+            sv[6] = 1.0f; /* f19 */
+            sv[7] = ((-5.265f * s17) + (-0.00035555556f * b[13].x1 * (2.0f + (-2.0f * (tanhf((2.0f * b[16].x1)) * tanhf((2.0f * b[16].x1)))))) + (19.5f * s16 * s2 * s29 * t112 * ((-(s25 * ((-0.1458f * b[16].x1) + (0.54f * s0) + (0.54f * s1)))) + (-(s34 * s40)) + (-(s36 * s40)))) + (5.265f * s12 * s16 * s2 * s38 * s39 * s4)); /* f23 */
+        }
+#endif
+    }
+    if ((run & 0x00000020U) != 0U) /* MSO59: K1 K2 D1 D2 W3.FL W3.dyn W3.D S3 S4 S5 S.omega3 */
+    {
+        const float value = ((5.9259257f * b[11].x1) + (-3.3333333f * b[17].x2) + (-(t121 * tanhf((2.0f * b[17].x1)))) + (-(t123 * t145)));
+        io->r[io->at[5]] = value;
+        if (!fdi_float_is_finite(value))
+        {
+            io->failed |= 0x00000020U;
+        }
+#if FDI_GEN_SENSITIVITIES
+        if ((io->sens_mask & 0x00000020U) != 0U) /* d r / d f: f3 f4 f5 f8 f12 f16 f20 f24 */
+        {
+            float *const sv = &io->sens[io->sens_at[5]];
+            const float s0 = ((-0.425f * b[2].x1) + b[3].x1);
+            const float s1 = (s0 * t125);
+            const float s2 = (-b[4].x1);
+            const float s3 = ((-2.199f * b[2].x1) + (-s2));
+            const float s4 = (s3 * t127);
+            const float s5 = (s1 + s4);
+            const float s6 = ((0.27f * b[17].x1) + (-s5));
+            const float s7 = (s3 * t125);
+            const float s8 = (s7 + t133);
+            const float s9 = (s8 * s8);
+            const float s10 = (1.0f / (t139 * t139));
+            const float s11 = (380.25f * s10);
+            const float s12 = (s6 * s6);
+            const float s13 = (1.0f + (s11 * s12) + (s11 * s9));
+            const float s14 = (1.0f / (sqrtf(s13)));
+            const float s15 = (s14 * t142);
+            const float s16 = (s15 * s6);
+            const float s17 = ((0.425f * t125) + (2.199f * t127));
+            const float s18 = (2565.315f + (213.05959f * b[2].x2) + t73 + (-180.34483f * b[4].x2) + (-109.04921f * b[2].x1 * ((-1.0f * b[2].x1) + (-s2))) + (-180.34483f * b[2].x1 * ((0.3f * b[2].x1) + b[3].x1)));
+            const float s19 = (s15 * s18);
+            const float s20 = (19.5f * s19);
+            const float s21 = fdi_gen_heaviside((t138 + (-fdi_gen_max(0.5f, t136))));
+            const float s22 = fdi_gen_sign(s5);
+            const float s23 = (s21 * s22);
+            const float s24 = (19.5f * s18 * s6);
+            const float s25 = (s10 * s14 * s23 * s24);
+            const float s26 = (190.125f * s10);
+            const float s27 = (s26 * s8);
+            const float s28 = (s26 * s6);
+            const float s29 = (1.0f / (t139 * t139 * t139));
+            const float s30 = (1.0f / (s13 * sqrtf(s13)));
+            const float s31 = (s24 * s30 * t142);
+            const float s32 = (b[2].x1 * s16);
+            const float s33 = (s11 * t127);
+            const float s34 = (s29 * s9);
+            const float s35 = (380.25f * s23);
+            const float s36 = (s35 * t125);
+            const float s37 = (s12 * s29);
+            const float s38 = (s35 * t127);
+            const float s39 = (s7 + (-(s0 * t127)));
+            const float s40 = fdi_gen_sign(b[17].x1);
+            const float s41 = fdi_gen_heaviside((t136 + (-fdi_gen_max(0.5f, t138))));
+            const float s42 = (102.6675f * s40 * s41);
+            sv[0] = ((19.5f * s16 * ((-109.89152f * b[2].x1) + (180.34483f * b[3].x1) + (109.04921f * b[4].x1))) + (-(s17 * s20)) + (-(s17 * s25)) + (s31 * ((-(s27 * ((4.398f * t125) + (-0.85f * t127)))) + (-(s28 * ((-0.85f * t125) + (-4.398f * t127)))) + (380.25f * s12 * s17 * s21 * s22 * s29) + (380.25f * s17 * s21 * s22 * s29 * s9)))); /* f3 */
+            sv[1] = ((3516.724f * s32) + (s20 * t125) + (s25 * t125) + (s31 * ((-(s33 * s8)) + (-(s34 * s36)) + (-(s36 * s37)) + (-(s11 * s6 * t125))))); /* f4 */
+            sv[2] = ((2126.4595f * s32) + (s20 * t127) + (s25 * t127) + (s31 * ((-(s33 * s6)) + (-(s34 * s38)) + (-(s37 * s38)) + (380.25f * s10 * s8 * t125)))); /* f5 */
+            sv[3] = ((-(s20 * s39)) + (-(s25 * s39)) + (s31 * ((-(s27 * ((-2.0f * s4) + (2.0f * t125 * t80)))) + (-(s28 * ((-2.0f * s7) + (2.0f * s0 * t127)))) + (380.25f * s12 * s21 * s22 * s29 * s39) + (380.25f * s21 * s22 * s29 * s39 * s9)))); /* f8 */
+            sv[4] = -3.7037036f; /* f12 */
+            sv[5] = -3.7037036f; /* f16 */
+            sv[6] = 1.0f; /* f20 */
+            sv[7] = ((-5.265f * s19) + (-0.00035555556f * b[14].x1 * (2.0f + (-2.0f * (tanhf((2.0f * b[17].x1)) * tanhf((2.0f * b[17].x1)))))) + (19.5f * s18 * s30 * s6 * t142 * ((-(s26 * ((-0.1458f * b[17].x1) + (0.54f * s1) + (0.54f * s4)))) + (-(s34 * s42)) + (-(s37 * s42)))) + (5.265f * s10 * s14 * s18 * s40 * s41 * s6)); /* f24 */
+        }
+#endif
+    }
+    if ((run & 0x00000040U) != 0U) /* MSO1670: B1 K1 D1 W1.FL W3.FL W1.FS W2.FS W3.FS W4.FS W1.Fx W2.Fx W3.Fx W4.Fx W1.dyn W2.dyn W4.dyn W1.D W2.D W4.D S2 S3 S4 S5 S.omega2 S.omega3 S.omega4 */
+    {
+        fdi_obs_t *const o = &io->obs[io->at[6]];
+        const float t166 = (1.5795f * t153);
+        const float t175 = (5.265f * t9);
+        const float t215 = ((-313.8f * b[2].x2) + t182 + t185 + t214 + (t144 * t192) + (t145 * t193) + (19.5f * t194 * t212) + (t114 * t188 * (t187 + t76)));
+        float xh = 0.0f;
+        if ((io->restart & 0x00000040U) != 0U)
+        {
+            const float x0 = in->value[ROMO_SIG_OMEGA1_M]; /* omega1 from its sensor outside the MSO set */
+            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;
+        }
+        else
+        {
+            const float xp = o->xh;
+            const float t147 = tanhf((2.0f * xp));
+            const float t154 = (0.27f * fabsf(xp));
+            const float t155 = fdi_gen_max(0.5f, fdi_gen_max(t154, t87));
+            const float t156 = (1.0f / (t155 * t155));
+            const float t157 = (380.25f * t156);
+            const float t158 = ((-t83) + (0.27f * xp));
+            const float t159 = (t158 * t158);
+            const float t160 = (1.0f + (t157 * t159) + (t157 * t86));
+            const float t161 = (1.0f / (sqrtf(t160)));
+            const float t162 = (1.0f / (t155));
+            const float t163 = (t161 * t162);
+            const float t164 = (t153 * t163);
+            const float t165 = (5.85f * t158);
+            const float t167 = fdi_gen_sign(xp);
+            const float t169 = fdi_gen_heaviside((t154 + t168));
+            const float t172 = ((1.0f / (t155 * t155 * t155)) * t167 * t169);
+            const float t173 = (t153 * (1.0f / (t160 * sqrtf(t160))) * t162 * ((-190.125f * t156 * ((-t170) + (0.1458f * xp))) + (102.6675f * t159 * t172) + (t171 * t172)));
+            const float t174 = ((t148 * (2.0f + (-2.0f * (t147 * t147)))) + (t163 * t166) + (t165 * t173) + (-1.5795f * t153 * t156 * t158 * t161 * t167 * t169));
+            const float t177 = (19.5f * t173);
+            const float t178 = (t158 * t9);
+            const float t179 = ((-(t164 * t175)) + (-(t176 * t177)) + (-(t177 * t178)) + (5.265f * t153 * t156 * t158 * t161 * t167 * t169 * t9) + (5.265f * t153 * t156 * t161 * t167 * t169 * t8 * t85));
+            const float t180 = (19.5f * t164);
+            const float f = ((-t146) + (-(t147 * t148)) + (-(t164 * t165)));
+            const float l = (-(t179 * (1.0f / (7140.25f + (t179 * t179))) * fdi_gen_max(0.0f, (12.566371f + (-t174)))));
+            const float a = (-t174);
+            const float c = t179;
+            const float e = ((-t215) + (-(t176 * t180)) + (-(t178 * t180)));
+            xh = fdi_gen_obs_predict(o, io->par, f + (l * e), a + (l * c));
+        }
+        {
+            const float t216 = tanhf((2.0f * xh));
+            const float t217 = (0.27f * fabsf(xh));
+            const float t218 = fdi_gen_max(0.5f, fdi_gen_max(t217, t87));
+            const float t219 = (1.0f / (t218 * t218));
+            const float t220 = (380.25f * t219);
+            const float t221 = ((-t83) + (0.27f * xh));
+            const float t222 = (t221 * t221);
+            const float t223 = (1.0f + (t220 * t222) + (t220 * t86));
+            const float t224 = (1.0f / (sqrtf(t223)));
+            const float t225 = (1.0f / (t218));
+            const float t226 = (t224 * t225);
+            const float t227 = (t153 * t226);
+            const float t228 = (5.85f * t221);
+            const float t229 = fdi_gen_sign(xh);
+            const float t230 = fdi_gen_heaviside((t168 + t217));
+            const float t231 = ((1.0f / (t218 * t218 * t218)) * t229 * t230);
+            const float t232 = (t153 * (1.0f / (t223 * sqrtf(t223))) * t225 * ((t171 * t231) + (-190.125f * t219 * ((-t170) + (0.1458f * xh))) + (102.6675f * t222 * t231)));
+            const float t233 = (19.5f * t232);
+            const float t234 = (t221 * t9);
+            const float t235 = ((-(t175 * t227)) + (-(t176 * t233)) + (-(t233 * t234)) + (5.265f * t153 * t219 * t221 * t224 * t229 * t230 * t9) + (5.265f * t153 * t219 * t224 * t229 * t230 * t8 * t85));
+            const float t236 = (19.5f * t227);
+            const float f = ((-t146) + (-(t148 * t216)) + (-(t227 * t228)));
+            const float l = (-(t235 * (1.0f / (7140.25f + (t235 * t235))) * fdi_gen_max(0.0f, (12.566371f + (-(t148 * (2.0f + (-2.0f * (t216 * t216))))) + (-(t166 * t226)) + (-(t228 * t232)) + (1.5795f * t153 * t219 * t221 * t224 * t229 * t230)))));
+            const float value = ((-t215) + (-(t176 * t236)) + (-(t234 * t236)));
+            io->r[io->at[6]] = value;
+            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, f + (l * value)) != FDI_OK))
+            {
+                io->failed |= 0x00000040U;
+            }
+#if FDI_GEN_SENSITIVITIES
+            if ((io->sens_mask & 0x00000040U) != 0U) /* d r / d f: f2 f3 f4 f5 f6 f7 f8 f9 f10 f11 f13 f14 f15 f17 f18 f19 f20 f21 f23 f24 f25 */
+            {
+                float *const sv = &io->sens[io->sens_at[6]];
+                const float s0 = (180.34483f * b[1].x1);
+                const float s1 = (32.714764f * b[2].x2);
+                const float s2 = (109.04921f * b[3].x2);
+                const float s3 = (-b[4].x1);
+                const float s4 = (109.04921f * b[2].x1 * ((-1.0f * b[2].x1) + (-s3)));
+                const float s5 = (-s4);
+                const float s6 = (2565.315f + (-s0) + (-s1) + (-s2) + (-s5));
+                const float s7 = (380.25f * t219);
+                const float s8 = (t78 * t8);
+                const float s9 = ((-0.425f * b[2].x1) + b[3].x1);
+                const float s10 = (s9 * t9);
+                const float s11 = ((-s10) + (-s8) + (0.27f * xh));
+                const float s12 = (s11 * s11);
+                const float s13 = (1.0f + (s12 * s7) + (s7 * t86));
+                const float s14 = (1.0f / (sqrtf(s13)));
+                const float s15 = (s14 * t225);
+                const float s16 = (s15 * s6);
+                const float s17 = (s16 * t9);
+                const float s18 = (t8 * t85);
+                const float s19 = (1.0f / (t218 * t218 * t218));
+                const float s20 = (s19 * t86);
+                const float s21 = (t229 * t230);
+                const float s22 = (102.6675f * s21);
+                const float s23 = (190.125f * t219);
+                const float s24 = (s12 * s19);
+                const float s25 = ((s20 * s22) + (s22 * s24) + (-(s23 * ((-0.54f * s10) + (-0.54f * s8) + (0.1458f * xh)))));
+                const float s26 = (1.0f / (s13 * sqrtf(s13)));
+                const float s27 = (s26 * t225);
+                const float s28 = (s25 * s27);
+                const float s29 = (s28 * s6);
+                const float s30 = (19.5f * s29);
+                const float s31 = (s11 * t9);
+                const float s32 = ((-5.265f * s17) + (-(s18 * s30)) + (-(s30 * s31)) + (5.265f * s11 * s14 * s6 * t219 * t229 * t230 * t9) + (5.265f * s14 * s6 * t219 * t229 * t230 * t8 * t85));
+                const float s33 = (s11 * s15);
+                const float s34 = (s11 * s6);
+                const float s35 = (5.85f * s34);
+                const float s36 = ((1.5795f * s16) + (0.00010666667f * b[13].x1 * (2.0f + (-2.0f * (t216 * t216)))) + (s28 * s35) + (-1.5795f * s11 * s14 * s6 * t219 * t229 * t230));
+                const float s37 = (-s36);
+                const float s38 = (3516.724f * s15);
+                const float s39 = ((-2.199f * b[2].x1) + (-s3));
+                const float s40 = (s39 * t125);
+                const float s41 = (s40 + t133);
+                const float s42 = (s41 * s41);
+                const float s43 = (1.0f / (t139 * t139));
+                const float s44 = (380.25f * s43);
+                const float s45 = (s9 * t125);
+                const float s46 = (s39 * t127);
+                const float s47 = (s45 + s46);
+                const float s48 = ((0.27f * b[17].x1) + (-s47));
+                const float s49 = (s48 * s48);
+                const float s50 = (1.0f + (s42 * s44) + (s44 * s49));
+                const float s51 = (1.0f / (sqrtf(s50)));
+                const float s52 = (s51 * t142);
+                const float s53 = (3516.724f * s52);
+                const float s54 = (s41 * t127);
+                const float s55 = (t78 * t95);
+                const float s56 = ((-1.025f * b[2].x1) + (-b[3].x1));
+                const float s57 = (s56 * t96);
+                const float s58 = (s55 + s57);
+                const float s59 = (t78 * t96);
+                const float s60 = (t95 * t97);
+                const float s61 = ((0.27f * b[16].x1) + (-s59) + (-s60));
+                const float s62 = (s61 * s61);
+                const float s63 = (1.0f / (t107 * t107));
+                const float s64 = (380.25f * s63);
+                const float s65 = (s58 * s58);
+                const float s66 = (1.0f + (s62 * s64) + (s64 * s65));
+                const float s67 = (1.0f / (sqrtf(s66)));
+                const float s68 = (s48 * t125);
+                const float s69 = (s39 * t183);
+                const float s70 = (s69 + (s56 * t195));
+                const float s71 = (t183 * t97);
+                const float s72 = (s39 * t195);
+                const float s73 = ((0.27f * b[18].x1) + (-s71) + (-s72));
+                const float s74 = (s73 * s73);
+                const float s75 = (1.0f / (t203 * t203));
+                const float s76 = (380.25f * s75);
+                const float s77 = (s70 * s70);
+                const float s78 = (1.0f + (s74 * s76) + (s76 * s77));
+                const float s79 = (1.0f / (sqrtf(s78)));
+                const float s80 = (s32 * s32);
+                const float s81 = (1.0f / (fdi_gen_min(-0.1f, ((-s36) + (-(s80 * (1.0f / (7140.25f + s80)) * fdi_gen_max(0.0f, (12.566371f + (-s36)))))))));
+                const float s82 = ((218.09842f * b[2].x1) + (-109.04921f * b[4].x1));
+                const float s83 = (s33 * s82);
+                const float s84 = ((0.199f * t8) + (-0.425f * t9));
+                const float s85 = (s16 * s84);
+                const float s86 = fdi_gen_heaviside((t87 + (-fdi_gen_max(0.5f, t217))));
+                const float s87 = ((-s8) + (t80 * t9));
+                const float s88 = fdi_gen_sign(s87);
+                const float s89 = (s23 * t85);
+                const float s90 = (s11 * s23);
+                const float s91 = (s27 * ((-(s89 * ((-0.85f * t8) + (-0.398f * t9)))) + (-(s90 * ((0.398f * t8) + (-0.85f * t9)))) + (380.25f * s12 * s19 * s84 * s86 * s88) + (380.25f * s19 * s84 * s86 * s88 * t86)));
+                const float s92 = (19.5f * s82);
+                const float s93 = (s15 * t85);
+                const float s94 = (19.5f * s16);
+                const float s95 = (19.5f * s91);
+                const float s96 = (s6 * t85);
+                const float s97 = (s86 * s88);
+                const float s98 = (s14 * t219);
+                const float s99 = (s97 * s98);
+                const float s100 = (-19.5f * s82);
+                const float s101 = (s41 * s52);
+                const float s102 = (2565.315f + s5 + t150 + t73);
+                const float s103 = ((-s0) + s102);
+                const float s104 = (s103 * s52);
+                const float s105 = (19.5f * s104);
+                const float s106 = ((0.425f * t125) + (2.199f * t127));
+                const float s107 = fdi_gen_heaviside((t138 + (-fdi_gen_max(0.5f, t136))));
+                const float s108 = fdi_gen_sign(s47);
+                const float s109 = (s103 * s41);
+                const float s110 = (19.5f * s109);
+                const float s111 = (190.125f * s43);
+                const float s112 = (s111 * s41);
+                const float s113 = (s111 * s48);
+                const float s114 = (1.0f / (t139 * t139 * t139));
+                const float s115 = ((1.0f / (s50 * sqrtf(s50))) * t142);
+                const float s116 = (s115 * ((-(s112 * ((4.398f * t125) + (-0.85f * t127)))) + (-(s113 * ((-0.85f * t125) + (-4.398f * t127)))) + (380.25f * s106 * s107 * s108 * s114 * s42) + (380.25f * s106 * s107 * s108 * s114 * s49)));
+                const float s117 = (s67 * t112);
+                const float s118 = (s117 * s58);
+                const float s119 = (2565.315f + (-s1) + (-s2) + s4 + t12);
+                const float s120 = (19.5f * s119);
+                const float s121 = (s117 * s120);
+                const float s122 = ((1.025f * t95) + (0.199f * t96));
+                const float s123 = fdi_gen_heaviside((t106 + (-fdi_gen_max(0.5f, t102))));
+                const float s124 = ((-0.199f * b[2].x1) + t0);
+                const float s125 = fdi_gen_sign(((s124 * t96) + (s56 * t95)));
+                const float s126 = (190.125f * s63);
+                const float s127 = (s126 * s61);
+                const float s128 = (s126 * s58);
+                const float s129 = (1.0f / (t107 * t107 * t107));
+                const float s130 = (s120 * s58);
+                const float s131 = (s130 * (1.0f / (s66 * sqrtf(s66))) * t112);
+                const float s132 = (s48 * s52);
+                const float s133 = (s103 * s48);
+                const float s134 = (19.5f * s133);
+                const float s135 = (s107 * s108);
+                const float s136 = (s43 * s51);
+                const float s137 = (s135 * s136);
+                const float s138 = (s79 * t210);
+                const float s139 = (s102 + t12);
+                const float s140 = (19.5f * s139);
+                const float s141 = (s138 * s140);
+                const float s142 = (s138 * s70);
+                const float s143 = ((1.025f * t183) + (-2.199f * t195));
+                const float s144 = fdi_gen_heaviside((t202 + (-fdi_gen_max(0.5f, t200))));
+                const float s145 = (s56 * t183);
+                const float s146 = (s145 + (-s72));
+                const float s147 = fdi_gen_sign(s146);
+                const float s148 = (190.125f * s75);
+                const float s149 = (s148 * s73);
+                const float s150 = (s148 * s70);
+                const float s151 = (1.0f / (t203 * t203 * t203));
+                const float s152 = (s140 * s70 * (1.0f / (s78 * sqrtf(s78))) * t210);
+                const float s153 = (5.85f * s17);
+                const float s154 = (s7 * t85);
+                const float s155 = (s11 * s7);
+                const float s156 = (s27 * ((-(s154 * t8)) + (-(s155 * t9)) + (380.25f * s12 * s19 * s86 * s88 * t9) + (380.25f * s19 * s86 * s88 * t86 * t9)));
+                const float s157 = (s94 * t8);
+                const float s158 = (19.5f * s156);
+                const float s159 = (19.5f * s17);
+                const float s160 = (s31 * s6);
+                const float s161 = (s105 * t127);
+                const float s162 = (s44 * t127);
+                const float s163 = (s114 * s42);
+                const float s164 = (380.25f * s135);
+                const float s165 = (s164 * t125);
+                const float s166 = (s114 * s49);
+                const float s167 = (s115 * ((-(s162 * s41)) + (-(s163 * s165)) + (-(s165 * s166)) + (-(s44 * s48 * t125))));
+                const float s168 = (s64 * t95);
+                const float s169 = (s64 * t96);
+                const float s170 = (s105 * t125);
+                const float s171 = (19.5f * s103 * s137);
+                const float s172 = (s76 * t183);
+                const float s173 = (s76 * t195);
+                const float s174 = (b[2].x1 * s33);
+                const float s175 = (5.85f * s16);
+                const float s176 = (380.25f * s97 * t8);
+                const float s177 = ((s154 * t9) + (-(s155 * t8)) + (s176 * s20) + (s176 * s24));
+                const float s178 = (s177 * s27);
+                const float s179 = (2126.4595f * b[2].x1);
+                const float s180 = (s18 * s6);
+                const float s181 = (19.5f * s99);
+                const float s182 = (s181 * s34);
+                const float s183 = (s164 * t127);
+                const float s184 = (s115 * ((-(s162 * s48)) + (-(s163 * s183)) + (-(s166 * s183)) + (380.25f * s41 * s43 * t125)));
+                const float s185 = (s123 * s125);
+                const float s186 = (s63 * s67);
+                const float s187 = (s129 * s62);
+                const float s188 = (380.25f * s185 * t96);
+                const float s189 = (s129 * s65);
+                const float s190 = (s134 * s137);
+                const float s191 = (s151 * s74);
+                const float s192 = (380.25f * s144 * s147 * t195);
+                const float s193 = (s151 * s77);
+                const float s194 = (t78 * t9);
+                const float s195 = ((-s194) + (s9 * t8));
+                const float s196 = ((-s194) + (-(t8 * t80)));
+                const float s197 = (s27 * ((-(s89 * ((-2.0f * s8) + (2.0f * t80 * t9)))) + (-(s90 * ((-2.0f * s194) + (2.0f * s9 * t8)))) + (380.25f * s12 * s19 * s196 * s86 * s88) + (380.25f * s19 * s196 * s86 * s88 * t86)));
+                const float s198 = (19.5f * s197);
+                const float s199 = tanhf((2.0f * b[16].x1));
+                const float s200 = (0.00035555556f * b[13].x1);
+                const float s201 = ((-s57) + (s124 * t95));
+                const float s202 = (s37 * s81);
+                const float s203 = (s40 + (-(s9 * t127)));
+                const float s204 = (s115 * ((-(s112 * ((-2.0f * s46) + (2.0f * t125 * t80)))) + (-(s113 * ((-2.0f * s40) + (2.0f * s9 * t127)))) + (380.25f * s107 * s108 * s114 * s203 * s42) + (380.25f * s107 * s108 * s114 * s203 * s49)));
+                const float s205 = tanhf((2.0f * b[18].x1));
+                const float s206 = (0.00035555556f * b[14].x1);
+                const float s207 = (-s70);
+                const float s208 = (21.666666f * s29);
+                const float s209 = (s81 * ((-s153) + (-(s18 * s208)) + (-(s208 * s31)) + (5.85f * s11 * s14 * s6 * t219 * t229 * t230 * t9) + (5.85f * s14 * s6 * t219 * t229 * t230 * t8 * t85)));
+                const float s210 = (3.7037036f * s202);
+                const float s211 = (s210 * t95);
+                const float s212 = (s210 * t183);
+                const float s213 = (1.5795f * s21 * s98);
+                const float s214 = (fdi_gen_heaviside((t102 + (-fdi_gen_max(0.5f, t106)))) * fdi_gen_sign(b[16].x1));
+                const float s215 = (102.6675f * s214);
+                const float s216 = (fdi_gen_heaviside((t136 + (-fdi_gen_max(0.5f, t138)))) * fdi_gen_sign(b[17].x1));
+                const float s217 = (5.265f * s136 * s216);
+                const float s218 = (102.6675f * s216);
+                const float s219 = (s115 * ((-(s111 * ((-0.1458f * b[17].x1) + (0.54f * s45) + (0.54f * s46)))) + (-(s163 * s218)) + (-(s166 * s218))));
+                const float s220 = (fdi_gen_heaviside((t200 + (-fdi_gen_max(0.5f, t202)))) * fdi_gen_sign(b[18].x1));
+                const float s221 = (102.6675f * s220);
+                sv[0] = (s81 * ((-1055.0172f * s32 * s33) + (-(s37 * ((-(s18 * s38)) + (-(s31 * s38)) + (-(s53 * s54)) + (-(s53 * s68)) + (3516.724f * s58 * s67 * t112 * t96) + (3516.724f * s70 * s79 * t195 * t210)))))); /* f2 */
+                sv[1] = (s81 * ((s32 * ((-5.85f * s83) + (-5.85f * s85) + (-(s35 * s91)) + (5.85f * s11 * s14 * s6 * s84 * s86 * s88 * t219))) + (-(s37 * ((-2092.0f * b[2].x1) + (1046.0f * b[4].x1) + (-(t125 * ((s100 * s132) + (-(s105 * s106)) + (s116 * s134) + (-(s106 * s134 * s137))))) + (t127 * ((-(s100 * s101)) + (-(s105 * ((2.199f * t125) + (-0.425f * t127)))) + (-(s110 * s116)) + (19.5f * s103 * s106 * s107 * s108 * s41 * s43 * s51))) + (t195 * ((-(s100 * s142)) + (-(s141 * ((2.199f * t183) + (1.025f * t195)))) + (-(s152 * ((-(s149 * ((2.05f * t183) + (-4.398f * t195)))) + (-(s150 * ((4.398f * t183) + (2.05f * t195)))) + (380.25f * s143 * s144 * s147 * s151 * s74) + (380.25f * s143 * s144 * s147 * s151 * s77)))) + (19.5f * s139 * s143 * s144 * s147 * s70 * s75 * s79))) + (t8 * ((-(s92 * s93)) + (-(s94 * ((-0.425f * t8) + (-0.199f * t9)))) + (-(s95 * s96)) + (19.5f * s14 * s6 * s84 * s86 * s88 * t219 * t85))) + (-(t9 * ((19.5f * s83) + (19.5f * s85) + (s34 * s95) + (-19.5f * s34 * s84 * s99)))) + (t96 * ((-(s118 * s92)) + (-(s121 * ((-0.199f * t95) + (1.025f * t96)))) + (-(s131 * ((-(s127 * ((2.05f * t95) + (0.398f * t96)))) + (-(s128 * ((-0.398f * t95) + (2.05f * t96)))) + (380.25f * s122 * s123 * s125 * s129 * s62) + (380.25f * s122 * s123 * s125 * s129 * s65)))) + (19.5f * s119 * s122 * s123 * s125 * s58 * s63 * s67)))))))); /* f3 */
+                sv[2] = (s81 * ((s32 * ((-s153) + (-(s156 * s35)) + (5.85f * s11 * s14 * s6 * s86 * s88 * t219 * t9))) + (-(s37 * ((-(t125 * (s170 + (s134 * s167) + (s171 * s68)))) + (t127 * ((-s161) + (-(s110 * s167)) + (-(s110 * s137 * t125)))) + (t195 * ((-(s141 * t195)) + (-(s152 * ((-(s172 * s73)) + (-(s173 * s70)) + (380.25f * s144 * s147 * s151 * s74 * t183) + (380.25f * s144 * s147 * s151 * s77 * t183)))) + (19.5f * s139 * s144 * s147 * s70 * s75 * s79 * t183))) + (t8 * ((-s157) + (-(s158 * s96)) + (19.5f * s14 * s6 * s86 * s88 * t219 * t85 * t9))) + (-(t9 * (s159 + (s158 * s34) + (-19.5f * s160 * s99)))) + (t96 * ((-(s121 * t96)) + (-(s131 * ((-(s168 * s61)) + (-(s169 * s58)) + (380.25f * s123 * s125 * s129 * s62 * t95) + (380.25f * s123 * s125 * s129 * s65 * t95)))) + (19.5f * s119 * s123 * s125 * s58 * s63 * s67 * t95)))))))); /* f4 */
+                sv[3] = (s81 * ((s32 * ((637.93787f * s174) + (-(s175 * t8)) + (-(s178 * s35)) + (s35 * s99 * t8))) + (-(s37 * ((1046.0f * b[2].x1) + (-(t125 * (s161 + (s132 * s179) + (s134 * s184) + (s190 * t127)))) + (t127 * ((-(s101 * s179)) + (-(s110 * s184)) + (-(s171 * s54)) + (19.5f * s103 * s51 * t125 * t142))) + (t195 * ((-(s142 * s179)) + (-(s152 * ((s172 * s70) + (-(s173 * s73)) + (s191 * s192) + (s192 * s193)))) + (19.5f * s139 * s79 * t183 * t210) + (19.5f * s139 * s144 * s147 * s70 * s75 * s79 * t195))) + (t8 * (s159 + (-19.5f * s178 * s96) + (s179 * s93) + (s180 * s181))) + (-(t9 * (s157 + (-2126.4595f * s174) + (-(s182 * t8)) + (19.5f * s11 * s177 * s26 * s6 * t225)))) + (t96 * ((s118 * s179) + (s121 * t95) + (-(s131 * ((s168 * s58) + (-(s169 * s61)) + (s187 * s188) + (s188 * s189)))) + (s130 * s185 * s186 * t96)))))))); /* f5 */
+                sv[4] = (s81 * ((s32 * ((-(s175 * s195)) + (-(s197 * s35)) + (5.85f * s11 * s14 * s196 * s6 * s86 * s88 * t219))) + (-(s37 * ((s11 * s157) + (-(s159 * t85)) + (t8 * ((-(s198 * s96)) + (-(s87 * s94)) + (19.5f * s14 * s196 * s6 * s86 * s88 * t219 * t85))) + (-(t9 * ((-(s182 * s196)) + (s195 * s94) + (s198 * s34))))))))); /* f6 */
+                sv[5] = (-(s202 * ((t96 * ((5.9259257f * b[10].x1) + (-3.3333333f * b[16].x2) + (-(s199 * s200)))) + (t96 * ((-(s121 * ((-s59) + (s56 * t95)))) + (-(s131 * ((-(s127 * ((-2.0f * s55) + (2.0f * t96 * t97)))) + (-(s128 * ((-2.0f * s59) + (2.0f * s56 * t95)))) + (380.25f * s123 * s125 * s129 * s201 * s62) + (380.25f * s123 * s125 * s129 * s201 * s65)))) + (19.5f * s119 * s123 * s125 * s201 * s58 * s63 * s67))) + (-(s118 * s120 * t95))))); /* f7 */
+                sv[6] = (-(s202 * ((-(s170 * s41)) + (-(t125 * ((-(s105 * s203)) + (s134 * s204) + (-(s190 * s203))))) + (t127 * ((-(s105 * ((-s46) + t137))) + (-(s110 * s204)) + (19.5f * s103 * s107 * s108 * s203 * s41 * s43 * s51))) + (19.5f * s103 * s48 * s51 * t127 * t142)))); /* f8 */
+                sv[7] = (-(s202 * ((t195 * ((5.9259257f * b[12].x1) + (-3.3333333f * b[18].x2) + (-(s205 * s206)))) + (t195 * ((-(s141 * s146)) + (-(s152 * ((-(s149 * ((-2.0f * s69) + (2.0f * t195 * t97)))) + (-(s150 * ((2.0f * s145) + (-2.0f * s72)))) + (380.25f * s144 * s147 * s151 * s207 * s74) + (380.25f * s144 * s147 * s151 * s207 * s77)))) + (19.5f * s139 * s144 * s147 * s207 * s70 * s75 * s79))) + (-(s140 * s142 * t183))))); /* f9 */
+                sv[8] = s209; /* f10 */
+                sv[9] = s211; /* f11 */
+                sv[10] = s212; /* f13 */
+                sv[11] = s209; /* f14 */
+                sv[12] = s211; /* f15 */
+                sv[13] = s212; /* f17 */
+                sv[14] = (s81 * ((-(s160 * s213)) + (-(s180 * s213)) + (-(s37 * (t8 + (-t9)))) + (1.5795f * s14 * s6 * t225 * t9) + (5.85f * s11 * s25 * s26 * s6 * t225 * t9) + (5.85f * s25 * s26 * s6 * t225 * t8 * t85))); /* f18 */
+                sv[15] = (-(s202 * t96)); /* f19 */
+                sv[16] = (-(s202 * ((-t125) + t127))); /* f20 */
+                sv[17] = (-(s202 * t195)); /* f21 */
+                sv[18] = (-(s202 * ((t96 * ((-(s131 * ((-(s126 * ((-0.1458f * b[16].x1) + (0.54f * s59) + (0.54f * s60)))) + (-(s187 * s215)) + (-(s189 * s215))))) + (-5.265f * s119 * s186 * s214 * s58))) + (-(s200 * t95 * (2.0f + (-2.0f * (s199 * s199)))))))); /* f23 */
+                sv[19] = (-(s202 * ((-(t125 * ((-5.265f * s104) + (s133 * s217) + (s134 * s219)))) + (t127 * ((-(s109 * s217)) + (-(s110 * s219))))))); /* f24 */
+                sv[20] = (-(s202 * ((t195 * ((-(s152 * ((-(s148 * ((-0.1458f * b[18].x1) + (0.54f * s71) + (0.54f * s72)))) + (-(s191 * s221)) + (-(s193 * s221))))) + (-5.265f * s139 * s220 * s70 * s75 * s79))) + (-(s206 * t183 * (2.0f + (-2.0f * (s205 * s205)))))))); /* f25 */
+            }
+#endif
+        }
+    }
+    if ((run & 0x00000080U) != 0U) /* MSO1958: B1 B2 B3 D.psidot K1 K2 D2 W1.FL W2.FL W4.FL W1.FS W2.FS W4.FS W1.Fx W2.Fx W4.Fx W1.Fy W2.Fy W4.Fy W4.dyn W4.D S1 S3 S4 S5 S.omega1 S.omega2 */
+    {
+        fdi_obs_t *const o = &io->obs[io->at[7]];
+        const float t240 = (-180.34483f * b[2].x2);
+        const float t241 = (t11 + t240);
+        const float t242 = (t116 + t241);
+        const float t255 = (1.5795f * t242);
+        const float t264 = (10.53f * t183);
+        const float t269 = ((-t11) + t116 + t240);
+        const float t270 = (t113 * t269);
+        const float t271 = (39.0f * t270);
+        const float t272 = ((-t122) + (-t241));
+        const float t276 = ((-1046.0f * b[0].x1) + (171.2469f * b[2].x2) + t275 + (t188 * t271) + (64.49793f * t110 * t270 * t96) + (t110 * t271 * t95) + (64.49793f * t272 * t8 * t93) + (-64.49793f * t100 * t111 * t112 * t269 * t95) + (-64.49793f * t272 * t85 * t9 * t90 * t91));
+        float xh = 0.0f;
+        if ((io->restart & 0x00000080U) != 0U)
+        {
+            const float x0 = in->value[ROMO_SIG_OMEGA4_M]; /* omega4 from its sensor outside the MSO set */
+            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;
+        }
+        else
+        {
+            const float xp = o->xh;
+            const float t238 = tanhf((2.0f * xp));
+            const float t243 = (0.27f * fabsf(xp));
+            const float t244 = fdi_gen_max(0.5f, fdi_gen_max(t202, t243));
+            const float t245 = (1.0f / (t244 * t244));
+            const float t246 = (380.25f * t245);
+            const float t247 = ((-t207) + (0.27f * xp));
+            const float t248 = (t247 * t247);
+            const float t249 = (1.0f + (t199 * t246) + (t246 * t248));
+            const float t250 = (1.0f / (sqrtf(t249)));
+            const float t251 = (1.0f / (t244));
+            const float t252 = (t250 * t251);
+            const float t253 = (t242 * t252);
+            const float t254 = (5.85f * t247);
+            const float t256 = fdi_gen_sign(xp);
+            const float t258 = fdi_gen_heaviside((t243 + t257));
+            const float t261 = ((1.0f / (t244 * t244 * t244)) * t256 * t258);
+            const float t262 = (t242 * (1.0f / (t249 * sqrtf(t249))) * t251 * ((-190.125f * t245 * ((-t259) + (0.1458f * xp))) + (102.6675f * t248 * t261) + (t260 * t261)));
+            const float t263 = ((t239 * (2.0f + (-2.0f * (t238 * t238)))) + (t252 * t255) + (t254 * t262) + (-1.5795f * t242 * t245 * t247 * t250 * t256 * t258));
+            const float t265 = (39.0f * t262);
+            const float t266 = (t183 * t247);
+            const float t267 = ((-(t198 * t265)) + (-(t253 * t264)) + (-(t265 * t266)) + (10.53f * t183 * t242 * t245 * t247 * t250 * t256 * t258) + (10.53f * t195 * t197 * t242 * t245 * t250 * t256 * t258));
+            const float t268 = (39.0f * t253);
+            const float f = ((-t237) + (-(t238 * t239)) + (-(t253 * t254)));
+            const float l = (-(t267 * (1.0f / (65025.0f + (t267 * t267))) * fdi_gen_max(0.0f, (12.566371f + (-t263)))));
+            const float a = (-t263);
+            const float c = t267;
+            const float e = ((-t276) + (-(t198 * t268)) + (-(t266 * t268)));
+            xh = fdi_gen_obs_predict(o, io->par, f + (l * e), a + (l * c));
+        }
+        {
+            const float t277 = tanhf((2.0f * xh));
+            const float t278 = (0.27f * fabsf(xh));
+            const float t279 = fdi_gen_max(0.5f, fdi_gen_max(t202, t278));
+            const float t280 = (1.0f / (t279 * t279));
+            const float t281 = (380.25f * t280);
+            const float t282 = ((-t207) + (0.27f * xh));
+            const float t283 = (t282 * t282);
+            const float t284 = (1.0f + (t199 * t281) + (t281 * t283));
+            const float t285 = (1.0f / (sqrtf(t284)));
+            const float t286 = (1.0f / (t279));
+            const float t287 = (t285 * t286);
+            const float t288 = (t242 * t287);
+            const float t289 = (5.85f * t282);
+            const float t290 = fdi_gen_sign(xh);
+            const float t291 = fdi_gen_heaviside((t257 + t278));
+            const float t292 = ((1.0f / (t279 * t279 * t279)) * t290 * t291);
+            const float t293 = (t242 * (1.0f / (t284 * sqrtf(t284))) * t286 * ((t260 * t292) + (-190.125f * t280 * ((-t259) + (0.1458f * xh))) + (102.6675f * t283 * t292)));
+            const float t294 = (39.0f * t293);
+            const float t295 = (t183 * t282);
+            const float t296 = ((-(t198 * t294)) + (-(t264 * t288)) + (-(t294 * t295)) + (10.53f * t183 * t242 * t280 * t282 * t285 * t290 * t291) + (10.53f * t195 * t197 * t242 * t280 * t285 * t290 * t291));
+            const float t297 = (39.0f * t288);
+            const float f = ((-t237) + (-(t239 * t277)) + (-(t288 * t289)));
+            const float l = (-(t296 * (1.0f / (65025.0f + (t296 * t296))) * fdi_gen_max(0.0f, (12.566371f + (-(t239 * (2.0f + (-2.0f * (t277 * t277))))) + (-(t255 * t287)) + (-(t289 * t293)) + (1.5795f * t242 * t280 * t282 * t285 * t290 * t291)))));
+            const float value = ((-t276) + (-(t198 * t297)) + (-(t295 * t297)));
+            io->r[io->at[7]] = value;
+            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, f + (l * value)) != FDI_OK))
+            {
+                io->failed |= 0x00000080U;
+            }
+#if FDI_GEN_SENSITIVITIES
+            if ((io->sens_mask & 0x00000080U) != 0U) /* d r / d f: f1 f3 f4 f5 f6 f7 f9 f13 f17 f18 f19 f21 f22 f23 */
+            {
+                float *const sv = &io->sens[io->sens_at[7]];
+                const float s0 = (180.34483f * b[2].x1 * ((0.3f * b[2].x1) + b[3].x1));
+                const float s1 = (2565.315f + s0 + t240 + t71);
+                const float s2 = (s1 + t11);
+                const float s3 = (t183 * t97);
+                const float s4 = ((-2.199f * b[2].x1) + b[4].x1);
+                const float s5 = (s4 * t195);
+                const float s6 = ((-s3) + (-s5) + (0.27f * xh));
+                const float s7 = (s6 * s6);
+                const float s8 = (380.25f * t280);
+                const float s9 = (s4 * t183);
+                const float s10 = ((-1.025f * b[2].x1) + (-b[3].x1));
+                const float s11 = (s9 + (s10 * t195));
+                const float s12 = (s11 * s11);
+                const float s13 = (1.0f + (s12 * s8) + (s7 * s8));
+                const float s14 = (1.0f / (sqrtf(s13)));
+                const float s15 = (s14 * t286);
+                const float s16 = (s15 * s2);
+                const float s17 = (s16 * t183);
+                const float s18 = (s6 * t183);
+                const float s19 = (190.125f * t280);
+                const float s20 = (t290 * t291);
+                const float s21 = (102.6675f * s20);
+                const float s22 = (1.0f / (t279 * t279 * t279));
+                const float s23 = (s22 * s7);
+                const float s24 = (s12 * s22);
+                const float s25 = ((-(s19 * ((-0.54f * s3) + (-0.54f * s5) + (0.1458f * xh)))) + (s21 * s23) + (s21 * s24));
+                const float s26 = (1.0f / (s13 * sqrtf(s13)));
+                const float s27 = (s26 * t286);
+                const float s28 = (s25 * s27);
+                const float s29 = (s2 * s28);
+                const float s30 = (39.0f * s29);
+                const float s31 = (s11 * t195);
+                const float s32 = ((-10.53f * s17) + (-(s18 * s30)) + (-(s30 * s31)) + (10.53f * s11 * s14 * s2 * t195 * t280 * t290 * t291) + (10.53f * s14 * s2 * s6 * t183 * t280 * t290 * t291));
+                const float s33 = (s15 * s6);
+                const float s34 = (s2 * s6);
+                const float s35 = (5.85f * s34);
+                const float s36 = ((1.5795f * s16) + (0.00010666667f * b[14].x1 * (2.0f + (-2.0f * (t277 * t277)))) + (s28 * s35) + (-1.5795f * s14 * s2 * s6 * t280 * t290 * t291));
+                const float s37 = (-s36);
+                const float s38 = (1.0f / (t88 * t88));
+                const float s39 = (380.25f * s38);
+                const float s40 = (t78 * t8);
+                const float s41 = ((-0.425f * b[2].x1) + b[3].x1);
+                const float s42 = (s41 * t9);
+                const float s43 = ((0.27f * b[15].x1) + (-s40) + (-s42));
+                const float s44 = (s43 * s43);
+                const float s45 = (1.0f + (s39 * s44) + (s39 * t86));
+                const float s46 = (1.0f / (sqrtf(s45)));
+                const float s47 = (s46 * t91);
+                const float s48 = (s43 * t8);
+                const float s49 = (t78 * t96);
+                const float s50 = (t95 * t97);
+                const float s51 = ((0.27f * b[16].x1) + (-s49) + (-s50));
+                const float s52 = (s51 * s51);
+                const float s53 = (1.0f / (t107 * t107));
+                const float s54 = (380.25f * s53);
+                const float s55 = (t78 * t95);
+                const float s56 = (s10 * t96);
+                const float s57 = (s55 + s56);
+                const float s58 = (s57 * s57);
+                const float s59 = (1.0f + (s52 * s54) + (s54 * s58));
+                const float s60 = (1.0f / (sqrtf(s59)));
+                const float s61 = (s60 * t112);
+                const float s62 = (4252.919f * s61);
+                const float s63 = (s51 * t95);
+                const float s64 = (s51 * t96);
+                const float s65 = (s57 * t96);
+                const float s66 = (s32 * s32);
+                const float s67 = (1.0f / (fdi_gen_min(-0.1f, ((-s36) + (-(s66 * (1.0f / (65025.0f + s66)) * fdi_gen_max(0.0f, (12.566371f + (-s36)))))))));
+                const float s68 = ((1.025f * t183) + (-2.199f * t195));
+                const float s69 = (s16 * s68);
+                const float s70 = ((108.206894f * b[2].x1) + (180.34483f * b[3].x1));
+                const float s71 = (-s70);
+                const float s72 = (s33 * s71);
+                const float s73 = fdi_gen_heaviside((t202 + (-fdi_gen_max(0.5f, t278))));
+                const float s74 = (s10 * t183);
+                const float s75 = ((-s5) + s74);
+                const float s76 = fdi_gen_sign(s75);
+                const float s77 = (s19 * s6);
+                const float s78 = (s11 * s19);
+                const float s79 = (s27 * ((-(s77 * ((2.05f * t183) + (-4.398f * t195)))) + (-(s78 * ((4.398f * t183) + (2.05f * t195)))) + (380.25f * s12 * s22 * s68 * s73 * s76) + (380.25f * s22 * s68 * s7 * s73 * s76)));
+                const float s80 = (19.5f * s70);
+                const float s81 = (s47 * t85);
+                const float s82 = (109.04921f * b[0].x1);
+                const float s83 = (2565.315f + (180.34483f * b[2].x2) + (-s0) + (-s82) + (-180.34483f * b[4].x2));
+                const float s84 = (s47 * s83);
+                const float s85 = (19.5f * s84);
+                const float s86 = ((0.199f * t8) + (-0.425f * t9));
+                const float s87 = fdi_gen_heaviside((t87 + (-fdi_gen_max(0.5f, t23))));
+                const float s88 = ((-s40) + (t80 * t9));
+                const float s89 = fdi_gen_sign(s88);
+                const float s90 = (190.125f * s38);
+                const float s91 = (s90 * t85);
+                const float s92 = (s43 * s90);
+                const float s93 = (1.0f / (t88 * t88 * t88));
+                const float s94 = ((1.0f / (s45 * sqrtf(s45))) * t91);
+                const float s95 = (s94 * ((-(s91 * ((-0.85f * t8) + (-0.398f * t9)))) + (-(s92 * ((0.398f * t8) + (-0.85f * t9)))) + (380.25f * s44 * s86 * s87 * s89 * s93) + (380.25f * s86 * s87 * s89 * s93 * t86)));
+                const float s96 = (s83 * t85);
+                const float s97 = (19.5f * s96);
+                const float s98 = (3.3075862f * t9);
+                const float s99 = (s43 * s47);
+                const float s100 = (s43 * s83);
+                const float s101 = (19.5f * s100);
+                const float s102 = (s87 * s89);
+                const float s103 = (s38 * s46);
+                const float s104 = (s102 * s103);
+                const float s105 = (3.3075862f * t8);
+                const float s106 = (19.5f * s71);
+                const float s107 = (s106 * s61);
+                const float s108 = ((1.025f * t95) + (0.199f * t96));
+                const float s109 = (s1 + (-s82));
+                const float s110 = (s109 * s61);
+                const float s111 = (19.5f * s110);
+                const float s112 = (s109 * s51);
+                const float s113 = (19.5f * s112);
+                const float s114 = fdi_gen_heaviside((t106 + (-fdi_gen_max(0.5f, t102))));
+                const float s115 = ((-0.199f * b[2].x1) + t0);
+                const float s116 = fdi_gen_sign(((s10 * t95) + (s115 * t96)));
+                const float s117 = (s114 * s116);
+                const float s118 = (s53 * s60);
+                const float s119 = (s117 * s118);
+                const float s120 = (190.125f * s53);
+                const float s121 = (s120 * s51);
+                const float s122 = (s120 * s57);
+                const float s123 = (1.0f / (t107 * t107 * t107));
+                const float s124 = (1.0f / (s59 * sqrtf(s59)));
+                const float s125 = (s124 * t112);
+                const float s126 = (s125 * ((-(s121 * ((2.05f * t95) + (0.398f * t96)))) + (-(s122 * ((-0.398f * t95) + (2.05f * t96)))) + (380.25f * s108 * s114 * s116 * s123 * s52) + (380.25f * s108 * s114 * s116 * s123 * s58)));
+                const float s127 = ((s107 * s51) + (s108 * s111) + (s113 * s126) + (-(s108 * s113 * s119)));
+                const float s128 = (2.0f * t95);
+                const float s129 = (3.3075862f * t96);
+                const float s130 = (s109 * s57);
+                const float s131 = (19.5f * s130);
+                const float s132 = ((-(s107 * s57)) + (-(s111 * ((-0.199f * t95) + (1.025f * t96)))) + (-(s126 * s131)) + (19.5f * s108 * s109 * s114 * s116 * s53 * s57 * s60));
+                const float s133 = (3.3075862f * t95);
+                const float s134 = (s73 * s76);
+                const float s135 = (s14 * t280);
+                const float s136 = (s134 * s135);
+                const float s137 = (19.5f * s79);
+                const float s138 = (2.0f * t183);
+                const float s139 = (19.5f * s16);
+                const float s140 = (s11 * s15);
+                const float s141 = (s11 * s2);
+                const float s142 = (b[2].x1 * s33);
+                const float s143 = (s18 * s2);
+                const float s144 = (s136 * s143);
+                const float s145 = (s8 * t183);
+                const float s146 = (s8 * t195);
+                const float s147 = ((-(s11 * s146)) + (-(s145 * s6)) + (380.25f * s12 * s22 * s73 * s76 * t183) + (380.25f * s22 * s7 * s73 * s76 * t183));
+                const float s148 = (s147 * s27);
+                const float s149 = (3516.724f * b[2].x1);
+                const float s150 = (s85 * t8);
+                const float s151 = (s39 * t85);
+                const float s152 = (s39 * s43);
+                const float s153 = (s94 * ((-(s151 * t8)) + (-(s152 * t9)) + (380.25f * s44 * s87 * s89 * s93 * t9) + (380.25f * s87 * s89 * s93 * t86 * t9)));
+                const float s154 = (s85 * t9);
+                const float s155 = (s101 * s104);
+                const float s156 = (s149 * s61);
+                const float s157 = (19.5f * s109 * s119);
+                const float s158 = (s54 * t95);
+                const float s159 = (s54 * t96);
+                const float s160 = ((-(s158 * s51)) + (-(s159 * s57)) + (380.25f * s114 * s116 * s123 * s52 * t95) + (380.25f * s114 * s116 * s123 * s58 * t95));
+                const float s161 = ((-(s156 * s51)) + (-(s157 * s63)) + (19.5f * s109 * s60 * t112 * t95) + (19.5f * s109 * s124 * s160 * s51 * t112));
+                const float s162 = (s111 * t96);
+                const float s163 = (s57 * t95);
+                const float s164 = ((-s162) + (s156 * s57) + (s157 * s163) + (-(s125 * s131 * s160)));
+                const float s165 = (s139 * t195);
+                const float s166 = (19.5f * s136);
+                const float s167 = (5.85f * s16);
+                const float s168 = (380.25f * s134 * t195);
+                const float s169 = (s27 * ((s11 * s145) + (-(s146 * s6)) + (s168 * s23) + (s168 * s24)));
+                const float s170 = (s93 * t86);
+                const float s171 = (380.25f * s102 * t8);
+                const float s172 = (s44 * s93);
+                const float s173 = (s94 * ((s151 * t9) + (-(s152 * t8)) + (s170 * s171) + (s171 * s172)));
+                const float s174 = (s123 * s52);
+                const float s175 = (380.25f * s117 * t96);
+                const float s176 = (s123 * s58);
+                const float s177 = (s125 * ((s158 * s57) + (-(s159 * s51)) + (s174 * s175) + (s175 * s176)));
+                const float s178 = (s162 + (s113 * s177) + (-(s157 * s64)));
+                const float s179 = ((s111 * t95) + (-(s131 * s177)) + (s157 * s65));
+                const float s180 = (s166 * s34);
+                const float s181 = (19.5f * s169);
+                const float s182 = (s2 * s31);
+                const float s183 = (64.49793f * s84);
+                const float s184 = (t78 * t9);
+                const float s185 = ((-s184) + (-(t8 * t80)));
+                const float s186 = (s94 * ((-(s91 * ((-2.0f * s40) + (2.0f * t80 * t9)))) + (-(s92 * ((-2.0f * s184) + (2.0f * s41 * t8)))) + (380.25f * s185 * s44 * s87 * s89 * s93) + (380.25f * s185 * s87 * s89 * s93 * t86)));
+                const float s187 = (s37 * s67);
+                const float s188 = (64.49793f * s110);
+                const float s189 = ((-s56) + (s115 * t95));
+                const float s190 = (s125 * ((-(s121 * ((-2.0f * s55) + (2.0f * t96 * t97)))) + (-(s122 * ((-2.0f * s49) + (2.0f * s10 * t95)))) + (380.25f * s114 * s116 * s123 * s189 * s52) + (380.25f * s114 * s116 * s123 * s189 * s58)));
+                const float s191 = ((s111 * ((-s55) + (t96 * t97))) + (s113 * s190) + (-(s113 * s119 * s189)));
+                const float s192 = ((-(s111 * ((-s49) + (s10 * t95)))) + (-(s131 * s190)) + (19.5f * s109 * s114 * s116 * s189 * s53 * s57 * s60));
+                const float s193 = ((-s9) + (t195 * t97));
+                const float s194 = (-s11);
+                const float s195 = (s27 * ((-(s77 * ((-2.0f * s9) + (2.0f * t195 * t97)))) + (-(s78 * ((-2.0f * s5) + (2.0f * s74)))) + (380.25f * s12 * s194 * s22 * s73 * s76) + (380.25f * s194 * s22 * s7 * s73 * s76)));
+                const float s196 = (19.5f * s195);
+                const float s197 = (43.333332f * s29);
+                const float s198 = (s67 * ((-11.7f * s17) + (-(s18 * s197)) + (-(s197 * s31)) + (11.7f * s11 * s14 * s2 * t195 * t280 * t290 * t291) + (11.7f * s14 * s2 * s6 * t183 * t280 * t290 * t291)));
+                const float s199 = (3.159f * s135 * s20);
+                const float s200 = (fdi_gen_heaviside((t23 + (-fdi_gen_max(0.5f, t87)))) * fdi_gen_sign(b[15].x1));
+                const float s201 = (5.265f * s103 * s200);
+                const float s202 = (102.6675f * s200);
+                const float s203 = (s94 * ((-(s170 * s202)) + (-(s172 * s202)) + (-(s90 * ((-0.1458f * b[15].x1) + (0.54f * s40) + (0.54f * s42))))));
+                const float s204 = (fdi_gen_heaviside((t102 + (-fdi_gen_max(0.5f, t106)))) * fdi_gen_sign(b[16].x1));
+                const float s205 = (5.265f * s118 * s204);
+                const float s206 = (102.6675f * s204);
+                const float s207 = (s125 * ((-(s120 * ((-0.1458f * b[16].x1) + (0.54f * s49) + (0.54f * s50)))) + (-(s174 * s206)) + (-(s176 * s206))));
+                const float s208 = ((-(s130 * s205)) + (-(s131 * s207)));
+                const float s209 = ((-5.265f * s110) + (s112 * s205) + (s113 * s207));
+                sv[0] = (s67 * ((637.93787f * s32 * s33) + (-(s37 * (-1046.0f + (-7033.448f * s47 * s48) + (-7033.448f * s61 * s64) + (-(s62 * s63)) + (-(s62 * s65)) + (4252.919f * s11 * s14 * t195 * t286) + (4252.919f * s14 * s6 * t183 * t286) + (7033.448f * s46 * t85 * t9 * t91) + (7033.448f * s57 * s60 * t112 * t95)))))); /* f1 */
+                sv[1] = (s67 * ((s32 * ((-5.85f * s69) + (-5.85f * s72) + (-(s35 * s79)) + (5.85f * s14 * s2 * s6 * s68 * s73 * s76 * t280))) + (-(s37 * ((-1037.9205f * b[2].x1) + (-1729.8676f * b[3].x1) + (-(s105 * ((s101 * s95) + (s80 * s99) + (s85 * s86) + (-(s101 * s104 * s86))))) + (-(s127 * s128)) + (-(s127 * s129)) + (-(s132 * s133)) + (2.0f * s132 * t96) + (-(s138 * ((19.5f * s69) + (19.5f * s72) + (s137 * s34) + (-19.5f * s136 * s34 * s68)))) + (-(s98 * ((-(s80 * s81)) + (-(s85 * ((-0.425f * t8) + (-0.199f * t9)))) + (-(s95 * s97)) + (19.5f * s38 * s46 * s83 * s86 * s87 * s89 * t85)))) + (2.0f * t195 * ((-(s106 * s140)) + (-(s137 * s141)) + (-(s139 * ((2.199f * t183) + (1.025f * t195)))) + (19.5f * s11 * s14 * s2 * s68 * s73 * s76 * t280)))))))); /* f3 */
+                sv[2] = (s67 * ((s32 * ((1055.0172f * s142) + (5.85f * s144) + (-5.85f * s17) + (-(s148 * s35)))) + (-(s37 * ((-1729.8676f * b[2].x1) + (-(s105 * (s154 + (s101 * s153) + (s149 * s99) + (-(s155 * t9))))) + (-(s128 * s161)) + (-(s129 * s161)) + (-(s133 * s164)) + (-(s138 * ((-3516.724f * s142) + (-19.5f * s144) + (19.5f * s14 * s2 * t183 * t286) + (19.5f * s147 * s2 * s26 * s6 * t286)))) + (2.0f * s164 * t96) + (-(s98 * ((-s150) + (-(s149 * s81)) + (-(s153 * s97)) + (19.5f * s38 * s46 * s83 * s87 * s89 * t85 * t9)))) + (2.0f * t195 * ((-s165) + (s140 * s149) + (-19.5f * s141 * s148) + (s141 * s166 * t183)))))))); /* f4 */
+                sv[3] = (s67 * ((s32 * ((-(s167 * t195)) + (-(s169 * s35)) + (5.85f * s14 * s2 * s6 * s73 * s76 * t195 * t280))) + (-(s37 * ((-(s105 * (s150 + (s101 * s173) + (-19.5f * s104 * s48 * s83)))) + (-(s128 * s178)) + (-(s129 * s178)) + (-(s133 * s179)) + (-(s138 * (s165 + (-(s180 * t195)) + (s181 * s34)))) + (2.0f * s179 * t96) + (-(s98 * (s154 + (-(s173 * s97)) + (s104 * s97 * t8)))) + (2.0f * t195 * ((19.5f * s17) + (-(s141 * s181)) + (s166 * s182)))))))); /* f5 */
+                sv[4] = (-(s187 * ((-(s105 * ((s101 * s186) + (-(s155 * s185)) + (s85 * ((-s184) + (s41 * t8)))))) + (-(s98 * ((-(s186 * s97)) + (-(s85 * s88)) + (19.5f * s185 * s38 * s46 * s83 * s87 * s89 * t85)))) + (-(s183 * s43 * t9)) + (-(s183 * t8 * t85))))); /* f6 */
+                sv[5] = (-(s187 * ((-39.0f * s110 * s163) + (-(s128 * s191)) + (-(s129 * s191)) + (-(s133 * s192)) + (-(s188 * s63)) + (-(s188 * s65)) + (2.0f * s192 * t96) + (39.0f * s109 * s51 * s60 * t112 * t96)))); /* f7 */
+                sv[6] = (s67 * ((s32 * ((-(s167 * s193)) + (-(s195 * s35)) + (5.85f * s14 * s194 * s2 * s6 * s73 * s76 * t280))) + (-(s37 * ((-39.0f * s11 * s17) + (-(s138 * ((s139 * s193) + (-(s180 * s194)) + (s196 * s34)))) + (2.0f * t195 * ((-(s139 * s75)) + (-(s141 * s196)) + (19.5f * s11 * s14 * s194 * s2 * s73 * s76 * t280))) + (39.0f * s14 * s2 * s6 * t195 * t286)))))); /* f9 */
+                sv[7] = s198; /* f13 */
+                sv[8] = s198; /* f17 */
+                sv[9] = (-(s187 * ((-s105) + (-s98)))); /* f18 */
+                sv[10] = (-(s187 * ((-5.307586f * t95) + (-1.3075862f * t96)))); /* f19 */
+                sv[11] = (s67 * ((-(s143 * s199)) + (-(s182 * s199)) + (-(s37 * ((-s138) + (2.0f * t195)))) + (3.159f * s14 * s2 * t183 * t286) + (11.7f * s11 * s2 * s25 * s26 * t195 * t286) + (11.7f * s2 * s25 * s26 * s6 * t183 * t286))); /* f21 */
+                sv[12] = (-(s187 * ((-(s105 * ((-5.265f * s84) + (s100 * s201) + (s101 * s203)))) + (-(s98 * ((-(s201 * s96)) + (-(s203 * s97)))))))); /* f22 */
+                sv[13] = (-(s187 * ((-(s128 * s209)) + (-(s129 * s209)) + (-(s133 * s208)) + (2.0f * s208 * t96)))); /* f23 */
+            }
+#endif
+        }
+    }
+    if ((run & 0x00000100U) != 0U) /* MSO2058: B1 B2 B3 D.psidot K1 K2 D1 D2 W1.FL W2.FL W3.FL W1.FS W2.FS W3.FS W1.Fx W2.Fx W3.Fx W1.Fy W2.Fy W3.Fy W2.dyn W2.D S3 S4 S5 S.omega1 S.omega3 */
+    {
+        fdi_obs_t *const o = &io->obs[io->at[8]];
+        const float t298 = (-1.7777778f * b[10].x1);
+        const float t312 = (1.5795f * t118);
+        const float t314 = (-fdi_gen_max(0.5f, t106));
+        const float t316 = ((0.54f * t103) + (0.54f * t104));
+        const float t317 = (102.6675f * t101);
+        const float t322 = (17.414442f * t96);
+        const float t324 = (t100 * t95);
+        const float t325 = (17.414442f * t118 * t324);
+        const float t326 = (t118 * t322);
+        const float t327 = (64.49793f * t324);
+        const float t332 = (t123 * t331);
+        const float t335 = ((-485.0469f * b[2].x2) + t334 + (t191 * t332) + (t329 * t77) + (t330 * t94) + (t125 * t132 * t332) + (64.49793f * t333 * t77 * t92) + (-64.49793f * t77 * t8 * t84 * t90 * t91));
+        float xh = 0.0f;
+        if ((io->restart & 0x00000100U) != 0U)
+        {
+            const float x0 = in->value[ROMO_SIG_OMEGA2_M]; /* omega2 from its sensor outside the MSO set */
+            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;
+        }
+        else
+        {
+            const float xp = o->xh;
+            const float t299 = tanhf((2.0f * xp));
+            const float t300 = (0.27f * fabsf(xp));
+            const float t301 = fdi_gen_max(0.5f, fdi_gen_max(t106, t300));
+            const float t302 = (1.0f / (t301 * t301));
+            const float t303 = (380.25f * t302);
+            const float t304 = ((-t105) + (0.27f * xp));
+            const float t305 = (t304 * t304);
+            const float t306 = (1.0f + (t101 * t303) + (t303 * t305));
+            const float t307 = (1.0f / (sqrtf(t306)));
+            const float t308 = (1.0f / (t301));
+            const float t309 = (t307 * t308);
+            const float t310 = (t118 * t309);
+            const float t311 = (5.85f * t304);
+            const float t313 = fdi_gen_sign(xp);
+            const float t315 = fdi_gen_heaviside((t300 + t314));
+            const float t318 = (t313 * t315);
+            const float t319 = ((1.0f / (t301 * t301 * t301)) * t318);
+            const float t320 = (t118 * (1.0f / (t306 * sqrtf(t306))) * t308 * ((-190.125f * t302 * ((-t316) + (0.1458f * xp))) + (102.6675f * t305 * t319) + (t317 * t319)));
+            const float t321 = ((t148 * (2.0f + (-2.0f * (t299 * t299)))) + (t309 * t312) + (t311 * t320) + (-1.5795f * t118 * t302 * t304 * t307 * t313 * t315));
+            const float t323 = (t302 * t307 * t318);
+            const float t328 = ((t310 * t322) + (-(t320 * t327)) + (t323 * t325) + (64.49793f * t304 * t320 * t96) + (-(t304 * t323 * t326)));
+            const float f = ((-t298) + (-(t148 * t299)) + (-(t310 * t311)));
+            const float l = (-(t328 * (1.0f / (61.9369f + (t328 * t328))) * fdi_gen_max(0.0f, (12.566371f + (-t321)))));
+            const float a = (-t321);
+            const float c = t328;
+            const float e = ((-t335) + (-64.49793f * t310 * t324) + (64.49793f * t118 * t304 * t307 * t308 * t96));
+            xh = fdi_gen_obs_predict(o, io->par, f + (l * e), a + (l * c));
+        }
+        {
+            const float t336 = tanhf((2.0f * xh));
+            const float t337 = (0.27f * fabsf(xh));
+            const float t338 = fdi_gen_max(0.5f, fdi_gen_max(t106, t337));
+            const float t339 = (1.0f / (t338 * t338));
+            const float t340 = (380.25f * t339);
+            const float t341 = ((-t105) + (0.27f * xh));
+            const float t342 = (t341 * t341);
+            const float t343 = (1.0f + (t101 * t340) + (t340 * t342));
+            const float t344 = (1.0f / (sqrtf(t343)));
+            const float t345 = (1.0f / (t338));
+            const float t346 = (t344 * t345);
+            const float t347 = (t118 * t346);
+            const float t348 = (5.85f * t341);
+            const float t349 = fdi_gen_sign(xh);
+            const float t350 = fdi_gen_heaviside((t314 + t337));
+            const float t351 = (t349 * t350);
+            const float t352 = ((1.0f / (t338 * t338 * t338)) * t351);
+            const float t353 = (t118 * (1.0f / (t343 * sqrtf(t343))) * t345 * ((t317 * t352) + (-190.125f * t339 * ((-t316) + (0.1458f * xh))) + (102.6675f * t342 * t352)));
+            const float t354 = (t339 * t344 * t351);
+            const float t355 = ((t322 * t347) + (t325 * t354) + (-(t327 * t353)) + (-(t326 * t341 * t354)) + (64.49793f * t341 * t353 * t96));
+            const float f = ((-t298) + (-(t148 * t336)) + (-(t347 * t348)));
+            const float l = (-(t355 * (1.0f / (61.9369f + (t355 * t355))) * fdi_gen_max(0.0f, (12.566371f + (-(t148 * (2.0f + (-2.0f * (t336 * t336))))) + (-(t312 * t346)) + (-(t348 * t353)) + (1.5795f * t118 * t339 * t341 * t344 * t349 * t350)))));
+            const float value = ((-t335) + (-64.49793f * t324 * t347) + (64.49793f * t118 * t341 * t344 * t345 * t96));
+            io->r[io->at[8]] = value;
+            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, f + (l * value)) != FDI_OK))
+            {
+                io->failed |= 0x00000100U;
+            }
+#if FDI_GEN_SENSITIVITIES
+            if ((io->sens_mask & 0x00000100U) != 0U) /* d r / d f: f3 f4 f5 f6 f7 f8 f11 f15 f18 f19 f20 f22 f24 */
+            {
+                float *const sv = &io->sens[io->sens_at[8]];
+                const float s0 = (180.34483f * b[2].x1 * ((0.3f * b[2].x1) + b[3].x1));
+                const float s1 = (-b[4].x1);
+                const float s2 = (109.04921f * b[2].x1 * ((-1.0f * b[2].x1) + (-s1)));
+                const float s3 = ((-213.05959f * b[2].x2) + s0 + s2);
+                const float s4 = (2565.315f + (-109.04921f * b[3].x2));
+                const float s5 = (s3 + s4 + t71);
+                const float s6 = (t78 * t96);
+                const float s7 = (t95 * t97);
+                const float s8 = ((-s6) + (-s7) + (0.27f * xh));
+                const float s9 = (s8 * s8);
+                const float s10 = (380.25f * t339);
+                const float s11 = (t78 * t95);
+                const float s12 = ((-1.025f * b[2].x1) + (-b[3].x1));
+                const float s13 = (s12 * t96);
+                const float s14 = (s11 + s13);
+                const float s15 = (s14 * s14);
+                const float s16 = (1.0f + (s10 * s15) + (s10 * s9));
+                const float s17 = (1.0f / (sqrtf(s16)));
+                const float s18 = (s17 * t345);
+                const float s19 = (s18 * s5);
+                const float s20 = (190.125f * t339);
+                const float s21 = (t349 * t350);
+                const float s22 = (102.6675f * s21);
+                const float s23 = (1.0f / (t338 * t338 * t338));
+                const float s24 = (s23 * s9);
+                const float s25 = (s15 * s23);
+                const float s26 = ((-(s20 * ((-0.54f * s6) + (-0.54f * s7) + (0.1458f * xh)))) + (s22 * s24) + (s22 * s25));
+                const float s27 = (5.85f * s8);
+                const float s28 = (s27 * s5);
+                const float s29 = (1.0f / (s16 * sqrtf(s16)));
+                const float s30 = (s29 * t345);
+                const float s31 = (s28 * s30);
+                const float s32 = ((1.5795f * s19) + (0.00010666667f * b[13].x1 * (2.0f + (-2.0f * (t336 * t336)))) + (s26 * s31) + (-1.5795f * s17 * s5 * s8 * t339 * t349 * t350));
+                const float s33 = (s19 * t96);
+                const float s34 = (s17 * t339);
+                const float s35 = (s34 * s5);
+                const float s36 = (s21 * s35);
+                const float s37 = (s36 * s8 * t96);
+                const float s38 = (s14 * t95);
+                const float s39 = (s36 * s38);
+                const float s40 = (64.49793f * s8);
+                const float s41 = (s30 * s5);
+                const float s42 = (s26 * s41);
+                const float s43 = (s42 * t96);
+                const float s44 = (64.49793f * s14);
+                const float s45 = (s42 * t95);
+                const float s46 = ((17.414442f * s33) + (-17.414442f * s37) + (17.414442f * s39) + (s40 * s43) + (-(s44 * s45)));
+                const float s47 = (s46 * s46);
+                const float s48 = (1.0f / (fdi_gen_min(-0.1f, ((-s32) + (-(s47 * (1.0f / (61.9369f + s47)) * fdi_gen_max(0.0f, (12.566371f + (-s32)))))))));
+                const float s49 = (180.34483f * b[3].x1);
+                const float s50 = (109.04921f * b[4].x1);
+                const float s51 = ((-109.89152f * b[2].x1) + s49 + s50);
+                const float s52 = (-(s18 * s51));
+                const float s53 = ((1.025f * t95) + (0.199f * t96));
+                const float s54 = (s19 * s53);
+                const float s55 = fdi_gen_heaviside((t106 + (-fdi_gen_max(0.5f, t337))));
+                const float s56 = ((-0.199f * b[2].x1) + t0);
+                const float s57 = fdi_gen_sign(((s12 * t95) + (s56 * t96)));
+                const float s58 = (s20 * s8);
+                const float s59 = (s14 * s20);
+                const float s60 = ((-(s58 * ((2.05f * t95) + (0.398f * t96)))) + (-(s59 * ((-0.398f * t95) + (2.05f * t96)))) + (380.25f * s15 * s23 * s53 * s55 * s57) + (380.25f * s23 * s53 * s55 * s57 * s9));
+                const float s61 = (-s32);
+                const float s62 = (1.0f / (t88 * t88));
+                const float s63 = (380.25f * s62);
+                const float s64 = (t78 * t8);
+                const float s65 = ((-0.425f * b[2].x1) + b[3].x1);
+                const float s66 = (s65 * t9);
+                const float s67 = ((0.27f * b[15].x1) + (-s64) + (-s66));
+                const float s68 = (s67 * s67);
+                const float s69 = (1.0f + (s63 * s68) + (s63 * t86));
+                const float s70 = (1.0f / (sqrtf(s69)));
+                const float s71 = (s70 * t91);
+                const float s72 = (s71 * t85);
+                const float s73 = ((6362.9536f * b[2].x1) + (19.5f * s49) + (-19.5f * s50));
+                const float s74 = (180.34483f * b[4].x2);
+                const float s75 = ((-s0) + s2 + s4 + (-s74) + t70);
+                const float s76 = (s71 * s75);
+                const float s77 = (19.5f * s76);
+                const float s78 = ((0.199f * t8) + (-0.425f * t9));
+                const float s79 = fdi_gen_heaviside((t87 + (-fdi_gen_max(0.5f, t23))));
+                const float s80 = ((-s64) + (t80 * t9));
+                const float s81 = fdi_gen_sign(s80);
+                const float s82 = (s75 * t85);
+                const float s83 = (19.5f * s82);
+                const float s84 = (190.125f * s62);
+                const float s85 = (s84 * t85);
+                const float s86 = (s67 * s84);
+                const float s87 = (1.0f / (t88 * t88 * t88));
+                const float s88 = (1.0f / (s69 * sqrtf(s69)));
+                const float s89 = (s88 * t91);
+                const float s90 = (s89 * ((-(s85 * ((-0.85f * t8) + (-0.398f * t9)))) + (-(s86 * ((0.398f * t8) + (-0.85f * t9)))) + (380.25f * s68 * s78 * s79 * s81 * s87) + (380.25f * s78 * s79 * s81 * s87 * t86)));
+                const float s91 = ((-(s72 * s73)) + (-(s77 * ((-0.425f * t8) + (-0.199f * t9)))) + (-(s83 * s90)) + (19.5f * s62 * s70 * s75 * s78 * s79 * s81 * t85));
+                const float s92 = (2.0f * t8);
+                const float s93 = (3.3075862f * t9);
+                const float s94 = (s67 * s71);
+                const float s95 = (s67 * s75);
+                const float s96 = (19.5f * s95);
+                const float s97 = (s79 * s81);
+                const float s98 = (s62 * s70);
+                const float s99 = (s97 * s98);
+                const float s100 = ((s73 * s94) + (s77 * s78) + (s90 * s96) + (-(s78 * s96 * s99)));
+                const float s101 = (3.3075862f * t8);
+                const float s102 = (2.0f * t9);
+                const float s103 = (19.5f * s52);
+                const float s104 = (s55 * s57);
+                const float s105 = (19.5f * s35);
+                const float s106 = (19.5f * s41);
+                const float s107 = (s106 * s60);
+                const float s108 = (3.3075862f * t96);
+                const float s109 = (19.5f * s19);
+                const float s110 = (3.3075862f * t95);
+                const float s111 = ((-2.199f * b[2].x1) + (-s1));
+                const float s112 = (s111 * t125);
+                const float s113 = (s112 + t133);
+                const float s114 = (s113 * s113);
+                const float s115 = (1.0f / (t139 * t139));
+                const float s116 = (380.25f * s115);
+                const float s117 = (s65 * t125);
+                const float s118 = (s111 * t127);
+                const float s119 = (s117 + s118);
+                const float s120 = ((0.27f * b[17].x1) + (-s119));
+                const float s121 = (s120 * s120);
+                const float s122 = (1.0f + (s114 * s116) + (s116 * s121));
+                const float s123 = (1.0f / (sqrtf(s122)));
+                const float s124 = (s123 * t142);
+                const float s125 = (s113 * s124);
+                const float s126 = (19.5f * s51);
+                const float s127 = (2565.315f + (-s3) + (-s74) + t73);
+                const float s128 = (s124 * s127);
+                const float s129 = (19.5f * s128);
+                const float s130 = ((0.425f * t125) + (2.199f * t127));
+                const float s131 = fdi_gen_heaviside((t138 + (-fdi_gen_max(0.5f, t136))));
+                const float s132 = fdi_gen_sign(s119);
+                const float s133 = (s113 * s127);
+                const float s134 = (19.5f * s133);
+                const float s135 = (190.125f * s115);
+                const float s136 = (s113 * s135);
+                const float s137 = (s120 * s135);
+                const float s138 = (1.0f / (t139 * t139 * t139));
+                const float s139 = ((1.0f / (s122 * sqrtf(s122))) * t142);
+                const float s140 = (s139 * ((-(s136 * ((4.398f * t125) + (-0.85f * t127)))) + (-(s137 * ((-0.85f * t125) + (-4.398f * t127)))) + (380.25f * s114 * s130 * s131 * s132 * s138) + (380.25f * s121 * s130 * s131 * s132 * s138)));
+                const float s141 = (2.0f * t127);
+                const float s142 = (s120 * s124);
+                const float s143 = (s120 * s127);
+                const float s144 = (19.5f * s143);
+                const float s145 = (s131 * s132);
+                const float s146 = (s115 * s123);
+                const float s147 = (s145 * s146);
+                const float s148 = (2.0f * t125);
+                const float s149 = (b[2].x1 * s18);
+                const float s150 = (s149 * s8);
+                const float s151 = (5.85f * s19);
+                const float s152 = (s28 * s34);
+                const float s153 = (s104 * t95);
+                const float s154 = (s10 * t95);
+                const float s155 = (s10 * t96);
+                const float s156 = ((-(s14 * s155)) + (-(s154 * s8)) + (380.25f * s15 * s23 * s55 * s57 * t95) + (380.25f * s23 * s55 * s57 * s9 * t95));
+                const float s157 = (3516.724f * b[2].x1);
+                const float s158 = (s77 * t8);
+                const float s159 = (s63 * t85);
+                const float s160 = (s63 * s67);
+                const float s161 = (s89 * ((-(s159 * t8)) + (-(s160 * t9)) + (380.25f * s68 * s79 * s81 * s87 * t9) + (380.25f * s79 * s81 * s87 * t86 * t9)));
+                const float s162 = ((-s158) + (-(s157 * s72)) + (-(s161 * s83)) + (19.5f * s62 * s70 * s75 * s79 * s81 * t85 * t9));
+                const float s163 = (s77 * t9);
+                const float s164 = (s163 + (s157 * s94) + (s161 * s96) + (-(s96 * s99 * t9)));
+                const float s165 = (s14 * s149);
+                const float s166 = (-19.5f * s33);
+                const float s167 = (s104 * s105);
+                const float s168 = (s129 * t127);
+                const float s169 = (s147 * t125);
+                const float s170 = (s116 * t127);
+                const float s171 = (s114 * s138);
+                const float s172 = (380.25f * s145);
+                const float s173 = (s172 * t125);
+                const float s174 = (s121 * s138);
+                const float s175 = (s139 * ((-(s113 * s170)) + (-(s171 * s173)) + (-(s173 * s174)) + (-(s116 * s120 * t125))));
+                const float s176 = (380.25f * s104 * t96);
+                const float s177 = ((s14 * s154) + (-(s155 * s8)) + (s176 * s24) + (s176 * s25));
+                const float s178 = (2126.4595f * b[2].x1);
+                const float s179 = (s99 * t8);
+                const float s180 = (s87 * t86);
+                const float s181 = (380.25f * s97 * t8);
+                const float s182 = (s68 * s87);
+                const float s183 = ((s159 * t9) + (-(s160 * t8)) + (s180 * s181) + (s181 * s182));
+                const float s184 = (s163 + (s178 * s72) + (s179 * s83) + (-(s183 * s83 * s89)));
+                const float s185 = (s158 + (-(s178 * s94)) + (-(s179 * s96)) + (19.5f * s183 * s67 * s75 * s88 * t91));
+                const float s186 = (s167 * t96);
+                const float s187 = (s147 * t127);
+                const float s188 = (s172 * t127);
+                const float s189 = (s139 * ((-(s120 * s170)) + (-(s171 * s188)) + (-(s174 * s188)) + (380.25f * s113 * s115 * t125)));
+                const float s190 = (s76 * t8);
+                const float s191 = (s76 * t9);
+                const float s192 = (t78 * t9);
+                const float s193 = ((-s192) + (-(t8 * t80)));
+                const float s194 = (s89 * ((-(s85 * ((-2.0f * s64) + (2.0f * t80 * t9)))) + (-(s86 * ((-2.0f * s192) + (2.0f * s65 * t8)))) + (380.25f * s193 * s68 * s79 * s81 * s87) + (380.25f * s193 * s79 * s81 * s87 * t86)));
+                const float s195 = ((-(s194 * s83)) + (-(s77 * s80)) + (19.5f * s193 * s62 * s70 * s75 * s79 * s81 * t85));
+                const float s196 = ((s194 * s96) + (s77 * ((-s192) + (s65 * t8))) + (-(s193 * s96 * s99)));
+                const float s197 = (s48 * s61);
+                const float s198 = ((-s11) + (t96 * t97));
+                const float s199 = ((-s13) + (s56 * t95));
+                const float s200 = ((-(s58 * ((-2.0f * s11) + (2.0f * t96 * t97)))) + (-(s59 * ((-2.0f * s6) + (2.0f * s12 * t95)))) + (380.25f * s15 * s199 * s23 * s55 * s57) + (380.25f * s199 * s23 * s55 * s57 * s9));
+                const float s201 = (s106 * s200);
+                const float s202 = (s112 + (-(s65 * t127)));
+                const float s203 = (s139 * ((-(s136 * ((-2.0f * s118) + (2.0f * t125 * t80)))) + (-(s137 * ((-2.0f * s112) + (2.0f * s65 * t127)))) + (380.25f * s114 * s131 * s132 * s138 * s202) + (380.25f * s121 * s131 * s132 * s138 * s202)));
+                const float s204 = (s43 * s8);
+                const float s205 = (s48 * ((71.66437f * s204) + (19.349379f * s33) + (-19.349379f * s37) + (19.349379f * s39) + (-71.66437f * s14 * s45)));
+                const float s206 = (fdi_gen_heaviside((t23 + (-fdi_gen_max(0.5f, t87)))) * fdi_gen_sign(b[15].x1));
+                const float s207 = (5.265f * s206 * s98);
+                const float s208 = (102.6675f * s206);
+                const float s209 = (s89 * ((-(s180 * s208)) + (-(s182 * s208)) + (-(s84 * ((-0.1458f * b[15].x1) + (0.54f * s64) + (0.54f * s66))))));
+                const float s210 = ((-(s207 * s82)) + (-(s209 * s83)));
+                const float s211 = ((-5.265f * s76) + (s207 * s95) + (s209 * s96));
+                const float s212 = (fdi_gen_heaviside((t136 + (-fdi_gen_max(0.5f, t138)))) * fdi_gen_sign(b[17].x1));
+                const float s213 = (5.265f * s146 * s212);
+                const float s214 = (102.6675f * s212);
+                const float s215 = (s139 * ((-(s135 * ((-0.1458f * b[17].x1) + (0.54f * s117) + (0.54f * s118)))) + (-(s171 * s214)) + (-(s174 * s214))));
+                sv[0] = (s48 * ((s46 * ((-5.85f * s54) + (-(s27 * s52)) + (-(s31 * s60)) + (5.85f * s17 * s5 * s53 * s55 * s57 * s8 * t339))) + (-(s61 * ((-1054.0795f * b[2].x1) + (1729.8676f * b[3].x1) + (1046.0f * b[4].x1) + (s100 * s101) + (-(s100 * s102)) + (s108 * ((19.5f * s54) + (s103 * s8) + (s107 * s8) + (-(s104 * s105 * s53 * s8)))) + (s110 * ((-(s103 * s14)) + (-(s107 * s14)) + (-(s109 * ((-0.199f * t95) + (1.025f * t96)))) + (19.5f * s14 * s17 * s5 * s53 * s55 * s57 * t339))) + (s141 * ((-(s125 * s126)) + (-(s129 * ((2.199f * t125) + (-0.425f * t127)))) + (-(s134 * s140)) + (19.5f * s113 * s115 * s123 * s127 * s130 * s131 * s132))) + (-(s148 * ((s126 * s142) + (-(s129 * s130)) + (s140 * s144) + (-(s130 * s144 * s147))))) + (s91 * s92) + (s91 * s93)))))); /* f3 */
+                sv[1] = (s48 * ((s46 * ((1055.0172f * s150) + (-(s151 * t95)) + (s152 * s153) + (-(s156 * s31)))) + (-(s61 * ((1729.8676f * b[2].x1) + (s101 * s164) + (-(s102 * s164)) + (s108 * ((-3516.724f * s150) + (-(s105 * s153 * s8)) + (19.5f * s17 * s5 * t345 * t95) + (19.5f * s156 * s29 * s5 * s8 * t345))) + (s110 * ((3516.724f * s165) + s166 + (s167 * s38) + (-(s106 * s14 * s156)))) + (s141 * ((-s168) + (-(s125 * s157)) + (-(s134 * s169)) + (-(s134 * s175)))) + (-(s148 * ((s129 * t125) + (s142 * s157) + (s144 * s169) + (s144 * s175)))) + (s162 * s92) + (s162 * s93)))))); /* f4 */
+                sv[2] = (s48 * ((s46 * ((637.93787f * s150) + (-5.85f * s33) + (-(s177 * s31)) + (s104 * s152 * t96))) + (-(s61 * ((1046.0f * b[2].x1) + (s101 * s185) + (-(s102 * s185)) + (s108 * ((-2126.4595f * s150) + (-s166) + (-(s186 * s8)) + (19.5f * s177 * s29 * s5 * s8 * t345))) + (s110 * ((2126.4595f * s165) + (s109 * t95) + (s14 * s186) + (-(s106 * s14 * s177)))) + (s141 * ((-(s125 * s178)) + (-(s134 * s187)) + (-(s134 * s189)) + (19.5f * s123 * s127 * t125 * t142))) + (-(s148 * (s168 + (s142 * s178) + (s144 * s187) + (s144 * s189)))) + (s184 * s92) + (s184 * s93)))))); /* f5 */
+                sv[3] = (-(s197 * ((s101 * s196) + (-(s102 * s196)) + (39.0f * s190 * s67) + (64.49793f * s190 * t85) + (64.49793f * s191 * s67) + (-39.0f * s191 * t85) + (s195 * s92) + (s195 * s93)))); /* f6 */
+                sv[4] = (s48 * ((s46 * ((-(s151 * s198)) + (-(s200 * s31)) + (5.85f * s17 * s199 * s5 * s55 * s57 * s8 * t339))) + (-(s61 * ((s108 * ((s109 * s198) + (s201 * s8) + (-(s167 * s199 * s8)))) + (s110 * ((-(s109 * ((-s6) + (s12 * t95)))) + (-(s14 * s201)) + (19.5f * s14 * s17 * s199 * s5 * s55 * s57 * t339))) + (s33 * s44) + (s19 * s40 * t95)))))); /* f7 */
+                sv[5] = (-(s197 * ((-(s148 * ((-(s129 * s202)) + (s144 * s203) + (-(s144 * s147 * s202))))) + (2.0f * t127 * ((-(s129 * ((-s118) + t137))) + (-(s134 * s203)) + (19.5f * s113 * s115 * s123 * s127 * s131 * s132 * s202))) + (-39.0f * s113 * s128 * t125) + (39.0f * s120 * s123 * s127 * t127 * t142)))); /* f8 */
+                sv[6] = s205; /* f11 */
+                sv[7] = s205; /* f15 */
+                sv[8] = (-(s197 * ((5.307586f * t8) + (1.3075862f * t9)))); /* f18 */
+                sv[9] = (s48 * ((-19.349379f * s204) + (-5.2243323f * s33) + (-5.2243323f * s39) + (-(s61 * (s108 + s110))) + (19.349379f * s14 * s26 * s29 * s5 * t345 * t95) + (5.2243323f * s17 * s5 * s8 * t339 * t349 * t350 * t96))); /* f19 */
+                sv[10] = (-(s197 * ((-s148) + (2.0f * t127)))); /* f20 */
+                sv[11] = (-(s197 * ((s101 * s211) + (-(s102 * s211)) + (s210 * s92) + (s210 * s93)))); /* f22 */
+                sv[12] = (-(s197 * ((-(s148 * ((-5.265f * s128) + (s143 * s213) + (s144 * s215)))) + (2.0f * t127 * ((-(s133 * s213)) + (-(s134 * s215))))))); /* f24 */
+            }
+#endif
+        }
+    }
+    if ((run & 0x00000200U) != 0U) /* MSO2065: B1 B2 B3 D.psidot K1 K2 D1 W1.FL W3.FL W4.FL W1.FS W3.FS W4.FS W1.Fx W3.Fx W4.Fx W1.Fy W3.Fy W4.Fy W4.dyn W4.D S2 S3 S4 S5 S.omega1 S.omega3 */
+    {
+        fdi_obs_t *const o = &io->obs[io->at[9]];
+        const float t369 = (1.5795f * t194);
+        const float t378 = (17.414442f * t195);
+        const float t380 = (17.414442f * t194 * t379);
+        const float t384 = ((1244.8207f * b[2].x2) + t214 + (-t383) + (t153 * t329) + (t192 * t331) + (t132 * t193 * t331) + (t153 * t330 * t93) + (64.49793f * t127 * t132 * t143 * t190) + (-64.49793f * t125 * t134 * t141 * t142 * t190));
+        float xh = 0.0f;
+        if ((io->restart & 0x00000200U) != 0U)
+        {
+            const float x0 = in->value[ROMO_SIG_OMEGA4_M]; /* omega4 from its sensor outside the MSO set */
+            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;
+        }
+        else
+        {
+            const float xp = o->xh;
+            const float t356 = tanhf((2.0f * xp));
+            const float t357 = (0.27f * fabsf(xp));
+            const float t358 = fdi_gen_max(0.5f, fdi_gen_max(t202, t357));
+            const float t359 = (1.0f / (t358 * t358));
+            const float t360 = (380.25f * t359);
+            const float t361 = ((-t207) + (0.27f * xp));
+            const float t362 = (t361 * t361);
+            const float t363 = (1.0f + (t199 * t360) + (t360 * t362));
+            const float t364 = (1.0f / (sqrtf(t363)));
+            const float t365 = (1.0f / (t358));
+            const float t366 = (t364 * t365);
+            const float t367 = (t194 * t366);
+            const float t368 = (5.85f * t361);
+            const float t370 = fdi_gen_sign(xp);
+            const float t371 = fdi_gen_heaviside((t257 + t357));
+            const float t372 = (1.0f / (t363 * sqrtf(t363)));
+            const float t373 = (t370 * t371);
+            const float t374 = ((1.0f / (t358 * t358 * t358)) * t373);
+            const float t375 = ((t260 * t374) + (-190.125f * t359 * ((-t259) + (0.1458f * xp))) + (102.6675f * t362 * t374));
+            const float t376 = (t194 * t365 * t372 * t375);
+            const float t377 = ((t239 * (2.0f + (-2.0f * (t356 * t356)))) + (t366 * t369) + (t368 * t376) + (-1.5795f * t194 * t359 * t361 * t364 * t370 * t371));
+            const float t381 = (t195 * t361);
+            const float t382 = ((-(t367 * t378)) + (-64.49793f * t376 * t381) + (-(t359 * t364 * t373 * t380)) + (64.49793f * t183 * t194 * t197 * t365 * t372 * t375) + (17.414442f * t194 * t195 * t359 * t361 * t364 * t370 * t371));
+            const float f = ((-t237) + (-(t239 * t356)) + (-(t367 * t368)));
+            const float l = (-(t382 * (1.0f / (316.84f + (t382 * t382))) * fdi_gen_max(0.0f, (12.566371f + (-t377)))));
+            const float a = (-t377);
+            const float c = t382;
+            const float e = ((-t384) + (-64.49793f * t367 * t381) + (64.49793f * t183 * t194 * t197 * t364 * t365));
+            xh = fdi_gen_obs_predict(o, io->par, f + (l * e), a + (l * c));
+        }
+        {
+            const float t385 = tanhf((2.0f * xh));
+            const float t386 = (0.27f * fabsf(xh));
+            const float t387 = fdi_gen_max(0.5f, fdi_gen_max(t202, t386));
+            const float t388 = (1.0f / (t387 * t387));
+            const float t389 = (380.25f * t388);
+            const float t390 = ((-t207) + (0.27f * xh));
+            const float t391 = (t390 * t390);
+            const float t392 = (1.0f + (t199 * t389) + (t389 * t391));
+            const float t393 = (1.0f / (sqrtf(t392)));
+            const float t394 = (1.0f / (t387));
+            const float t395 = (t393 * t394);
+            const float t396 = (t194 * t395);
+            const float t397 = (5.85f * t390);
+            const float t398 = fdi_gen_sign(xh);
+            const float t399 = fdi_gen_heaviside((t257 + t386));
+            const float t400 = (1.0f / (t392 * sqrtf(t392)));
+            const float t401 = (t398 * t399);
+            const float t402 = ((1.0f / (t387 * t387 * t387)) * t401);
+            const float t403 = ((t260 * t402) + (-190.125f * t388 * ((-t259) + (0.1458f * xh))) + (102.6675f * t391 * t402));
+            const float t404 = (t194 * t394 * t400 * t403);
+            const float t405 = (t195 * t390);
+            const float t406 = ((-(t378 * t396)) + (-64.49793f * t404 * t405) + (-(t380 * t388 * t393 * t401)) + (64.49793f * t183 * t194 * t197 * t394 * t400 * t403) + (17.414442f * t194 * t195 * t388 * t390 * t393 * t398 * t399));
+            const float f = ((-t237) + (-(t239 * t385)) + (-(t396 * t397)));
+            const float l = (-(t406 * (1.0f / (316.84f + (t406 * t406))) * fdi_gen_max(0.0f, (12.566371f + (-(t239 * (2.0f + (-2.0f * (t385 * t385))))) + (-(t369 * t395)) + (-(t397 * t404)) + (1.5795f * t194 * t388 * t390 * t393 * t398 * t399)))));
+            const float value = ((-t384) + (-64.49793f * t396 * t405) + (64.49793f * t183 * t194 * t197 * t393 * t394));
+            io->r[io->at[9]] = value;
+            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, f + (l * value)) != FDI_OK))
+            {
+                io->failed |= 0x00000200U;
+            }
+#if FDI_GEN_SENSITIVITIES
+            if ((io->sens_mask & 0x00000200U) != 0U) /* d r / d f: f2 f3 f4 f5 f6 f8 f9 f13 f17 f18 f20 f21 f22 f24 */
+            {
+                float *const sv = &io->sens[io->sens_at[9]];
+                const float s0 = (-b[4].x1);
+                const float s1 = (-109.04921f * b[2].x1 * ((-1.0f * b[2].x1) + (-s0)));
+                const float s2 = (2565.315f + s1 + t150 + t73);
+                const float s3 = (s2 + t12);
+                const float s4 = (t183 * t97);
+                const float s5 = ((-2.199f * b[2].x1) + (-s0));
+                const float s6 = (s5 * t195);
+                const float s7 = ((-s4) + (-s6) + (0.27f * xh));
+                const float s8 = (s7 * s7);
+                const float s9 = (380.25f * t388);
+                const float s10 = (s5 * t183);
+                const float s11 = ((-1.025f * b[2].x1) + (-b[3].x1));
+                const float s12 = (s10 + (s11 * t195));
+                const float s13 = (s12 * s12);
+                const float s14 = (1.0f + (s13 * s9) + (s8 * s9));
+                const float s15 = (1.0f / (sqrtf(s14)));
+                const float s16 = (s15 * t394);
+                const float s17 = (s16 * s3);
+                const float s18 = (s17 * t195);
+                const float s19 = (t398 * t399);
+                const float s20 = (s15 * t388);
+                const float s21 = (s19 * s20);
+                const float s22 = (s12 * t183);
+                const float s23 = (s22 * s3);
+                const float s24 = (s7 * t195);
+                const float s25 = (190.125f * t388);
+                const float s26 = (102.6675f * s19);
+                const float s27 = (1.0f / (t387 * t387 * t387));
+                const float s28 = (s27 * s8);
+                const float s29 = (s13 * s27);
+                const float s30 = ((-(s25 * ((-0.54f * s4) + (-0.54f * s6) + (0.1458f * xh)))) + (s26 * s28) + (s26 * s29));
+                const float s31 = (1.0f / (s14 * sqrtf(s14)));
+                const float s32 = (s31 * t394);
+                const float s33 = (s30 * s32);
+                const float s34 = (s3 * s33);
+                const float s35 = ((-17.414442f * s18) + (-17.414442f * s21 * s23) + (-64.49793f * s24 * s34) + (64.49793f * s12 * s3 * s30 * s31 * t183 * t394) + (17.414442f * s15 * s3 * s7 * t195 * t388 * t398 * t399));
+                const float s36 = (s16 * s7);
+                const float s37 = (s3 * s7);
+                const float s38 = (5.85f * s37);
+                const float s39 = ((1.5795f * s17) + (0.00010666667f * b[14].x1 * (2.0f + (-2.0f * (t385 * t385)))) + (s33 * s38) + (-1.5795f * s15 * s3 * s7 * t388 * t398 * t399));
+                const float s40 = (-s39);
+                const float s41 = (1.0f / (t88 * t88));
+                const float s42 = (380.25f * s41);
+                const float s43 = (t78 * t8);
+                const float s44 = ((-0.425f * b[2].x1) + b[3].x1);
+                const float s45 = (s44 * t9);
+                const float s46 = ((0.27f * b[15].x1) + (-s43) + (-s45));
+                const float s47 = (s46 * s46);
+                const float s48 = (1.0f + (s42 * s47) + (s42 * t86));
+                const float s49 = (1.0f / (sqrtf(s48)));
+                const float s50 = (s49 * t91);
+                const float s51 = (7033.448f * s50);
+                const float s52 = (t8 * t85);
+                const float s53 = (s46 * t9);
+                const float s54 = (s5 * t125);
+                const float s55 = (s54 + t133);
+                const float s56 = (s55 * s55);
+                const float s57 = (1.0f / (t139 * t139));
+                const float s58 = (380.25f * s57);
+                const float s59 = (s44 * t125);
+                const float s60 = (s5 * t127);
+                const float s61 = (s59 + s60);
+                const float s62 = ((0.27f * b[17].x1) + (-s61));
+                const float s63 = (s62 * s62);
+                const float s64 = (1.0f + (s56 * s58) + (s58 * s63));
+                const float s65 = (1.0f / (sqrtf(s64)));
+                const float s66 = (s65 * t142);
+                const float s67 = (7033.448f * s66);
+                const float s68 = (s55 * t127);
+                const float s69 = (s62 * t125);
+                const float s70 = (s62 * t127);
+                const float s71 = (s35 * s35);
+                const float s72 = (1.0f / (fdi_gen_min(-0.1f, ((-s39) + (-(s71 * (1.0f / (316.84f + s71)) * fdi_gen_max(0.0f, (12.566371f + (-s39)))))))));
+                const float s73 = ((1.025f * t183) + (-2.199f * t195));
+                const float s74 = (s17 * s73);
+                const float s75 = ((218.09842f * b[2].x1) + (-109.04921f * b[4].x1));
+                const float s76 = (-s75);
+                const float s77 = (s36 * s76);
+                const float s78 = fdi_gen_heaviside((t202 + (-fdi_gen_max(0.5f, t386))));
+                const float s79 = (s11 * t183);
+                const float s80 = ((-s6) + s79);
+                const float s81 = fdi_gen_sign(s80);
+                const float s82 = (s25 * s7);
+                const float s83 = (s12 * s25);
+                const float s84 = (s32 * ((-(s82 * ((2.05f * t183) + (-4.398f * t195)))) + (-(s83 * ((4.398f * t183) + (2.05f * t195)))) + (380.25f * s13 * s27 * s73 * s78 * s81) + (380.25f * s27 * s73 * s78 * s8 * s81)));
+                const float s85 = (s50 * t85);
+                const float s86 = (19.5f * s75);
+                const float s87 = (180.34483f * b[1].x1);
+                const float s88 = (2565.315f + (-32.714764f * b[2].x2) + (-s1) + (-s87) + (-109.04921f * b[3].x2));
+                const float s89 = (s50 * s88);
+                const float s90 = (19.5f * s89);
+                const float s91 = ((0.199f * t8) + (-0.425f * t9));
+                const float s92 = fdi_gen_heaviside((t87 + (-fdi_gen_max(0.5f, t23))));
+                const float s93 = ((-s43) + (t80 * t9));
+                const float s94 = fdi_gen_sign(s93);
+                const float s95 = (s88 * t85);
+                const float s96 = (19.5f * s95);
+                const float s97 = (190.125f * s41);
+                const float s98 = (s97 * t85);
+                const float s99 = (s46 * s97);
+                const float s100 = (1.0f / (t88 * t88 * t88));
+                const float s101 = (1.0f / (s48 * sqrtf(s48)));
+                const float s102 = (s101 * t91);
+                const float s103 = (s102 * ((-(s98 * ((-0.85f * t8) + (-0.398f * t9)))) + (-(s99 * ((0.398f * t8) + (-0.85f * t9)))) + (380.25f * s100 * s47 * s91 * s92 * s94) + (380.25f * s100 * s91 * s92 * s94 * t86)));
+                const float s104 = (s46 * s50);
+                const float s105 = (s46 * s88);
+                const float s106 = (19.5f * s105);
+                const float s107 = (s92 * s94);
+                const float s108 = (s41 * s49);
+                const float s109 = (s107 * s108);
+                const float s110 = (2.0f * t9);
+                const float s111 = (19.5f * s76);
+                const float s112 = (s55 * s66);
+                const float s113 = (s2 + (-s87));
+                const float s114 = (s113 * s66);
+                const float s115 = (19.5f * s114);
+                const float s116 = ((0.425f * t125) + (2.199f * t127));
+                const float s117 = fdi_gen_heaviside((t138 + (-fdi_gen_max(0.5f, t136))));
+                const float s118 = fdi_gen_sign(s61);
+                const float s119 = (s113 * s55);
+                const float s120 = (19.5f * s119);
+                const float s121 = (190.125f * s57);
+                const float s122 = (s121 * s55);
+                const float s123 = (s121 * s62);
+                const float s124 = (1.0f / (t139 * t139 * t139));
+                const float s125 = ((1.0f / (s64 * sqrtf(s64))) * t142);
+                const float s126 = (s125 * ((-(s122 * ((4.398f * t125) + (-0.85f * t127)))) + (-(s123 * ((-0.85f * t125) + (-4.398f * t127)))) + (380.25f * s116 * s117 * s118 * s124 * s56) + (380.25f * s116 * s117 * s118 * s124 * s63)));
+                const float s127 = ((-(s111 * s112)) + (-(s115 * ((2.199f * t125) + (-0.425f * t127)))) + (-(s120 * s126)) + (19.5f * s113 * s116 * s117 * s118 * s55 * s57 * s65));
+                const float s128 = (3.3075862f * t125);
+                const float s129 = (s78 * s81);
+                const float s130 = (s129 * s20);
+                const float s131 = (19.5f * s84);
+                const float s132 = (3.3075862f * t195);
+                const float s133 = (19.5f * s17);
+                const float s134 = (s12 * s16);
+                const float s135 = (s12 * s3);
+                const float s136 = (3.3075862f * t183);
+                const float s137 = (s62 * s66);
+                const float s138 = (s113 * s62);
+                const float s139 = (19.5f * s138);
+                const float s140 = (s117 * s118);
+                const float s141 = (s57 * s65);
+                const float s142 = (s140 * s141);
+                const float s143 = ((s111 * s137) + (-(s115 * s116)) + (s126 * s139) + (-(s116 * s139 * s142)));
+                const float s144 = (2.0f * t125);
+                const float s145 = (3.3075862f * t127);
+                const float s146 = (5.85f * s17);
+                const float s147 = (s9 * t183);
+                const float s148 = (s9 * t195);
+                const float s149 = (s32 * ((-(s12 * s148)) + (-(s147 * s7)) + (380.25f * s13 * s27 * s78 * s81 * t183) + (380.25f * s27 * s78 * s8 * s81 * t183)));
+                const float s150 = (s90 * t8);
+                const float s151 = (s42 * t85);
+                const float s152 = (s42 * s46);
+                const float s153 = (s102 * ((-(s151 * t8)) + (-(s152 * t9)) + (380.25f * s100 * s47 * s92 * s94 * t9) + (380.25f * s100 * s92 * s94 * t86 * t9)));
+                const float s154 = (s90 * t9);
+                const float s155 = (19.5f * s109 * s88);
+                const float s156 = (s115 * t127);
+                const float s157 = (s55 * t125);
+                const float s158 = (19.5f * s113 * s142);
+                const float s159 = (s58 * t127);
+                const float s160 = (s124 * s56);
+                const float s161 = (380.25f * s140);
+                const float s162 = (s161 * t125);
+                const float s163 = (s124 * s63);
+                const float s164 = (s125 * ((-(s159 * s55)) + (-(s160 * s162)) + (-(s162 * s163)) + (-(s58 * s62 * t125))));
+                const float s165 = ((-s156) + (-(s120 * s164)) + (-(s157 * s158)));
+                const float s166 = (19.5f * s149);
+                const float s167 = ((s115 * t125) + (s139 * s164) + (s158 * s69));
+                const float s168 = (19.5f * s18);
+                const float s169 = (b[2].x1 * s36);
+                const float s170 = (380.25f * s129 * t195);
+                const float s171 = (s32 * ((s12 * s147) + (-(s148 * s7)) + (s170 * s28) + (s170 * s29)));
+                const float s172 = (2126.4595f * b[2].x1);
+                const float s173 = (s100 * t86);
+                const float s174 = (380.25f * s107 * t8);
+                const float s175 = (s100 * s47);
+                const float s176 = ((s151 * t9) + (-(s152 * t8)) + (s173 * s174) + (s174 * s175));
+                const float s177 = (s106 * s109);
+                const float s178 = (s161 * t127);
+                const float s179 = (s125 * ((-(s159 * s62)) + (-(s160 * s178)) + (-(s163 * s178)) + (380.25f * s55 * s57 * t125)));
+                const float s180 = ((-(s112 * s172)) + (-(s120 * s179)) + (-(s158 * s68)) + (19.5f * s113 * s65 * t125 * t142));
+                const float s181 = (s24 * s3);
+                const float s182 = (19.5f * s130);
+                const float s183 = (19.5f * s171);
+                const float s184 = (s156 + (s137 * s172) + (s139 * s179) + (s158 * s70));
+                const float s185 = (39.0f * s89);
+                const float s186 = (t78 * t9);
+                const float s187 = ((-s186) + (-(t8 * t80)));
+                const float s188 = (s102 * ((-(s98 * ((-2.0f * s43) + (2.0f * t80 * t9)))) + (-(s99 * ((-2.0f * s186) + (2.0f * s44 * t8)))) + (380.25f * s100 * s187 * s47 * s92 * s94) + (380.25f * s100 * s187 * s92 * s94 * t86)));
+                const float s189 = (2.0f * t8);
+                const float s190 = (s40 * s72);
+                const float s191 = (64.49793f * s114);
+                const float s192 = (s54 + (-(s44 * t127)));
+                const float s193 = (s125 * ((-(s122 * ((-2.0f * s60) + (2.0f * t125 * t80)))) + (-(s123 * ((-2.0f * s54) + (2.0f * s44 * t127)))) + (380.25f * s117 * s118 * s124 * s192 * s56) + (380.25f * s117 * s118 * s124 * s192 * s63)));
+                const float s194 = ((-(s115 * ((-s60) + t137))) + (-(s120 * s193)) + (19.5f * s113 * s117 * s118 * s192 * s55 * s57 * s65));
+                const float s195 = ((-(s115 * s192)) + (s139 * s193) + (-(s139 * s142 * s192)));
+                const float s196 = ((-s10) + (t195 * t97));
+                const float s197 = (-s12);
+                const float s198 = (s32 * ((-(s82 * ((-2.0f * s10) + (2.0f * t195 * t97)))) + (-(s83 * ((-2.0f * s6) + (2.0f * s79)))) + (380.25f * s13 * s197 * s27 * s78 * s81) + (380.25f * s197 * s27 * s78 * s8 * s81)));
+                const float s199 = (19.5f * s198);
+                const float s200 = (s72 * ((-19.349379f * s18) + (-19.349379f * s21 * s23) + (-71.66437f * s24 * s34) + (71.66437f * s12 * s3 * s30 * s31 * t183 * t394) + (19.349379f * s15 * s3 * s7 * t195 * t388 * t398 * t399)));
+                const float s201 = (5.2243323f * s21);
+                const float s202 = (19.349379f * s34);
+                const float s203 = (fdi_gen_heaviside((t23 + (-fdi_gen_max(0.5f, t87)))) * fdi_gen_sign(b[15].x1));
+                const float s204 = (5.265f * s108 * s203);
+                const float s205 = (102.6675f * s203);
+                const float s206 = (s102 * ((-(s173 * s205)) + (-(s175 * s205)) + (-(s97 * ((-0.1458f * b[15].x1) + (0.54f * s43) + (0.54f * s45))))));
+                const float s207 = (fdi_gen_heaviside((t136 + (-fdi_gen_max(0.5f, t138)))) * fdi_gen_sign(b[17].x1));
+                const float s208 = (5.265f * s141 * s207);
+                const float s209 = (102.6675f * s207);
+                const float s210 = (s125 * ((-(s121 * ((-0.1458f * b[17].x1) + (0.54f * s59) + (0.54f * s60)))) + (-(s160 * s209)) + (-(s163 * s209))));
+                const float s211 = ((-(s119 * s208)) + (-(s120 * s210)));
+                const float s212 = ((-5.265f * s114) + (s138 * s208) + (s139 * s210));
+                sv[0] = (s72 * ((1055.0172f * s35 * s36) + (-(s40 * (-1729.8676f + (-11631.868f * s16 * s22) + (-(s51 * s52)) + (-(s51 * s53)) + (-11631.868f * s66 * s70) + (-(s67 * s68)) + (-(s67 * s69)) + (11631.868f * s15 * s7 * t195 * t394) + (11631.868f * s55 * s65 * t125 * t142)))))); /* f2 */
+                sv[1] = (s72 * ((s35 * ((-5.85f * s74) + (-5.85f * s77) + (-(s38 * s84)) + (5.85f * s15 * s3 * s7 * s73 * s78 * s81 * t388))) + (-(s40 * ((-2092.0f * b[2].x1) + (1046.0f * b[4].x1) + (-(s110 * ((s103 * s106) + (s104 * s86) + (s90 * s91) + (-(s106 * s109 * s91))))) + (-(s127 * s128)) + (2.0f * s127 * t127) + (-(s132 * ((19.5f * s74) + (19.5f * s77) + (s131 * s37) + (-19.5f * s130 * s37 * s73)))) + (-(s136 * ((-(s111 * s134)) + (-(s131 * s135)) + (-(s133 * ((2.199f * t183) + (1.025f * t195)))) + (19.5f * s12 * s15 * s3 * s73 * s78 * s81 * t388)))) + (-(s143 * s144)) + (-(s143 * s145)) + (2.0f * t8 * ((-(s103 * s96)) + (-(s85 * s86)) + (-(s90 * ((-0.425f * t8) + (-0.199f * t9)))) + (19.5f * s41 * s49 * s88 * s91 * s92 * s94 * t85)))))))); /* f3 */
+                sv[2] = (s72 * ((s35 * ((-(s146 * t183)) + (-(s149 * s38)) + (5.85f * s15 * s3 * s7 * s78 * s81 * t183 * t388))) + (-(s40 * ((-(s110 * (s154 + (s106 * s153) + (-(s155 * s53))))) + (-(s128 * s165)) + (-(s132 * ((s133 * t183) + (s166 * s37) + (-19.5f * s130 * s37 * t183)))) + (-(s136 * ((-s168) + (-(s135 * s166)) + (19.5f * s12 * s15 * s3 * s78 * s81 * t183 * t388)))) + (-(s144 * s167)) + (-(s145 * s167)) + (2.0f * s165 * t127) + (2.0f * t8 * ((-s150) + (-(s153 * s96)) + (19.5f * s41 * s49 * s88 * s92 * s94 * t85 * t9)))))))); /* f4 */
+                sv[3] = (s72 * ((s35 * ((-637.93787f * s169) + (-5.85f * s18) + (-(s171 * s38)) + (5.85f * s15 * s3 * s7 * s78 * s81 * t195 * t388))) + (-(s40 * ((1046.0f * b[2].x1) + (-(s110 * (s150 + (-(s104 * s172)) + (-(s177 * t8)) + (19.5f * s101 * s176 * s46 * s88 * t91)))) + (-(s128 * s180)) + (-(s132 * (s168 + (2126.4595f * s169) + (-(s181 * s182)) + (s183 * s37)))) + (-(s136 * ((-(s134 * s172)) + (-(s135 * s183)) + (19.5f * s15 * s3 * t183 * t394) + (19.5f * s12 * s15 * s3 * s78 * s81 * t195 * t388)))) + (-(s144 * s184)) + (-(s145 * s184)) + (2.0f * s180 * t127) + (2.0f * t8 * (s154 + (s155 * s52) + (s172 * s85) + (-(s102 * s176 * s96))))))))); /* f5 */
+                sv[4] = (-(s190 * ((-(s110 * ((s106 * s188) + (-(s177 * s187)) + (s90 * ((-s186) + (s44 * t8)))))) + (s189 * ((-(s188 * s96)) + (-(s90 * s93)) + (19.5f * s187 * s41 * s49 * s88 * s92 * s94 * t85))) + (s185 * s46 * t8) + (-(s185 * t85 * t9))))); /* f6 */
+                sv[5] = (-(s190 * ((-39.0f * s114 * s157) + (-(s128 * s194)) + (-(s144 * s195)) + (-(s145 * s195)) + (-(s191 * s68)) + (-(s191 * s69)) + (2.0f * s194 * t127) + (39.0f * s113 * s62 * s65 * t127 * t142)))); /* f8 */
+                sv[6] = (s72 * ((s35 * ((-(s146 * s196)) + (-(s198 * s38)) + (5.85f * s15 * s197 * s3 * s7 * s78 * s81 * t388))) + (-(s40 * ((-64.49793f * s12 * s18) + (-(s132 * ((s133 * s196) + (s199 * s37) + (-(s182 * s197 * s37))))) + (-(s136 * ((-(s133 * s80)) + (-(s135 * s199)) + (19.5f * s12 * s15 * s197 * s3 * s78 * s81 * t388)))) + (-64.49793f * s17 * s7 * t183)))))); /* f9 */
+                sv[7] = s200; /* f13 */
+                sv[8] = s200; /* f17 */
+                sv[9] = (-(s190 * ((-s110) + s189))); /* f18 */
+                sv[10] = (-(s190 * ((-5.307586f * t125) + (-1.3075862f * t127)))); /* f20 */
+                sv[11] = (s72 * ((5.2243323f * s18) + (-(s181 * s201)) + (s201 * s23) + (-(s202 * s22)) + (s202 * s24) + (-(s40 * ((-s132) + (-s136)))))); /* f21 */
+                sv[12] = (-(s190 * ((-(s110 * ((-5.265f * s89) + (s105 * s204) + (s106 * s206)))) + (s189 * ((-(s204 * s95)) + (-(s206 * s96))))))); /* f22 */
+                sv[13] = (-(s190 * ((-(s128 * s211)) + (-(s144 * s212)) + (-(s145 * s212)) + (2.0f * s211 * t127)))); /* f24 */
+            }
+#endif
+        }
+    }
+    if ((run & 0x00000400U) != 0U) /* MSO2443: B1 B2 B3 D.psidot K1 K2 D1 D2 W2.FL W3.FL W4.FL W2.FS W3.FS W4.FS W2.Fx W3.Fx W4.Fx W2.Fy W3.Fy W4.Fy W3.dyn W3.D S3 S4 S5 S.omega2 S.omega4 */
+    {
+        fdi_obs_t *const o = &io->obs[io->at[10]];
+        const float t407 = (-1.7777778f * b[11].x1);
+        const float t421 = (1.5795f * t123);
+        const float t423 = (-fdi_gen_max(0.5f, t138));
+        const float t425 = ((0.54f * t126) + (0.54f * t130));
+        const float t426 = (102.6675f * t135);
+        const float t431 = (17.414442f * t127);
+        const float t433 = (t125 * t134);
+        const float t434 = (17.414442f * t123 * t433);
+        const float t435 = (t123 * t431);
+        const float t442 = ((-3602.2883f * b[2].x2) + t334 + t441 + (t119 * t438 * t95) + (64.49793f * t211 * t379 * t439) + (-64.49793f * t195 * t208 * t209 * t210 * t439));
+        float xh = 0.0f;
+        if ((io->restart & 0x00000400U) != 0U)
+        {
+            const float x0 = in->value[ROMO_SIG_OMEGA3_M]; /* omega3 from its sensor outside the MSO set */
+            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;
+        }
+        else
+        {
+            const float xp = o->xh;
+            const float t408 = tanhf((2.0f * xp));
+            const float t409 = (0.27f * fabsf(xp));
+            const float t410 = fdi_gen_max(0.5f, fdi_gen_max(t138, t409));
+            const float t411 = (1.0f / (t410 * t410));
+            const float t412 = (380.25f * t411);
+            const float t413 = ((-t131) + (0.27f * xp));
+            const float t414 = (t413 * t413);
+            const float t415 = (1.0f + (t135 * t412) + (t412 * t414));
+            const float t416 = (1.0f / (sqrtf(t415)));
+            const float t417 = (1.0f / (t410));
+            const float t418 = (t416 * t417);
+            const float t419 = (t123 * t418);
+            const float t420 = (5.85f * t413);
+            const float t422 = fdi_gen_sign(xp);
+            const float t424 = fdi_gen_heaviside((t409 + t423));
+            const float t427 = (t422 * t424);
+            const float t428 = ((1.0f / (t410 * t410 * t410)) * t427);
+            const float t429 = (t123 * (1.0f / (t415 * sqrtf(t415))) * t417 * ((-190.125f * t411 * ((-t425) + (0.1458f * xp))) + (102.6675f * t414 * t428) + (t426 * t428)));
+            const float t430 = ((t239 * (2.0f + (-2.0f * (t408 * t408)))) + (t418 * t421) + (t420 * t429) + (-1.5795f * t123 * t411 * t413 * t416 * t422 * t424));
+            const float t432 = (t411 * t416 * t427);
+            const float t436 = (64.49793f * t429);
+            const float t437 = ((t419 * t431) + (t432 * t434) + (-(t433 * t436)) + (t127 * t413 * t436) + (-(t413 * t432 * t435)));
+            const float f = ((-t407) + (-(t239 * t408)) + (-(t419 * t420)));
+            const float l = (-(t437 * (1.0f / (132.25f + (t437 * t437))) * fdi_gen_max(0.0f, (12.566371f + (-t430)))));
+            const float a = (-t430);
+            const float c = t437;
+            const float e = ((-t442) + (-64.49793f * t419 * t433) + (64.49793f * t123 * t127 * t413 * t416 * t417));
+            xh = fdi_gen_obs_predict(o, io->par, f + (l * e), a + (l * c));
+        }
+        {
+            const float t443 = tanhf((2.0f * xh));
+            const float t444 = (0.27f * fabsf(xh));
+            const float t445 = fdi_gen_max(0.5f, fdi_gen_max(t138, t444));
+            const float t446 = (1.0f / (t445 * t445));
+            const float t447 = (380.25f * t446);
+            const float t448 = ((-t131) + (0.27f * xh));
+            const float t449 = (t448 * t448);
+            const float t450 = (1.0f + (t135 * t447) + (t447 * t449));
+            const float t451 = (1.0f / (sqrtf(t450)));
+            const float t452 = (1.0f / (t445));
+            const float t453 = (t451 * t452);
+            const float t454 = (t123 * t453);
+            const float t455 = (5.85f * t448);
+            const float t456 = fdi_gen_sign(xh);
+            const float t457 = fdi_gen_heaviside((t423 + t444));
+            const float t458 = (t456 * t457);
+            const float t459 = ((1.0f / (t445 * t445 * t445)) * t458);
+            const float t460 = (t123 * (1.0f / (t450 * sqrtf(t450))) * t452 * ((t426 * t459) + (-190.125f * t446 * ((-t425) + (0.1458f * xh))) + (102.6675f * t449 * t459)));
+            const float t461 = (t446 * t451 * t458);
+            const float t462 = (64.49793f * t460);
+            const float t463 = ((t431 * t454) + (-(t433 * t462)) + (t434 * t461) + (t127 * t448 * t462) + (-(t435 * t448 * t461)));
+            const float f = ((-t407) + (-(t239 * t443)) + (-(t454 * t455)));
+            const float l = (-(t463 * (1.0f / (132.25f + (t463 * t463))) * fdi_gen_max(0.0f, (12.566371f + (-(t239 * (2.0f + (-2.0f * (t443 * t443))))) + (-(t421 * t453)) + (-(t455 * t460)) + (1.5795f * t123 * t446 * t448 * t451 * t456 * t457)))));
+            const float value = ((-t442) + (-64.49793f * t433 * t454) + (64.49793f * t123 * t127 * t448 * t451 * t452));
+            io->r[io->at[10]] = value;
+            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, f + (l * value)) != FDI_OK))
+            {
+                io->failed |= 0x00000400U;
+            }
+#if FDI_GEN_SENSITIVITIES
+            if ((io->sens_mask & 0x00000400U) != 0U) /* d r / d f: f3 f4 f5 f7 f8 f9 f12 f16 f19 f20 f21 f23 f25 */
+            {
+                float *const sv = &io->sens[io->sens_at[10]];
+                const float s0 = (180.34483f * b[2].x1 * ((0.3f * b[2].x1) + b[3].x1));
+                const float s1 = (-b[4].x1);
+                const float s2 = (109.04921f * b[2].x1 * ((-1.0f * b[2].x1) + (-s1)));
+                const float s3 = ((-213.05959f * b[2].x2) + s0 + s2);
+                const float s4 = (2565.315f + (-s3) + t73 + (-180.34483f * b[4].x2));
+                const float s5 = ((-2.199f * b[2].x1) + (-s1));
+                const float s6 = (s5 * t125);
+                const float s7 = (s6 + t133);
+                const float s8 = (s7 * s7);
+                const float s9 = (380.25f * t446);
+                const float s10 = ((-0.425f * b[2].x1) + b[3].x1);
+                const float s11 = (s10 * t125);
+                const float s12 = (s5 * t127);
+                const float s13 = (s11 + s12);
+                const float s14 = ((-s13) + (0.27f * xh));
+                const float s15 = (s14 * s14);
+                const float s16 = (1.0f + (s15 * s9) + (s8 * s9));
+                const float s17 = (1.0f / (sqrtf(s16)));
+                const float s18 = (s17 * t452);
+                const float s19 = (s18 * s4);
+                const float s20 = (1.0f / (t445 * t445 * t445));
+                const float s21 = (s20 * s8);
+                const float s22 = (t456 * t457);
+                const float s23 = (102.6675f * s22);
+                const float s24 = (190.125f * t446);
+                const float s25 = (s15 * s20);
+                const float s26 = ((s21 * s23) + (s23 * s25) + (-(s24 * ((-0.54f * s11) + (-0.54f * s12) + (0.1458f * xh)))));
+                const float s27 = (5.85f * s14);
+                const float s28 = (s27 * s4);
+                const float s29 = (1.0f / (s16 * sqrtf(s16)));
+                const float s30 = (s29 * t452);
+                const float s31 = (s28 * s30);
+                const float s32 = ((1.5795f * s19) + (0.00010666667f * b[14].x1 * (2.0f + (-2.0f * (t443 * t443)))) + (s26 * s31) + (-1.5795f * s14 * s17 * s4 * t446 * t456 * t457));
+                const float s33 = (s19 * t127);
+                const float s34 = (s17 * t446);
+                const float s35 = (s34 * s4);
+                const float s36 = (s22 * s35);
+                const float s37 = (s7 * t125);
+                const float s38 = (s36 * s37);
+                const float s39 = (s14 * s36 * t127);
+                const float s40 = (64.49793f * s7);
+                const float s41 = (s30 * s4);
+                const float s42 = (s26 * s41);
+                const float s43 = (s42 * t125);
+                const float s44 = (64.49793f * s14);
+                const float s45 = (s42 * t127);
+                const float s46 = ((17.414442f * s33) + (17.414442f * s38) + (-17.414442f * s39) + (-(s40 * s43)) + (s44 * s45));
+                const float s47 = (s46 * s46);
+                const float s48 = (1.0f / (fdi_gen_min(-0.1f, ((-s32) + (-(s47 * (1.0f / (132.25f + s47)) * fdi_gen_max(0.0f, (12.566371f + (-s32)))))))));
+                const float s49 = (180.34483f * b[3].x1);
+                const float s50 = (109.04921f * b[4].x1);
+                const float s51 = ((-109.89152f * b[2].x1) + s49 + s50);
+                const float s52 = (s18 * s51);
+                const float s53 = ((0.425f * t125) + (2.199f * t127));
+                const float s54 = (-(s19 * s53));
+                const float s55 = fdi_gen_heaviside((t138 + (-fdi_gen_max(0.5f, t444))));
+                const float s56 = fdi_gen_sign(s13);
+                const float s57 = (s24 * s7);
+                const float s58 = (s14 * s24);
+                const float s59 = ((-(s57 * ((4.398f * t125) + (-0.85f * t127)))) + (-(s58 * ((-0.85f * t125) + (-4.398f * t127)))) + (380.25f * s15 * s20 * s53 * s55 * s56) + (380.25f * s20 * s53 * s55 * s56 * s8));
+                const float s60 = (-s32);
+                const float s61 = (19.5f * s52);
+                const float s62 = (19.5f * s19);
+                const float s63 = (19.5f * s41);
+                const float s64 = (s59 * s63);
+                const float s65 = (3.3075862f * t125);
+                const float s66 = (-19.5f * s51);
+                const float s67 = (t78 * t96);
+                const float s68 = (t95 * t97);
+                const float s69 = ((0.27f * b[16].x1) + (-s67) + (-s68));
+                const float s70 = (s69 * s69);
+                const float s71 = (1.0f / (t107 * t107));
+                const float s72 = (380.25f * s71);
+                const float s73 = (t78 * t95);
+                const float s74 = ((-1.025f * b[2].x1) + (-b[3].x1));
+                const float s75 = (s74 * t96);
+                const float s76 = (s73 + s75);
+                const float s77 = (s76 * s76);
+                const float s78 = (1.0f + (s70 * s72) + (s72 * s77));
+                const float s79 = (1.0f / (sqrtf(s78)));
+                const float s80 = (s79 * t112);
+                const float s81 = (s69 * s80);
+                const float s82 = ((1.025f * t95) + (0.199f * t96));
+                const float s83 = (2565.315f + t71);
+                const float s84 = (s3 + s83 + (-109.04921f * b[3].x2));
+                const float s85 = (s80 * s84);
+                const float s86 = (19.5f * s85);
+                const float s87 = (s69 * s84);
+                const float s88 = (19.5f * s87);
+                const float s89 = fdi_gen_heaviside((t106 + (-fdi_gen_max(0.5f, t102))));
+                const float s90 = ((-0.199f * b[2].x1) + t0);
+                const float s91 = fdi_gen_sign(((s74 * t95) + (s90 * t96)));
+                const float s92 = (s89 * s91);
+                const float s93 = (s71 * s79);
+                const float s94 = (s92 * s93);
+                const float s95 = (190.125f * s71);
+                const float s96 = (s69 * s95);
+                const float s97 = (s76 * s95);
+                const float s98 = (1.0f / (t107 * t107 * t107));
+                const float s99 = (1.0f / (s78 * sqrtf(s78)));
+                const float s100 = (s99 * t112);
+                const float s101 = (s100 * ((-(s96 * ((2.05f * t95) + (0.398f * t96)))) + (-(s97 * ((-0.398f * t95) + (2.05f * t96)))) + (380.25f * s70 * s82 * s89 * s91 * s98) + (380.25f * s77 * s82 * s89 * s91 * s98)));
+                const float s102 = (2.0f * t95);
+                const float s103 = (s76 * s80);
+                const float s104 = (s76 * s84);
+                const float s105 = (19.5f * s104);
+                const float s106 = (2.0f * t96);
+                const float s107 = (s55 * s56);
+                const float s108 = (19.5f * s35);
+                const float s109 = (3.3075862f * t127);
+                const float s110 = ((-6362.9536f * b[2].x1) + (-19.5f * s49) + (19.5f * s50));
+                const float s111 = (t183 * t97);
+                const float s112 = (s5 * t195);
+                const float s113 = ((0.27f * b[18].x1) + (-s111) + (-s112));
+                const float s114 = (s113 * s113);
+                const float s115 = (1.0f / (t203 * t203));
+                const float s116 = (380.25f * s115);
+                const float s117 = (s5 * t183);
+                const float s118 = (s117 + (s74 * t195));
+                const float s119 = (s118 * s118);
+                const float s120 = (1.0f + (s114 * s116) + (s116 * s119));
+                const float s121 = (1.0f / (sqrtf(s120)));
+                const float s122 = (s121 * t210);
+                const float s123 = (s113 * s122);
+                const float s124 = ((1.025f * t183) + (-2.199f * t195));
+                const float s125 = ((-147.63007f * b[2].x2) + s0 + (-s2) + s83 + t73);
+                const float s126 = (s122 * s125);
+                const float s127 = (19.5f * s126);
+                const float s128 = (s113 * s125);
+                const float s129 = (19.5f * s128);
+                const float s130 = fdi_gen_heaviside((t202 + (-fdi_gen_max(0.5f, t200))));
+                const float s131 = (s74 * t183);
+                const float s132 = ((-s112) + s131);
+                const float s133 = fdi_gen_sign(s132);
+                const float s134 = (s130 * s133);
+                const float s135 = (s115 * s121);
+                const float s136 = (s134 * s135);
+                const float s137 = (190.125f * s115);
+                const float s138 = (s113 * s137);
+                const float s139 = (s118 * s137);
+                const float s140 = (1.0f / (t203 * t203 * t203));
+                const float s141 = (1.0f / (s120 * sqrtf(s120)));
+                const float s142 = (s141 * t210);
+                const float s143 = (s142 * ((-(s138 * ((2.05f * t183) + (-4.398f * t195)))) + (-(s139 * ((4.398f * t183) + (2.05f * t195)))) + (380.25f * s114 * s124 * s130 * s133 * s140) + (380.25f * s119 * s124 * s130 * s133 * s140)));
+                const float s144 = ((s110 * s123) + (s124 * s127) + (s129 * s143) + (-(s124 * s129 * s136)));
+                const float s145 = (2.0f * t183);
+                const float s146 = (3.3075862f * t195);
+                const float s147 = (s118 * s122);
+                const float s148 = (s118 * s125);
+                const float s149 = (19.5f * s148);
+                const float s150 = ((-(s110 * s147)) + (-(s127 * ((2.199f * t183) + (1.025f * t195)))) + (-(s143 * s149)) + (19.5f * s115 * s118 * s121 * s124 * s125 * s130 * s133));
+                const float s151 = (3.3075862f * t183);
+                const float s152 = (2.0f * t195);
+                const float s153 = (b[2].x1 * s18);
+                const float s154 = (s14 * s153);
+                const float s155 = (5.85f * s19);
+                const float s156 = (s28 * s34);
+                const float s157 = (s107 * t125);
+                const float s158 = (s9 * t127);
+                const float s159 = (380.25f * s107);
+                const float s160 = (s159 * t125);
+                const float s161 = ((-(s158 * s7)) + (-(s160 * s21)) + (-(s160 * s25)) + (-(s14 * s9 * t125)));
+                const float s162 = (s153 * s7);
+                const float s163 = (19.5f * s33);
+                const float s164 = (s107 * s108);
+                const float s165 = (s161 * s63);
+                const float s166 = (3516.724f * b[2].x1);
+                const float s167 = (s94 * t95);
+                const float s168 = (s72 * t95);
+                const float s169 = (s72 * t96);
+                const float s170 = ((-(s168 * s69)) + (-(s169 * s76)) + (380.25f * s70 * s89 * s91 * s98 * t95) + (380.25f * s77 * s89 * s91 * s98 * t95));
+                const float s171 = (-(s86 * t96));
+                const float s172 = (-19.5f * s121 * s125 * t183 * t210);
+                const float s173 = (s136 * t183);
+                const float s174 = (s116 * t183);
+                const float s175 = (s116 * t195);
+                const float s176 = ((-(s113 * s174)) + (-(s118 * s175)) + (380.25f * s114 * s130 * s133 * s140 * t183) + (380.25f * s119 * s130 * s133 * s140 * t183));
+                const float s177 = ((-s172) + (-(s123 * s166)) + (-(s129 * s173)) + (19.5f * s113 * s125 * s141 * s176 * t210));
+                const float s178 = (s127 * t195);
+                const float s179 = ((-s178) + (s147 * s166) + (s149 * s173) + (-(s142 * s149 * s176)));
+                const float s180 = (s159 * t127);
+                const float s181 = ((-(s14 * s158)) + (-(s180 * s21)) + (-(s180 * s25)) + (380.25f * s7 * t125 * t446));
+                const float s182 = (s164 * t127);
+                const float s183 = (s181 * s63);
+                const float s184 = (2126.4595f * b[2].x1);
+                const float s185 = (s94 * t96);
+                const float s186 = (s70 * s98);
+                const float s187 = (380.25f * s92 * t96);
+                const float s188 = (s77 * s98);
+                const float s189 = ((s168 * s76) + (-(s169 * s69)) + (s186 * s187) + (s187 * s188));
+                const float s190 = (s114 * s140);
+                const float s191 = (380.25f * s134 * t195);
+                const float s192 = (s119 * s140);
+                const float s193 = (s142 * ((-(s113 * s175)) + (s118 * s174) + (s190 * s191) + (s191 * s192)));
+                const float s194 = (s178 + (s123 * s184) + (s129 * s193) + (-(s129 * s136 * t195)));
+                const float s195 = ((-s172) + (-(s147 * s184)) + (-(s149 * s193)) + (19.5f * s115 * s118 * s121 * s125 * s130 * s133 * t195));
+                const float s196 = ((-s75) + (s90 * t95));
+                const float s197 = (s100 * ((-(s96 * ((-2.0f * s73) + (2.0f * t96 * t97)))) + (-(s97 * ((-2.0f * s67) + (2.0f * s74 * t95)))) + (380.25f * s196 * s70 * s89 * s91 * s98) + (380.25f * s196 * s77 * s89 * s91 * s98)));
+                const float s198 = (s48 * s60);
+                const float s199 = (s6 + (-(s10 * t127)));
+                const float s200 = (-s199);
+                const float s201 = ((-(s57 * ((-2.0f * s12) + (2.0f * t125 * t80)))) + (-(s58 * ((-2.0f * s6) + (2.0f * s10 * t127)))) + (380.25f * s15 * s199 * s20 * s55 * s56) + (380.25f * s199 * s20 * s55 * s56 * s8));
+                const float s202 = (s201 * s63);
+                const float s203 = (s113 * s126);
+                const float s204 = (s118 * s126);
+                const float s205 = (-s118);
+                const float s206 = (s142 * ((-(s138 * ((-2.0f * s117) + (2.0f * t195 * t97)))) + (-(s139 * ((-2.0f * s112) + (2.0f * s131)))) + (380.25f * s114 * s130 * s133 * s140 * s205) + (380.25f * s119 * s130 * s133 * s140 * s205)));
+                const float s207 = ((s127 * ((-s117) + (t195 * t97))) + (s129 * s206) + (-(s129 * s136 * s205)));
+                const float s208 = ((-(s127 * s132)) + (-(s149 * s206)) + (19.5f * s115 * s118 * s121 * s125 * s130 * s133 * s205));
+                const float s209 = (s14 * s45);
+                const float s210 = (s48 * ((71.66437f * s209) + (19.349379f * s33) + (19.349379f * s38) + (-19.349379f * s39) + (-71.66437f * s43 * s7)));
+                const float s211 = (fdi_gen_heaviside((t102 + (-fdi_gen_max(0.5f, t106)))) * fdi_gen_sign(b[16].x1));
+                const float s212 = (5.265f * s211 * s93);
+                const float s213 = (102.6675f * s211);
+                const float s214 = (s100 * ((-(s186 * s213)) + (-(s188 * s213)) + (-(s95 * ((-0.1458f * b[16].x1) + (0.54f * s67) + (0.54f * s68))))));
+                const float s215 = (fdi_gen_heaviside((t200 + (-fdi_gen_max(0.5f, t202)))) * fdi_gen_sign(b[18].x1));
+                const float s216 = (5.265f * s135 * s215);
+                const float s217 = (102.6675f * s215);
+                const float s218 = (s142 * ((-(s137 * ((-0.1458f * b[18].x1) + (0.54f * s111) + (0.54f * s112)))) + (-(s190 * s217)) + (-(s192 * s217))));
+                const float s219 = ((-(s148 * s216)) + (-(s149 * s218)));
+                const float s220 = ((-5.265f * s126) + (s128 * s216) + (s129 * s218));
+                sv[0] = (s48 * ((s46 * ((-5.85f * s54) + (-(s27 * s52)) + (-(s31 * s59)) + (5.85f * s14 * s17 * s4 * s53 * s55 * s56 * t446))) + (-(s60 * ((-1054.0795f * b[2].x1) + (1729.8676f * b[3].x1) + (1046.0f * b[4].x1) + (-(s102 * ((s101 * s88) + (s66 * s81) + (s82 * s86) + (-(s82 * s88 * s94))))) + (s106 * ((-(s101 * s105)) + (-(s103 * s66)) + (-(s86 * ((-0.199f * t95) + (1.025f * t96)))) + (19.5f * s71 * s76 * s79 * s82 * s84 * s89 * s91))) + (s109 * ((19.5f * s54) + (s14 * s61) + (s14 * s64) + (-(s107 * s108 * s14 * s53)))) + (-(s144 * s145)) + (s144 * s146) + (s150 * s151) + (s150 * s152) + (s65 * ((-(s61 * s7)) + (-(s62 * ((2.199f * t125) + (-0.425f * t127)))) + (-(s64 * s7)) + (19.5f * s17 * s4 * s53 * s55 * s56 * s7 * t446)))))))); /* f3 */
+                sv[1] = (s48 * ((s46 * ((-1055.0172f * s154) + (-(s155 * t125)) + (-(s156 * s157)) + (-(s161 * s31)))) + (-(s60 * ((1729.8676f * b[2].x1) + (-(s102 * ((-(s166 * s81)) + (-(s167 * s88)) + (19.5f * s79 * s84 * t112 * t95) + (19.5f * s170 * s69 * s84 * s99 * t112)))) + (s106 * (s171 + (s103 * s166) + (s105 * s167) + (-(s100 * s105 * s170)))) + (s109 * ((3516.724f * s154) + (s14 * s165) + (s62 * t125) + (s108 * s14 * s157))) + (-(s145 * s177)) + (s146 * s177) + (s151 * s179) + (s152 * s179) + (s65 * ((-3516.724f * s162) + (-s163) + (-(s164 * s37)) + (-(s165 * s7))))))))); /* f4 */
+                sv[2] = (s48 * ((s46 * ((-637.93787f * s154) + (-5.85f * s33) + (-(s181 * s31)) + (-(s107 * s156 * t127)))) + (-(s60 * ((1046.0f * b[2].x1) + (-(s102 * ((-s171) + (-(s184 * s81)) + (-(s185 * s88)) + (19.5f * s189 * s69 * s84 * s99 * t112)))) + (s106 * ((s103 * s184) + (s105 * s185) + (s86 * t95) + (-(s100 * s105 * s189)))) + (s109 * ((2126.4595f * s154) + s163 + (s14 * s182) + (s14 * s183))) + (-(s145 * s194)) + (s146 * s194) + (s151 * s195) + (s152 * s195) + (s65 * ((-2126.4595f * s162) + (-(s182 * s7)) + (-(s183 * s7)) + (19.5f * s17 * s4 * t125 * t452)))))))); /* f5 */
+                sv[3] = (-(s198 * ((-(s102 * ((s197 * s88) + (s86 * ((-s73) + (t96 * t97))) + (-(s196 * s88 * s94))))) + (2.0f * t96 * ((-(s105 * s197)) + (-(s86 * ((-s67) + (s74 * t95)))) + (19.5f * s196 * s71 * s76 * s79 * s84 * s89 * s91))) + (-39.0f * s76 * s85 * t95) + (39.0f * s69 * s79 * s84 * t112 * t96)))); /* f7 */
+                sv[4] = (s48 * ((s46 * ((-(s155 * s200)) + (-(s201 * s31)) + (5.85f * s14 * s17 * s199 * s4 * s55 * s56 * t446))) + (-(s60 * ((s109 * ((s14 * s202) + (s200 * s62) + (-(s14 * s164 * s199)))) + (s33 * s40) + (s65 * ((-(s202 * s7)) + (-(s62 * ((-s12) + t137))) + (19.5f * s17 * s199 * s4 * s55 * s56 * s7 * t446))) + (s19 * s44 * t125)))))); /* f8 */
+                sv[5] = (-(s198 * ((-(s145 * s207)) + (s146 * s207) + (s151 * s208) + (s152 * s208) + (64.49793f * s203 * t183) + (39.0f * s203 * t195) + (-39.0f * s204 * t183) + (64.49793f * s204 * t195)))); /* f9 */
+                sv[6] = s210; /* f12 */
+                sv[7] = s210; /* f16 */
+                sv[8] = (-(s198 * ((-s102) + (2.0f * t96)))); /* f19 */
+                sv[9] = (s48 * ((-19.349379f * s209) + (-5.2243323f * s33) + (-5.2243323f * s38) + (-(s60 * (s109 + s65))) + (19.349379f * s26 * s29 * s4 * s7 * t125 * t452) + (5.2243323f * s14 * s17 * s4 * t127 * t446 * t456 * t457))); /* f20 */
+                sv[10] = (-(s198 * ((1.3075862f * t183) + (5.307586f * t195)))); /* f21 */
+                sv[11] = (-(s198 * ((-(s102 * ((-5.265f * s85) + (s212 * s87) + (s214 * s88)))) + (2.0f * t96 * ((-(s104 * s212)) + (-(s105 * s214))))))); /* f23 */
+                sv[12] = (-(s198 * ((-(s145 * s220)) + (s146 * s220) + (s151 * s219) + (s152 * s219)))); /* f25 */
+            }
+#endif
+        }
+    }
+    if ((run & 0x00000800U) != 0U) /* MSO3805: B1 B2 B3 D.psidot K1 K2 D1 D2 W1.FL W4.FL W1.FS W2.FS W4.FS W1.Fx W2.Fx W4.Fx W1.Fy W2.Fy W4.Fy W1.dyn W2.dyn W1.D W2.D S3 S4 S5 S.omega2 S.omega4 */
+    {
+        fdi_obs_t *const o = &io->obs[io->at[11]];
+        const float t477 = (1.5795f * t77);
+        const float t486 = (17.414442f * t8);
+        const float t487 = (17.414442f * t333 * t77);
+        const float t488 = (64.49793f * t8);
+        const float t492 = ((-142.5531f * b[2].x2) + t214 + t275 + t441 + t491 + (3.3075862f * t181 * t96) + (-64.49793f * t100 * t111 * t112 * t118 * t95));
+        float xh = 0.0f;
+        if ((io->restart & 0x00000800U) != 0U)
+        {
+            const float x0 = in->value[ROMO_SIG_OMEGA1_M]; /* omega1 from its sensor outside the MSO set */
+            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;
+        }
+        else
+        {
+            const float xp = o->xh;
+            const float t464 = tanhf((2.0f * xp));
+            const float t465 = (0.27f * fabsf(xp));
+            const float t466 = fdi_gen_max(0.5f, fdi_gen_max(t465, t87));
+            const float t467 = (1.0f / (t466 * t466));
+            const float t468 = (380.25f * t467);
+            const float t469 = ((-t83) + (0.27f * xp));
+            const float t470 = (t469 * t469);
+            const float t471 = (1.0f + (t468 * t470) + (t468 * t86));
+            const float t472 = (1.0f / (sqrtf(t471)));
+            const float t473 = (1.0f / (t466));
+            const float t474 = (t472 * t473);
+            const float t475 = (t474 * t77);
+            const float t476 = (5.85f * t469);
+            const float t478 = fdi_gen_sign(xp);
+            const float t479 = fdi_gen_heaviside((t168 + t465));
+            const float t480 = (1.0f / (t471 * sqrtf(t471)));
+            const float t481 = (t478 * t479);
+            const float t482 = ((1.0f / (t466 * t466 * t466)) * t481);
+            const float t483 = ((t171 * t482) + (-190.125f * t467 * ((-t170) + (0.1458f * xp))) + (102.6675f * t470 * t482));
+            const float t484 = (t473 * t480 * t483 * t77);
+            const float t485 = ((t148 * (2.0f + (-2.0f * (t464 * t464)))) + (t474 * t477) + (t476 * t484) + (-1.5795f * t467 * t469 * t472 * t478 * t479 * t77));
+            const float t489 = (t469 * t488);
+            const float t490 = ((-(t475 * t486)) + (-(t484 * t489)) + (-(t467 * t472 * t481 * t487)) + (64.49793f * t473 * t480 * t483 * t77 * t85 * t9) + (17.414442f * t467 * t469 * t472 * t478 * t479 * t77 * t8));
+            const float f = ((-t146) + (-(t148 * t464)) + (-(t475 * t476)));
+            const float l = (-(t490 * (1.0f / (34.5744f + (t490 * t490))) * fdi_gen_max(0.0f, (12.566371f + (-t485)))));
+            const float a = (-t485);
+            const float c = t490;
+            const float e = ((-t492) + (-(t475 * t489)) + (64.49793f * t472 * t473 * t77 * t85 * t9));
+            xh = fdi_gen_obs_predict(o, io->par, f + (l * e), a + (l * c));
+        }
+        {
+            const float t493 = tanhf((2.0f * xh));
+            const float t494 = (0.27f * fabsf(xh));
+            const float t495 = fdi_gen_max(0.5f, fdi_gen_max(t494, t87));
+            const float t496 = (1.0f / (t495 * t495));
+            const float t497 = (380.25f * t496);
+            const float t498 = ((-t83) + (0.27f * xh));
+            const float t499 = (t498 * t498);
+            const float t500 = (1.0f + (t497 * t499) + (t497 * t86));
+            const float t501 = (1.0f / (sqrtf(t500)));
+            const float t502 = (1.0f / (t495));
+            const float t503 = (t501 * t502);
+            const float t504 = (t503 * t77);
+            const float t505 = (5.85f * t498);
+            const float t506 = fdi_gen_sign(xh);
+            const float t507 = fdi_gen_heaviside((t168 + t494));
+            const float t508 = (1.0f / (t500 * sqrtf(t500)));
+            const float t509 = (t506 * t507);
+            const float t510 = ((1.0f / (t495 * t495 * t495)) * t509);
+            const float t511 = ((t171 * t510) + (-190.125f * t496 * ((-t170) + (0.1458f * xh))) + (102.6675f * t499 * t510));
+            const float t512 = (t502 * t508 * t511 * t77);
+            const float t513 = (t488 * t498);
+            const float t514 = ((-(t486 * t504)) + (-(t512 * t513)) + (-(t487 * t496 * t501 * t509)) + (64.49793f * t502 * t508 * t511 * t77 * t85 * t9) + (17.414442f * t496 * t498 * t501 * t506 * t507 * t77 * t8));
+            const float f = ((-t146) + (-(t148 * t493)) + (-(t504 * t505)));
+            const float l = (-(t514 * (1.0f / (34.5744f + (t514 * t514))) * fdi_gen_max(0.0f, (12.566371f + (-(t148 * (2.0f + (-2.0f * (t493 * t493))))) + (-(t477 * t503)) + (-(t505 * t512)) + (1.5795f * t496 * t498 * t501 * t506 * t507 * t77)))));
+            const float value = ((-t492) + (-(t504 * t513)) + (64.49793f * t501 * t502 * t77 * t85 * t9));
+            io->r[io->at[11]] = value;
+            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, f + (l * value)) != FDI_OK))
+            {
+                io->failed |= 0x00000800U;
+            }
+#if FDI_GEN_SENSITIVITIES
+            if ((io->sens_mask & 0x00000800U) != 0U) /* d r / d f: f3 f4 f5 f6 f7 f9 f10 f11 f14 f15 f18 f19 f21 f23 f25 */
+            {
+                float *const sv = &io->sens[io->sens_at[11]];
+                const float s0 = (180.34483f * b[2].x1 * ((0.3f * b[2].x1) + b[3].x1));
+                const float s1 = (-b[4].x1);
+                const float s2 = (109.04921f * b[2].x1 * ((-1.0f * b[2].x1) + (-s1)));
+                const float s3 = (2565.315f + s2 + (-109.04921f * b[3].x2));
+                const float s4 = ((-s0) + s3 + t70 + (-180.34483f * b[4].x2));
+                const float s5 = (380.25f * t496);
+                const float s6 = (t78 * t8);
+                const float s7 = ((-0.425f * b[2].x1) + b[3].x1);
+                const float s8 = (s7 * t9);
+                const float s9 = ((-s6) + (-s8) + (0.27f * xh));
+                const float s10 = (s9 * s9);
+                const float s11 = (1.0f + (s10 * s5) + (s5 * t86));
+                const float s12 = (1.0f / (sqrtf(s11)));
+                const float s13 = (s12 * t502);
+                const float s14 = (s13 * s4);
+                const float s15 = (1.0f / (t495 * t495 * t495));
+                const float s16 = (s15 * t86);
+                const float s17 = (t506 * t507);
+                const float s18 = (102.6675f * s17);
+                const float s19 = (190.125f * t496);
+                const float s20 = (s10 * s15);
+                const float s21 = ((s16 * s18) + (s18 * s20) + (-(s19 * ((-0.54f * s6) + (-0.54f * s8) + (0.1458f * xh)))));
+                const float s22 = (5.85f * s9);
+                const float s23 = (s22 * s4);
+                const float s24 = (1.0f / (s11 * sqrtf(s11)));
+                const float s25 = (s24 * t502);
+                const float s26 = (s23 * s25);
+                const float s27 = ((1.5795f * s14) + (0.00010666667f * b[13].x1 * (2.0f + (-2.0f * (t493 * t493)))) + (s21 * s26) + (-1.5795f * s12 * s4 * s9 * t496 * t506 * t507));
+                const float s28 = (s14 * t8);
+                const float s29 = (s12 * t496);
+                const float s30 = (s29 * s4);
+                const float s31 = (s17 * s30);
+                const float s32 = (s31 * t85 * t9);
+                const float s33 = (64.49793f * s9);
+                const float s34 = (s25 * s4);
+                const float s35 = (s21 * s34);
+                const float s36 = (s35 * t8);
+                const float s37 = ((-17.414442f * s28) + (-17.414442f * s32) + (-(s33 * s36)) + (64.49793f * s21 * s24 * s4 * t502 * t85 * t9) + (17.414442f * s12 * s4 * s9 * t496 * t506 * t507 * t8));
+                const float s38 = (s37 * s37);
+                const float s39 = (1.0f / (fdi_gen_min(-0.1f, ((-s27) + (-(s38 * (1.0f / (34.5744f + s38)) * fdi_gen_max(0.0f, (12.566371f + (-s27)))))))));
+                const float s40 = (180.34483f * b[3].x1);
+                const float s41 = (109.04921f * b[4].x1);
+                const float s42 = ((326.3053f * b[2].x1) + s40 + (-s41));
+                const float s43 = (s13 * s42);
+                const float s44 = ((0.199f * t8) + (-0.425f * t9));
+                const float s45 = (s14 * s44);
+                const float s46 = fdi_gen_heaviside((t87 + (-fdi_gen_max(0.5f, t494))));
+                const float s47 = ((-s6) + (t80 * t9));
+                const float s48 = fdi_gen_sign(s47);
+                const float s49 = (s19 * t85);
+                const float s50 = (s19 * s9);
+                const float s51 = ((-(s49 * ((-0.85f * t8) + (-0.398f * t9)))) + (-(s50 * ((0.398f * t8) + (-0.85f * t9)))) + (380.25f * s10 * s15 * s44 * s46 * s48) + (380.25f * s15 * s44 * s46 * s48 * t86));
+                const float s52 = (-s27);
+                const float s53 = (19.5f * s43);
+                const float s54 = (19.5f * s14);
+                const float s55 = (19.5f * s34);
+                const float s56 = (s51 * s55);
+                const float s57 = (3.3075862f * t9);
+                const float s58 = (s46 * s48);
+                const float s59 = (19.5f * s30);
+                const float s60 = (3.3075862f * t8);
+                const float s61 = (t78 * t95);
+                const float s62 = ((-1.025f * b[2].x1) + (-b[3].x1));
+                const float s63 = (s62 * t96);
+                const float s64 = (s61 + s63);
+                const float s65 = (t78 * t96);
+                const float s66 = (t95 * t97);
+                const float s67 = ((0.27f * b[16].x1) + (-s65) + (-s66));
+                const float s68 = (s67 * s67);
+                const float s69 = (1.0f / (t107 * t107));
+                const float s70 = (380.25f * s69);
+                const float s71 = (s64 * s64);
+                const float s72 = (1.0f + (s68 * s70) + (s70 * s71));
+                const float s73 = (1.0f / (sqrtf(s72)));
+                const float s74 = (s73 * t112);
+                const float s75 = (19.5f * s74);
+                const float s76 = (s0 + t71);
+                const float s77 = ((-213.05959f * b[2].x2) + s3 + s76);
+                const float s78 = (s75 * s77);
+                const float s79 = ((1.025f * t95) + (0.199f * t96));
+                const float s80 = fdi_gen_heaviside((t106 + (-fdi_gen_max(0.5f, t102))));
+                const float s81 = ((-0.199f * b[2].x1) + t0);
+                const float s82 = fdi_gen_sign(((s62 * t95) + (s81 * t96)));
+                const float s83 = (190.125f * s69);
+                const float s84 = (s67 * s83);
+                const float s85 = (s64 * s83);
+                const float s86 = (1.0f / (t107 * t107 * t107));
+                const float s87 = (s64 * s77);
+                const float s88 = (19.5f * s87);
+                const float s89 = ((1.0f / (s72 * sqrtf(s72))) * s88 * t112);
+                const float s90 = ((-(s78 * ((-0.199f * t95) + (1.025f * t96)))) + (-(s89 * ((-(s84 * ((2.05f * t95) + (0.398f * t96)))) + (-(s85 * ((-0.398f * t95) + (2.05f * t96)))) + (380.25f * s68 * s79 * s80 * s82 * s86) + (380.25f * s71 * s79 * s80 * s82 * s86)))) + (-(s64 * s75 * ((109.89152f * b[2].x1) + (-s40) + (-s41)))) + (19.5f * s64 * s69 * s73 * s77 * s79 * s80 * s82));
+                const float s91 = (3.3075862f * t95);
+                const float s92 = (-19.5f * s42);
+                const float s93 = (t183 * t97);
+                const float s94 = ((-2.199f * b[2].x1) + (-s1));
+                const float s95 = (s94 * t195);
+                const float s96 = ((0.27f * b[18].x1) + (-s93) + (-s95));
+                const float s97 = (s96 * s96);
+                const float s98 = (1.0f / (t203 * t203));
+                const float s99 = (380.25f * s98);
+                const float s100 = (s94 * t183);
+                const float s101 = (s100 + (s62 * t195));
+                const float s102 = (s101 * s101);
+                const float s103 = (1.0f + (s102 * s99) + (s97 * s99));
+                const float s104 = (1.0f / (sqrtf(s103)));
+                const float s105 = (s104 * t210);
+                const float s106 = (s105 * s96);
+                const float s107 = ((1.025f * t183) + (-2.199f * t195));
+                const float s108 = (2565.315f + (-147.63007f * b[2].x2) + (-s2) + s76 + t73);
+                const float s109 = (s105 * s108);
+                const float s110 = (19.5f * s109);
+                const float s111 = (s108 * s96);
+                const float s112 = (19.5f * s111);
+                const float s113 = fdi_gen_heaviside((t202 + (-fdi_gen_max(0.5f, t200))));
+                const float s114 = (s62 * t183);
+                const float s115 = (s114 + (-s95));
+                const float s116 = fdi_gen_sign(s115);
+                const float s117 = (s113 * s116);
+                const float s118 = (s104 * s98);
+                const float s119 = (s117 * s118);
+                const float s120 = (190.125f * s98);
+                const float s121 = (s120 * s96);
+                const float s122 = (s101 * s120);
+                const float s123 = (1.0f / (t203 * t203 * t203));
+                const float s124 = (1.0f / (s103 * sqrtf(s103)));
+                const float s125 = (s124 * t210);
+                const float s126 = (s125 * ((-(s121 * ((2.05f * t183) + (-4.398f * t195)))) + (-(s122 * ((4.398f * t183) + (2.05f * t195)))) + (380.25f * s102 * s107 * s113 * s116 * s123) + (380.25f * s107 * s113 * s116 * s123 * s97)));
+                const float s127 = (2.0f * t183);
+                const float s128 = (s101 * s105);
+                const float s129 = (s101 * s108);
+                const float s130 = (19.5f * s129);
+                const float s131 = (b[2].x1 * s13);
+                const float s132 = (s131 * s9);
+                const float s133 = (5.85f * s14);
+                const float s134 = (s5 * t85);
+                const float s135 = (s5 * s9);
+                const float s136 = ((-(s134 * t8)) + (-(s135 * t9)) + (380.25f * s10 * s15 * s46 * s48 * t9) + (380.25f * s15 * s46 * s48 * t86 * t9));
+                const float s137 = (s131 * t85);
+                const float s138 = (19.5f * s28);
+                const float s139 = (s136 * s55);
+                const float s140 = (s54 * t9);
+                const float s141 = (s59 * s9);
+                const float s142 = (3516.724f * b[2].x1);
+                const float s143 = (s64 * s74);
+                const float s144 = (s80 * s82);
+                const float s145 = (s69 * s73);
+                const float s146 = (s144 * s145 * s88);
+                const float s147 = (s70 * t95);
+                const float s148 = (s70 * t96);
+                const float s149 = ((s142 * s143) + (s146 * t95) + (-(s78 * t96)) + (-(s89 * ((-(s147 * s67)) + (-(s148 * s64)) + (380.25f * s68 * s80 * s82 * s86 * t95) + (380.25f * s71 * s80 * s82 * s86 * t95)))));
+                const float s150 = (-19.5f * s104 * s108 * t183 * t210);
+                const float s151 = (s119 * t183);
+                const float s152 = (s99 * t183);
+                const float s153 = (s99 * t195);
+                const float s154 = ((-(s101 * s153)) + (-(s152 * s96)) + (380.25f * s102 * s113 * s116 * s123 * t183) + (380.25f * s113 * s116 * s123 * s97 * t183));
+                const float s155 = (s110 * t195);
+                const float s156 = (s58 * t8);
+                const float s157 = (380.25f * s58 * t8);
+                const float s158 = ((s134 * t9) + (-(s135 * t8)) + (s157 * s16) + (s157 * s20));
+                const float s159 = (2126.4595f * b[2].x1);
+                const float s160 = (s68 * s86);
+                const float s161 = (380.25f * s144 * t96);
+                const float s162 = (s71 * s86);
+                const float s163 = ((s143 * s159) + (s146 * t96) + (s78 * t95) + (-(s89 * ((s147 * s64) + (-(s148 * s67)) + (s160 * s161) + (s161 * s162)))));
+                const float s164 = (s123 * s97);
+                const float s165 = (380.25f * s117 * t195);
+                const float s166 = (s102 * s123);
+                const float s167 = (s125 * ((s101 * s152) + (-(s153 * s96)) + (s164 * s165) + (s165 * s166)));
+                const float s168 = (t78 * t9);
+                const float s169 = ((-s168) + (s7 * t8));
+                const float s170 = ((-s168) + (-(t8 * t80)));
+                const float s171 = ((-(s49 * ((-2.0f * s6) + (2.0f * t80 * t9)))) + (-(s50 * ((-2.0f * s168) + (2.0f * s7 * t8)))) + (380.25f * s10 * s15 * s170 * s46 * s48) + (380.25f * s15 * s170 * s46 * s48 * t86));
+                const float s172 = (s171 * s55);
+                const float s173 = tanhf((2.0f * b[16].x1));
+                const float s174 = ((5.9259257f * b[10].x1) + (-3.3333333f * b[16].x2) + (-0.00035555556f * b[13].x1 * s173));
+                const float s175 = (s143 * s77);
+                const float s176 = ((-s63) + (s81 * t95));
+                const float s177 = ((-(s78 * ((-s65) + (s62 * t95)))) + (-(s89 * ((-(s84 * ((-2.0f * s61) + (2.0f * t96 * t97)))) + (-(s85 * ((-2.0f * s65) + (2.0f * s62 * t95)))) + (380.25f * s176 * s68 * s80 * s82 * s86) + (380.25f * s176 * s71 * s80 * s82 * s86)))) + (19.5f * s176 * s64 * s69 * s73 * s77 * s80 * s82));
+                const float s178 = (s39 * s52);
+                const float s179 = (-s101);
+                const float s180 = (s125 * ((-(s121 * ((-2.0f * s100) + (2.0f * t195 * t97)))) + (-(s122 * ((2.0f * s114) + (-2.0f * s95)))) + (380.25f * s102 * s113 * s116 * s123 * s179) + (380.25f * s113 * s116 * s123 * s179 * s97)));
+                const float s181 = (s39 * ((-19.349379f * s28) + (-19.349379f * s32) + (-71.66437f * s36 * s9) + (71.66437f * s21 * s24 * s4 * t502 * t85 * t9) + (19.349379f * s12 * s4 * s9 * t496 * t506 * t507 * t8)));
+                const float s182 = (-(s178 * ((-7.4074073f * t95) + (-12.2503195f * t96))));
+                const float s183 = (b[13].x1 * (2.0f + (-2.0f * (s173 * s173))));
+                const float s184 = (fdi_gen_heaviside((t102 + (-fdi_gen_max(0.5f, t106)))) * fdi_gen_sign(b[16].x1));
+                const float s185 = (102.6675f * s184);
+                const float s186 = ((-(s89 * ((-(s160 * s185)) + (-(s162 * s185)) + (-(s83 * ((-0.1458f * b[16].x1) + (0.54f * s65) + (0.54f * s66))))))) + (-5.265f * s145 * s184 * s87));
+                const float s187 = (fdi_gen_heaviside((t200 + (-fdi_gen_max(0.5f, t202)))) * fdi_gen_sign(b[18].x1));
+                const float s188 = (5.265f * s118 * s187);
+                const float s189 = (102.6675f * s187);
+                const float s190 = (s125 * ((-(s120 * ((-0.1458f * b[18].x1) + (0.54f * s93) + (0.54f * s95)))) + (-(s164 * s189)) + (-(s166 * s189))));
+                sv[0] = (s39 * ((s37 * ((-5.85f * s45) + (-(s22 * s43)) + (-(s26 * s51)) + (5.85f * s12 * s4 * s44 * s46 * s48 * s9 * t496))) + (-(s52 * ((-3129.9207f * b[2].x1) + (-1729.8676f * b[3].x1) + (1046.0f * b[4].x1) + (-(s127 * ((s106 * s92) + (s107 * s110) + (s112 * s126) + (-(s107 * s112 * s119))))) + (-(s57 * ((-(s53 * t85)) + (-(s54 * ((-0.425f * t8) + (-0.199f * t9)))) + (-(s56 * t85)) + (19.5f * s12 * s4 * s44 * s46 * s48 * t496 * t85)))) + (-(s60 * ((19.5f * s45) + (s53 * s9) + (s56 * s9) + (-(s44 * s58 * s59 * s9))))) + (-(s90 * s91)) + (2.0f * s90 * t96) + (2.0f * t195 * ((-(s110 * ((2.199f * t183) + (1.025f * t195)))) + (-(s126 * s130)) + (-(s128 * s92)) + (19.5f * s101 * s104 * s107 * s108 * s113 * s116 * s98)))))))); /* f3 */
+                sv[1] = (s39 * ((s37 * ((-1055.0172f * s132) + (-(s133 * t9)) + (-(s136 * s26)) + (5.85f * s12 * s4 * s46 * s48 * s9 * t496 * t9))) + (-(s52 * ((-1729.8676f * b[2].x1) + (-(s127 * ((-s150) + (-(s106 * s142)) + (-(s112 * s151)) + (19.5f * s108 * s124 * s154 * s96 * t210)))) + (-(s149 * s91)) + (2.0f * s149 * t96) + (-(s57 * ((-3516.724f * s137) + (-s138) + (-(s139 * t85)) + (19.5f * s12 * s4 * s46 * s48 * t496 * t85 * t9)))) + (-(s60 * ((3516.724f * s132) + s140 + (s139 * s9) + (-(s141 * s58 * t9))))) + (2.0f * t195 * ((-s155) + (s128 * s142) + (s130 * s151) + (-(s125 * s130 * s154))))))))); /* f4 */
+                sv[2] = (s39 * ((s37 * ((637.93787f * s132) + (-5.85f * s28) + (-(s158 * s26)) + (s156 * s23 * s29))) + (-(s52 * ((1046.0f * b[2].x1) + (-(s127 * (s155 + (s106 * s159) + (s112 * s167) + (-(s112 * s119 * t195))))) + (-(s163 * s91)) + (2.0f * s163 * t96) + (-(s57 * ((2126.4595f * s137) + s140 + (-(s158 * s55 * t85)) + (s58 * s59 * t8 * t85)))) + (-(s60 * ((-2126.4595f * s132) + s138 + (-(s141 * s156)) + (19.5f * s158 * s24 * s4 * s9 * t502)))) + (2.0f * t195 * ((-s150) + (-(s128 * s159)) + (-(s130 * s167)) + (19.5f * s101 * s104 * s108 * s113 * s116 * s98 * t195)))))))); /* f5 */
+                sv[3] = (s39 * ((s37 * ((-(s133 * s169)) + (-(s171 * s26)) + (5.85f * s12 * s170 * s4 * s46 * s48 * s9 * t496))) + (-(s52 * ((-64.49793f * s28 * t85) + (-(s57 * ((-(s172 * t85)) + (-(s47 * s54)) + (19.5f * s12 * s170 * s4 * s46 * s48 * t496 * t85)))) + (-(s60 * ((s169 * s54) + (s172 * s9) + (-(s141 * s170 * s58))))) + (-(s14 * s33 * t9))))))); /* f6 */
+                sv[4] = (-(s178 * ((-(s174 * s91)) + (2.0f * s174 * t96) + (-39.0f * s175 * t95) + (-64.49793f * s175 * t96) + (-(s177 * s91)) + (2.0f * s177 * t96)))); /* f7 */
+                sv[5] = (-(s178 * ((-(s127 * ((s110 * ((-s100) + (t195 * t97))) + (s112 * s180) + (-(s112 * s119 * s179))))) + (2.0f * t195 * ((-(s110 * s115)) + (-(s130 * s180)) + (19.5f * s101 * s104 * s108 * s113 * s116 * s179 * s98))) + (-39.0f * s101 * s109 * t183) + (39.0f * s104 * s108 * s96 * t195 * t210)))); /* f9 */
+                sv[6] = s181; /* f10 */
+                sv[7] = s182; /* f11 */
+                sv[8] = s181; /* f14 */
+                sv[9] = s182; /* f15 */
+                sv[10] = (s39 * ((-(s52 * ((-s57) + (-s60)))) + (-5.2243323f * s31 * s9 * t8) + (-19.349379f * s35 * t85 * t9) + (5.2243323f * s12 * s4 * t502 * t8) + (19.349379f * s21 * s24 * s4 * s9 * t502 * t8) + (5.2243323f * s12 * s4 * t496 * t506 * t507 * t85 * t9))); /* f18 */
+                sv[11] = (-(s178 * ((-s91) + (2.0f * t96)))); /* f19 */
+                sv[12] = (-(s178 * ((-s127) + (2.0f * t195)))); /* f21 */
+                sv[13] = (-(s178 * ((-0.0007111111f * s183 * t95) + (-0.0011760306f * s183 * t96) + (-(s186 * s91)) + (2.0f * s186 * t96)))); /* f23 */
+                sv[14] = (-(s178 * ((-(s127 * ((-5.265f * s109) + (s111 * s188) + (s112 * s190)))) + (2.0f * t195 * ((-(s129 * s188)) + (-(s130 * s190))))))); /* f25 */
+            }
+#endif
+        }
+    }
+    if ((run & 0x00001000U) != 0U) /* MSO4195: B1 B2 B3 D.psidot K1 K2 D1 D2 W3.FL W2.FS W3.FS W4.FS W2.Fx W3.Fx W4.Fx W2.Fy W3.Fy W4.Fy W2.dyn W4.dyn W2.D W4.D S2 S3 S4 S.omega2 S.omega3 S.omega4 */
+    {
+        fdi_obs_t *const o = &io->obs[io->at[12]];
+        const float t515 = (13144.424f * b[2].x1);
+        const float t516 = (1.199f * b[2].x1);
+        const float t530 = (109.04921f * b[2].x1);
+        const float t532 = (t187 + t74);
+        const float t536 = (t95 * t96);
+        const float t537 = (490.08844f * t536);
+        const float t541 = (53443.758f * b[2].x1);
+        const float t553 = (t201 + t205);
+        const float t561 = (t183 * t183);
+        const float t562 = (810.5049f * t561);
+        const float t564 = (490.08844f * t183);
+        const float t565 = (t127 * t127);
+        const float t574 = (t124 + t126);
+        const float t583 = (t125 * t125);
+        const float t584 = (810.5049f * t583);
+        const float t587 = (88384.914f * b[2].x1);
+        const float t591 = (-fdi_gen_max(0.5f, t102));
+        const float t595 = (t96 * t96);
+        const float t596 = (490.08844f * t595);
+        const float t597 = (-fdi_gen_max(0.5f, t200));
+        const float t602 = (t195 * t195);
+        const float t603 = (490.08844f * t602);
+        const float t606 = (-fdi_gen_max(0.5f, t136));
+        const float t613 = (380.25f * t96);
+        const float t616 = (380.25f * t195);
+        const float t620 = (380.25f * t127);
+        const float t625 = (1046.0f * b[2].x1);
+        const float t626 = (39.0f * t536);
+        const float t627 = (4252.919f * b[2].x1);
+        const float t628 = (64.49793f * t561);
+        const float t629 = (64.49793f * t583);
+        const float t630 = (7033.448f * b[2].x1);
+        const float t635 = ((-1872.4207f * b[2].x2) + (2.0f * t185) + t213 + t383 + t491 + (-3.3075862f * t184 * t195));
+        float xh = 0.0f;
+        if ((io->restart & 0x00001000U) != 0U)
+        {
+            const float x0 = ((-1.0f * in->value[ROMO_SIG_PSIDOT_M]) + in->value[ROMO_SIG_VY_M]); /* vy from its sensor outside the MSO set */
+            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;
+        }
+        else
+        {
+            const float xp = o->xh;
+            const float t517 = (t516 + xp);
+            const float t518 = (t104 + (t517 * t96));
+            const float t519 = fabsf(t518);
+            const float t520 = fdi_gen_max(0.5f, fdi_gen_max(t102, t519));
+            const float t521 = (1.0f / (t520));
+            const float t522 = (t99 + (t517 * t95));
+            const float t523 = (t522 * t522);
+            const float t524 = (1.0f / (t520 * t520));
+            const float t525 = (380.25f * t524);
+            const float t526 = ((-t109) + (-t518));
+            const float t527 = (t526 * t526);
+            const float t528 = (1.0f + (t523 * t525) + (t525 * t527));
+            const float t529 = (1.0f / (sqrtf(t528)));
+            const float t531 = (t530 * xp);
+            const float t533 = (t531 + t532);
+            const float t534 = (t529 * t533);
+            const float t535 = (t521 * t534);
+            const float t538 = (t522 * t96);
+            const float t539 = (t521 * t538);
+            const float t540 = (t529 * t539);
+            const float t542 = (t151 + (-t531));
+            const float t543 = (t186 + t542);
+            const float t544 = (t516 + (-xp));
+            const float t545 = (-t544);
+            const float t546 = (t196 + (t183 * t545));
+            const float t547 = (t546 * t546);
+            const float t548 = (t201 + (-(t195 * t544)));
+            const float t549 = fabsf(t548);
+            const float t550 = fdi_gen_max(0.5f, fdi_gen_max(t200, t549));
+            const float t551 = (1.0f / (t550 * t550));
+            const float t552 = (380.25f * t551);
+            const float t554 = ((-t553) + (-(t195 * t545)));
+            const float t555 = (t554 * t554);
+            const float t556 = (1.0f + (t547 * t552) + (t552 * t555));
+            const float t557 = (1.0f / (sqrtf(t556)));
+            const float t558 = (1.0f / (t550));
+            const float t559 = (t557 * t558);
+            const float t560 = (t543 * t559);
+            const float t563 = (t195 * t560);
+            const float t566 = (t189 + t542);
+            const float t567 = (t133 + (t125 * t545));
+            const float t568 = (t567 * t567);
+            const float t569 = (t137 + (t127 * t544));
+            const float t570 = fabsf(t569);
+            const float t571 = fdi_gen_max(0.5f, fdi_gen_max(t136, t570));
+            const float t572 = (1.0f / (t571 * t571));
+            const float t573 = (380.25f * t572);
+            const float t575 = ((-t574) + (-(t127 * t545)));
+            const float t576 = (t575 * t575);
+            const float t577 = (1.0f + (t568 * t573) + (t573 * t576));
+            const float t578 = (1.0f / (sqrtf(t577)));
+            const float t579 = (1.0f / (t571));
+            const float t580 = (t578 * t579);
+            const float t581 = (t566 * t580);
+            const float t582 = (t565 * t581);
+            const float t585 = (t195 * t546);
+            const float t586 = (t183 * t546);
+            const float t588 = (t125 * t567);
+            const float t589 = (t580 * t587);
+            const float t590 = (t127 * t575);
+            const float t592 = fdi_gen_heaviside((t519 + t591));
+            const float t593 = fdi_gen_sign(t518);
+            const float t594 = (t592 * t593);
+            const float t598 = fdi_gen_heaviside((t549 + t597));
+            const float t599 = fdi_gen_sign(t548);
+            const float t600 = (t598 * t599);
+            const float t601 = (t543 * t551 * t557 * t600);
+            const float t604 = (810.5049f * t586);
+            const float t605 = (810.5049f * t566);
+            const float t607 = fdi_gen_heaviside((t570 + t606));
+            const float t608 = fdi_gen_sign(t569);
+            const float t609 = (t607 * t608);
+            const float t610 = (t572 * t578 * t609);
+            const float t611 = (t605 * t610);
+            const float t612 = (t127 * t588);
+            const float t614 = ((1.0f / (t520 * t520 * t520)) * t594 * t613);
+            const float t615 = ((1.0f / (t528 * sqrtf(t528))) * t533 * t539 * ((t523 * t614) + (t527 * t614) + (-(t522 * t525 * t95)) + (t525 * t526 * t96)));
+            const float t617 = ((1.0f / (t550 * t550 * t550)) * t600 * t616);
+            const float t618 = (t543 * (1.0f / (t556 * sqrtf(t556))) * t558 * ((t547 * t617) + (-(t552 * t586)) + (t555 * t617) + (t195 * t552 * t554)));
+            const float t619 = (1.0f / (t577 * sqrtf(t577)));
+            const float t621 = ((1.0f / (t571 * t571 * t571)) * t609 * t620);
+            const float t622 = ((-(t568 * t621)) + (-(t573 * t588)) + (-(t576 * t621)) + (380.25f * t127 * t572 * t575));
+            const float t623 = (t579 * t619 * t622);
+            const float t624 = (t605 * t623);
+            const float t631 = (64.49793f * t566);
+            const float t632 = (39.0f * t585);
+            const float t633 = (64.49793f * t586);
+            const float t634 = ((-64.49793f * t582) + (-39.0f * t615) + (-t625) + (-(t440 * t563)) + (-(t535 * t626)) + (-(t540 * t627)) + (-(t560 * t628)) + (-(t581 * t629)) + (-(t618 * t632)) + (-(t618 * t633)) + (-(t580 * t590 * t630)) + (-(t588 * t623 * t631)) + (-(t610 * t612 * t631)) + (7033.448f * b[2].x1 * t125 * t567 * t578 * t579) + (7033.448f * b[2].x1 * t183 * t546 * t557 * t558) + (4252.919f * b[2].x1 * t195 * t546 * t557 * t558) + (64.49793f * t127 * t566 * t575 * t579 * t619 * t622) + (39.0f * t522 * t524 * t529 * t533 * t592 * t593 * t595) + (39.0f * t543 * t546 * t551 * t557 * t598 * t599 * t602) + (64.49793f * t565 * t566 * t572 * t575 * t578 * t607 * t608) + (64.49793f * t183 * t195 * t543 * t546 * t551 * t557 * t598 * t599));
+            const float f = t3;
+            const float l = ((1.0f / (5522500.0f + (t634 * t634))) * (t515 + (810.5049f * t582) + (490.08844f * t615) + (t535 * t537) + (t540 * t541) + (t560 * t562) + (t563 * t564) + (t581 * t584) + (490.08844f * t585 * t618) + (-(t588 * t589)) + (t588 * t624) + (t589 * t590) + (-(t590 * t624)) + (t604 * t618) + (t611 * t612) + (-(t195 * t601 * t604)) + (-(t541 * t559 * t585)) + (-(t546 * t601 * t603)) + (-(t559 * t586 * t587)) + (-(t565 * t575 * t611)) + (-(t522 * t524 * t534 * t594 * t596))));
+            const float a = 0.0f;
+            const float c = t634;
+            const float e = ((-t635) + (-39.0f * t535 * t538) + (-(t560 * t632)) + (-(t560 * t633)) + (-64.49793f * t581 * t588) + (-(t625 * xp)) + (64.49793f * t127 * t566 * t575 * t578 * t579));
+            xh = fdi_gen_obs_predict(o, io->par, f + (l * e), a + (l * c));
+        }
+        {
+            const float t636 = (t530 * xh);
+            const float t637 = (t532 + t636);
+            const float t638 = (t516 + xh);
+            const float t639 = (t99 + (t638 * t95));
+            const float t640 = (t639 * t639);
+            const float t641 = (t104 + (t638 * t96));
+            const float t642 = fabsf(t641);
+            const float t643 = fdi_gen_max(0.5f, fdi_gen_max(t102, t642));
+            const float t644 = (1.0f / (t643 * t643));
+            const float t645 = (380.25f * t644);
+            const float t646 = ((-t109) + (-t641));
+            const float t647 = (t646 * t646);
+            const float t648 = (1.0f + (t640 * t645) + (t645 * t647));
+            const float t649 = (1.0f / (sqrtf(t648)));
+            const float t650 = (1.0f / (t643));
+            const float t651 = (t649 * t650);
+            const float t652 = (t637 * t651);
+            const float t653 = (t639 * t96);
+            const float t654 = (t651 * t653);
+            const float t655 = (t151 + (-t636));
+            const float t656 = (t186 + t655);
+            const float t657 = (t516 + (-xh));
+            const float t658 = (-t657);
+            const float t659 = (t196 + (t183 * t658));
+            const float t660 = (t659 * t659);
+            const float t661 = (t201 + (-(t195 * t657)));
+            const float t662 = fabsf(t661);
+            const float t663 = fdi_gen_max(0.5f, fdi_gen_max(t200, t662));
+            const float t664 = (1.0f / (t663 * t663));
+            const float t665 = (380.25f * t664);
+            const float t666 = ((-t553) + (-(t195 * t658)));
+            const float t667 = (t666 * t666);
+            const float t668 = (1.0f + (t660 * t665) + (t665 * t667));
+            const float t669 = (1.0f / (sqrtf(t668)));
+            const float t670 = (1.0f / (t663));
+            const float t671 = (t669 * t670);
+            const float t672 = (t656 * t671);
+            const float t673 = (t195 * t672);
+            const float t674 = (t189 + t655);
+            const float t675 = (t133 + (t125 * t658));
+            const float t676 = (t675 * t675);
+            const float t677 = (t137 + (t127 * t657));
+            const float t678 = fabsf(t677);
+            const float t679 = fdi_gen_max(0.5f, fdi_gen_max(t136, t678));
+            const float t680 = (1.0f / (t679 * t679));
+            const float t681 = (380.25f * t680);
+            const float t682 = ((-t574) + (-(t127 * t658)));
+            const float t683 = (t682 * t682);
+            const float t684 = (1.0f + (t676 * t681) + (t681 * t683));
+            const float t685 = (1.0f / (sqrtf(t684)));
+            const float t686 = (1.0f / (t679));
+            const float t687 = (t685 * t686);
+            const float t688 = (t674 * t687);
+            const float t689 = (t565 * t688);
+            const float t690 = (t195 * t659);
+            const float t691 = (t183 * t659);
+            const float t692 = (t125 * t675);
+            const float t693 = (t587 * t687);
+            const float t694 = (t127 * t682);
+            const float t695 = fdi_gen_heaviside((t591 + t642));
+            const float t696 = fdi_gen_sign(t641);
+            const float t697 = (t695 * t696);
+            const float t698 = fdi_gen_heaviside((t597 + t662));
+            const float t699 = fdi_gen_sign(t661);
+            const float t700 = (t698 * t699);
+            const float t701 = (t656 * t664 * t669 * t700);
+            const float t702 = (810.5049f * t691);
+            const float t703 = (810.5049f * t674);
+            const float t704 = fdi_gen_heaviside((t606 + t678));
+            const float t705 = fdi_gen_sign(t677);
+            const float t706 = (t704 * t705);
+            const float t707 = (t680 * t685 * t706);
+            const float t708 = (t703 * t707);
+            const float t709 = (t127 * t692);
+            const float t710 = (t613 * (1.0f / (t643 * t643 * t643)) * t697);
+            const float t711 = (t637 * (1.0f / (t648 * sqrtf(t648))) * t650 * ((t640 * t710) + (t647 * t710) + (-(t639 * t645 * t95)) + (t645 * t646 * t96)));
+            const float t712 = (t616 * (1.0f / (t663 * t663 * t663)) * t700);
+            const float t713 = (t656 * (1.0f / (t668 * sqrtf(t668))) * t670 * ((t660 * t712) + (-(t665 * t691)) + (t667 * t712) + (t195 * t665 * t666)));
+            const float t714 = (1.0f / (t684 * sqrtf(t684)));
+            const float t715 = (t620 * (1.0f / (t679 * t679 * t679)) * t706);
+            const float t716 = ((-(t676 * t715)) + (-(t681 * t692)) + (-(t683 * t715)) + (380.25f * t127 * t680 * t682));
+            const float t717 = (t686 * t714 * t716);
+            const float t718 = (t703 * t717);
+            const float t719 = (64.49793f * t674);
+            const float t720 = (39.0f * t653);
+            const float t721 = (39.0f * t690);
+            const float t722 = (64.49793f * t691);
+            const float f = t3;
+            const float l = ((1.0f / (5522500.0f + (((-t625) + (-64.49793f * t689) + (-(t440 * t673)) + (-(t626 * t652)) + (-(t627 * t654)) + (-(t628 * t672)) + (-(t629 * t688)) + (-(t711 * t720)) + (-(t713 * t721)) + (-(t713 * t722)) + (-(t630 * t687 * t694)) + (-(t692 * t717 * t719)) + (-(t707 * t709 * t719)) + (7033.448f * b[2].x1 * t125 * t675 * t685 * t686) + (7033.448f * b[2].x1 * t183 * t659 * t669 * t670) + (4252.919f * b[2].x1 * t195 * t659 * t669 * t670) + (64.49793f * t127 * t674 * t682 * t686 * t714 * t716) + (64.49793f * t565 * t674 * t680 * t682 * t685 * t704 * t705) + (39.0f * t595 * t637 * t639 * t644 * t649 * t695 * t696) + (39.0f * t602 * t656 * t659 * t664 * t669 * t698 * t699) + (64.49793f * t183 * t195 * t656 * t659 * t664 * t669 * t698 * t699)) * ((-t625) + (-64.49793f * t689) + (-(t440 * t673)) + (-(t626 * t652)) + (-(t627 * t654)) + (-(t628 * t672)) + (-(t629 * t688)) + (-(t711 * t720)) + (-(t713 * t721)) + (-(t713 * t722)) + (-(t630 * t687 * t694)) + (-(t692 * t717 * t719)) + (-(t707 * t709 * t719)) + (7033.448f * b[2].x1 * t125 * t675 * t685 * t686) + (7033.448f * b[2].x1 * t183 * t659 * t669 * t670) + (4252.919f * b[2].x1 * t195 * t659 * t669 * t670) + (64.49793f * t127 * t674 * t682 * t686 * t714 * t716) + (64.49793f * t565 * t674 * t680 * t682 * t685 * t704 * t705) + (39.0f * t595 * t637 * t639 * t644 * t649 * t695 * t696) + (39.0f * t602 * t656 * t659 * t664 * t669 * t698 * t699) + (64.49793f * t183 * t195 * t656 * t659 * t664 * t669 * t698 * t699))))) * (t515 + (810.5049f * t689) + (t537 * t652) + (t541 * t654) + (t562 * t672) + (t564 * t673) + (t584 * t688) + (490.08844f * t653 * t711) + (490.08844f * t690 * t713) + (-(t692 * t693)) + (t692 * t718) + (t693 * t694) + (-(t694 * t718)) + (t702 * t713) + (t708 * t709) + (-(t195 * t701 * t702)) + (-(t541 * t671 * t690)) + (-(t565 * t682 * t708)) + (-(t587 * t671 * t691)) + (-(t603 * t659 * t701)) + (-(t596 * t637 * t639 * t644 * t649 * t697))));
+            const float value = ((-t635) + (-(t625 * xh)) + (-(t652 * t720)) + (-(t672 * t721)) + (-(t672 * t722)) + (-64.49793f * t688 * t692) + (64.49793f * t127 * t674 * t682 * t685 * t686));
+            io->r[io->at[12]] = value;
+            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, f + (l * value)) != FDI_OK))
+            {
+                io->failed |= 0x00001000U;
+            }
+#if FDI_GEN_SENSITIVITIES
+            if ((io->sens_mask & 0x00001000U) != 0U) /* d r / d f: f2 f3 f4 f7 f8 f9 f11 f13 f15 f17 f19 f20 f21 f23 f24 f25 */
+            {
+                float *const sv = &io->sens[io->sens_at[12]];
+                const float s0 = (2565.315f + t12);
+                const float s1 = (109.04921f * b[2].x1 * xh);
+                const float s2 = ((-s1) + t150 + t73);
+                const float s3 = (s0 + s2);
+                const float s4 = ((-1.199f * b[2].x1) + xh);
+                const float s5 = ((0.27f * b[18].x1) + (-(s4 * t195)) + (-(t183 * t97)));
+                const float s6 = (s5 * s5);
+                const float s7 = (380.25f * t664);
+                const float s8 = ((-1.025f * b[2].x1) + (-b[3].x1));
+                const float s9 = ((s4 * t183) + (s8 * t195));
+                const float s10 = (s9 * s9);
+                const float s11 = (1.0f + (s10 * s7) + (s6 * s7));
+                const float s12 = (1.0f / (sqrtf(s11)));
+                const float s13 = (s12 * t670);
+                const float s14 = (s13 * s3);
+                const float s15 = (s14 * t561);
+                const float s16 = (2565.315f + (-180.34483f * b[1].x1) + s2);
+                const float s17 = (t133 + (s4 * t125));
+                const float s18 = (s17 * s17);
+                const float s19 = (380.25f * t680);
+                const float s20 = ((0.27f * b[17].x1) + (-(s4 * t127)) + (-(t125 * ((-0.425f * b[2].x1) + b[3].x1))));
+                const float s21 = (s20 * s20);
+                const float s22 = (1.0f + (s18 * s19) + (s19 * s21));
+                const float s23 = (1.0f / (sqrtf(s22)));
+                const float s24 = (s23 * t686);
+                const float s25 = (s16 * s24);
+                const float s26 = (64.49793f * s25);
+                const float s27 = (s14 * t183 * t195);
+                const float s28 = ((0.27f * b[16].x1) + (-(t638 * t96)) + (-(t95 * t97)));
+                const float s29 = (s28 * s28);
+                const float s30 = (380.25f * t644);
+                const float s31 = ((s8 * t96) + (t638 * t95));
+                const float s32 = (s31 * s31);
+                const float s33 = (1.0f + (s29 * s30) + (s30 * s32));
+                const float s34 = (1.0f / (sqrtf(s33)));
+                const float s35 = ((-32.714764f * b[2].x2) + s0 + s1 + (-109.04921f * b[3].x2));
+                const float s36 = (s34 * s35);
+                const float s37 = (39.0f * s36);
+                const float s38 = (t650 * t96);
+                const float s39 = (s38 * t95);
+                const float s40 = (s20 * t127);
+                const float s41 = (7033.448f * b[2].x1);
+                const float s42 = (s24 * s41);
+                const float s43 = (4252.919f * b[2].x1);
+                const float s44 = (s31 * s38);
+                const float s45 = (s34 * s44);
+                const float s46 = (s17 * t125);
+                const float s47 = (s9 * t183);
+                const float s48 = (s13 * s47);
+                const float s49 = (s9 * t195);
+                const float s50 = (s13 * s49);
+                const float s51 = (39.0f * s3);
+                const float s52 = (t698 * t699);
+                const float s53 = (s52 * t195);
+                const float s54 = (380.25f * s53 * (1.0f / (t663 * t663 * t663)));
+                const float s55 = ((1.0f / (s11 * sqrtf(s11))) * t670 * ((s10 * s54) + (-(s47 * s7)) + (s54 * s6) + (s5 * s7 * t195)));
+                const float s56 = (s49 * s55);
+                const float s57 = (t695 * t696);
+                const float s58 = (380.25f * s57 * (1.0f / (t643 * t643 * t643)) * t96);
+                const float s59 = ((1.0f / (s33 * sqrtf(s33))) * s35 * s44 * ((s29 * s58) + (s32 * s58) + (s28 * s30 * t96) + (-(s30 * s31 * t95))));
+                const float s60 = (64.49793f * s16);
+                const float s61 = (t704 * t705);
+                const float s62 = (s61 * t127);
+                const float s63 = (380.25f * s62 * (1.0f / (t679 * t679 * t679)));
+                const float s64 = ((1.0f / (s22 * sqrtf(s22))) * t686 * ((-(s18 * s63)) + (-(s19 * s46)) + (-(s21 * s63)) + (380.25f * s20 * t127 * t680)));
+                const float s65 = (s60 * s64);
+                const float s66 = (s3 * s47);
+                const float s67 = (s55 * s66);
+                const float s68 = (s31 * s57 * t595 * t644);
+                const float s69 = (s12 * t664);
+                const float s70 = (s52 * s69 * s9 * t602);
+                const float s71 = (s23 * t680);
+                const float s72 = (s60 * s71);
+                const float s73 = (s20 * s61 * t565);
+                const float s74 = (s46 * s62);
+                const float s75 = (s53 * s66 * s69);
+                const float s76 = ((64.49793f * s15) + (39.0f * s27) + (39.0f * s59) + (64.49793f * s67) + (-64.49793f * s75) + (s26 * t565) + (s26 * t583) + (s37 * s39) + (-(s37 * s68)) + (s40 * s42) + (-(s40 * s65)) + (-(s41 * s48)) + (-(s42 * s46)) + (s43 * s45) + (-(s43 * s50)) + (s46 * s65) + (s51 * s56) + (-(s51 * s70)) + (-(s72 * s73)) + (s72 * s74));
+                const float s77 = (490.08844f * s36);
+                const float s78 = (810.5049f * s25);
+                const float s79 = (88384.914f * b[2].x1);
+                const float s80 = (s24 * s79);
+                const float s81 = (53443.758f * b[2].x1);
+                const float s82 = (810.5049f * s16);
+                const float s83 = (s71 * s82);
+                const float s84 = (490.08844f * s3);
+                const float s85 = (s64 * s82);
+                const float s86 = ((-1046.0f * b[2].x1) + (-s76));
+                const float s87 = (1.0f / (fdi_gen_min(-0.1f, (s86 * (1.0f / (5522500.0f + (s86 * s86))) * ((810.5049f * s15) + (490.08844f * s27) + (490.08844f * s59) + (810.5049f * s67) + (-810.5049f * s75) + t515 + (s39 * s77) + (s40 * s80) + (-(s40 * s85)) + (s45 * s81) + (-(s46 * s80)) + (s46 * s85) + (-(s48 * s79)) + (-(s50 * s81)) + (s56 * s84) + (-(s68 * s77)) + (-(s70 * s84)) + (-(s73 * s83)) + (s74 * s83) + (s78 * t565) + (s78 * t583))))));
+                const float s88 = (s86 * s87);
+                sv[0] = (s87 * (s76 + t625)); /* f2 */
+                sv[1] = (s88 * ((0.6f * b[2].x1) + b[3].x1)); /* f3 */
+                sv[2] = (b[2].x1 * s88); /* f4 */
+                sv[3] = 0.0f; /* f7 */
+                sv[4] = 0.0f; /* f8 */
+                sv[5] = 0.0f; /* f9 */
+                sv[6] = 0.0f; /* f11 */
+                sv[7] = 0.0f; /* f13 */
+                sv[8] = 0.0f; /* f15 */
+                sv[9] = 0.0f; /* f17 */
+                sv[10] = 0.0f; /* f19 */
+                sv[11] = 0.0f; /* f20 */
+                sv[12] = 0.0f; /* f21 */
+                sv[13] = 0.0f; /* f23 */
+                sv[14] = 0.0f; /* f24 */
+                sv[15] = 0.0f; /* f25 */
+            }
+#endif
+        }
+    }
+}

@@ -9,209 +9,197 @@
 #include "fdi_float.h"
 #include "fdi_gen_impl.h"
 #include "fdi_static_assert.h"
-#include "fdi_svf.h"
 #include "fdi_three_tank_signals.h"
 
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
-FDI_STATIC_ASSERT(4U <= FDI_GEN_MAX_FILTERS, fdi_sa_three_tank_generator_filters);
+FDI_STATIC_ASSERT(FDI_THREE_TANK_N_GENERATORS <= FDI_GEN_MAX_SLOTS, fdi_sa_three_tank_generator_slots);
 
-/* MSO1: T1 V12 P S1 S2 D1
- * residual T1; derivative causality for dh1; 3 filters, level 1
- */
-static fdi_status_t three_tank_gen_1(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                                     float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_svf_out_t o2 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[THREE_TANK_SIG_U], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[THREE_TANK_SIG_Y1], reset, &o1));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->value[THREE_TANK_SIG_Y2], reset, &o2));
-    {
-        const float t0 = (o1.y + (-o2.y));
-        const float value = ((-o0.y) + (0.0154f * o1.dy) + (0.000110736175f * t0 * (1.0f / sqrtf(fabsf(t0)))));
-        st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-        if (sens != NULL) /* d r / d f: fP fL1 fC12 fS1 fS2 */
-        {
-            const float s0 = fabsf(t0);
-            const float s1 = ((0.000110736175f * (1.0f / sqrtf(s0))) + (5.5368087e-05f * powf(s0, -1.5f) * t0 * fdi_gen_sign(((-o1.y) + o2.y))));
-            sens[0] = 1.0f; /* fP */
-            sens[1] = -1.0f; /* fL1 */
-            sens[2] = -1.0f; /* fC12 */
-            sens[3] = s1; /* fS1 */
-            sens[4] = (-s1); /* fS2 */
-            st = fdi_gen_sens_finish(st, sens, 5U);
-        }
-#else
-        (void)sens;
-#endif
-    }
-    return st;
-}
-
-/* MSO2: T3 V23 V3 S2 S3 D3
- * residual T3; derivative causality for dh3; 2 filters, level 1
- */
-static fdi_status_t three_tank_gen_2(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                                     float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[THREE_TANK_SIG_Y2], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[THREE_TANK_SIG_Y3], reset, &o1));
-    {
-        const float t0 = (o0.y + (-o1.y));
-        const float value = ((0.0154f * o1.dy) + (-0.000110736175f * t0 * (1.0f / sqrtf(fabsf(t0)))) + (0.000110736175f * sqrtf(fabsf(o1.y))));
-        st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-        if (sens != NULL) /* d r / d f: fL3 fC23 fC3 fS2 fS3 */
-        {
-            const float s0 = fabsf(t0);
-            const float s1 = ((0.000110736175f * (1.0f / sqrtf(s0))) + (5.5368087e-05f * powf(s0, -1.5f) * t0 * fdi_gen_sign(((-o0.y) + o1.y))));
-            sens[0] = -1.0f; /* fL3 */
-            sens[1] = 1.0f; /* fC23 */
-            sens[2] = -1.0f; /* fC3 */
-            sens[3] = (-s1); /* fS2 */
-            sens[4] = (s1 + (5.5368087e-05f * (1.0f / sqrtf(fabsf(o1.y))) * fdi_gen_sign(o1.y))); /* fS3 */
-            st = fdi_gen_sens_finish(st, sens, 5U);
-        }
-#else
-        (void)sens;
-#endif
-    }
-    return st;
-}
-
-/* MSO3: T2 V12 V23 S1 S2 S3 D2
- * residual T2; derivative causality for dh2; 3 filters, level 1
- */
-static fdi_status_t three_tank_gen_3(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                                     float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_svf_out_t o2 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[THREE_TANK_SIG_Y1], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[THREE_TANK_SIG_Y2], reset, &o1));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->value[THREE_TANK_SIG_Y3], reset, &o2));
-    {
-        const float t0 = (o0.y + (-o1.y));
-        const float t1 = (o1.y + (-o2.y));
-        const float value = ((0.0154f * o1.dy) + (-0.000110736175f * t0 * (1.0f / sqrtf(fabsf(t0)))) + (0.000110736175f * t1 * (1.0f / sqrtf(fabsf(t1)))));
-        st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-        if (sens != NULL) /* d r / d f: fL2 fC12 fC23 fS1 fS2 fS3 */
-        {
-            const float s0 = fabsf(t0);
-            const float s1 = ((0.000110736175f * (1.0f / sqrtf(s0))) + (5.5368087e-05f * powf(s0, -1.5f) * t0 * fdi_gen_sign(((-o0.y) + o1.y))));
-            const float s2 = fabsf(t1);
-            const float s3 = ((0.000110736175f * (1.0f / sqrtf(s2))) + (5.5368087e-05f * powf(s2, -1.5f) * t1 * fdi_gen_sign(((-o1.y) + o2.y))));
-            sens[0] = -1.0f; /* fL2 */
-            sens[1] = 1.0f; /* fC12 */
-            sens[2] = -1.0f; /* fC23 */
-            sens[3] = (-s1); /* fS1 */
-            sens[4] = (s1 + s3); /* fS2 */
-            sens[5] = (-s3); /* fS3 */
-            st = fdi_gen_sens_finish(st, sens, 6U);
-        }
-#else
-        (void)sens;
-#endif
-    }
-    return st;
-}
-
-/* MSO6: T1 T2 V23 P S1 S2 S3 D1 D2
- * residual T1; derivative causality for dh1, dh2; 4 filters, level 1
- */
-static fdi_status_t three_tank_gen_4(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                                     float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_svf_out_t o2 = {0.0f, 0.0f};
-    fdi_svf_out_t o3 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[THREE_TANK_SIG_U], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[THREE_TANK_SIG_Y1], reset, &o1));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->value[THREE_TANK_SIG_Y2], reset, &o2));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 3U, in->value[THREE_TANK_SIG_Y3], reset, &o3));
-    {
-        const float t0 = (o2.y + (-o3.y));
-        const float value = ((-o0.y) + (0.0154f * o1.dy) + (0.0154f * o2.dy) + (0.000110736175f * t0 * (1.0f / sqrtf(fabsf(t0)))));
-        st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-        if (sens != NULL) /* d r / d f: fP fL1 fL2 fC23 fS2 fS3 */
-        {
-            const float s0 = fabsf(t0);
-            const float s1 = ((0.000110736175f * (1.0f / sqrtf(s0))) + (5.5368087e-05f * powf(s0, -1.5f) * t0 * fdi_gen_sign(((-o2.y) + o3.y))));
-            sens[0] = 1.0f; /* fP */
-            sens[1] = -1.0f; /* fL1 */
-            sens[2] = -1.0f; /* fL2 */
-            sens[3] = -1.0f; /* fC23 */
-            sens[4] = s1; /* fS2 */
-            sens[5] = (-s1); /* fS3 */
-            st = fdi_gen_sens_finish(st, sens, 6U);
-        }
-#else
-        (void)sens;
-#endif
-    }
-    return st;
-}
-
-/* MSO9: T2 T3 V12 V3 S1 S2 S3 D2 D3
- * residual T2; derivative causality for dh2, dh3; 3 filters, level 1
- */
-static fdi_status_t three_tank_gen_5(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
-                                     float *sens)
-{
-    fdi_svf_out_t o0 = {0.0f, 0.0f};
-    fdi_svf_out_t o1 = {0.0f, 0.0f};
-    fdi_svf_out_t o2 = {0.0f, 0.0f};
-    fdi_status_t st = FDI_OK;
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 0U, in->value[THREE_TANK_SIG_Y1], reset, &o0));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 1U, in->value[THREE_TANK_SIG_Y2], reset, &o1));
-    st = fdi_gen_status_worst(st, fdi_gen_filter_step(g, par, 2U, in->value[THREE_TANK_SIG_Y3], reset, &o2));
-    {
-        const float t0 = (o0.y + (-o1.y));
-        const float value = ((0.0154f * o1.dy) + (0.0154f * o2.dy) + (-0.000110736175f * t0 * (1.0f / sqrtf(fabsf(t0)))) + (0.000110736175f * sqrtf(fabsf(o2.y))));
-        st = fdi_gen_finish(st, value, reset, r);
-#if FDI_GEN_SENSITIVITIES
-        if (sens != NULL) /* d r / d f: fL2 fL3 fC12 fC3 fS1 fS2 fS3 */
-        {
-            const float s0 = fabsf(t0);
-            const float s1 = ((0.000110736175f * (1.0f / sqrtf(s0))) + (5.5368087e-05f * powf(s0, -1.5f) * t0 * fdi_gen_sign(((-o0.y) + o1.y))));
-            sens[0] = -1.0f; /* fL2 */
-            sens[1] = -1.0f; /* fL3 */
-            sens[2] = 1.0f; /* fC12 */
-            sens[3] = -1.0f; /* fC3 */
-            sens[4] = (-s1); /* fS1 */
-            sens[5] = s1; /* fS2 */
-            sens[6] = (5.5368087e-05f * (1.0f / sqrtf(fabsf(o2.y))) * fdi_gen_sign(o2.y)); /* fS3 */
-            st = fdi_gen_sens_finish(st, sens, 7U);
-        }
-#else
-        (void)sens;
-#endif
-    }
-    return st;
-}
-
-/* name, step, domain, signals read, sensitivities (bit j = fault j, ascending), filters, observer states */
-const fdi_gen_desc_t fdi_three_tank_generators[FDI_THREE_TANK_N_GENERATORS] = {
-    {"MSO1", three_tank_gen_1, NULL, THREE_TANK_SIGM_U | THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2,
-     FDI_GEN_SENS_MASK(0x00000193U), 3U, 0U}, /* sensitivities fP fL1 fC12 fS1 fS2 */
-    {"MSO2", three_tank_gen_2, NULL, THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
-     FDI_GEN_SENS_MASK(0x00000368U), 2U, 0U}, /* sensitivities fL3 fC23 fC3 fS2 fS3 */
-    {"MSO3", three_tank_gen_3, NULL, THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
-     FDI_GEN_SENS_MASK(0x000003B4U), 3U, 0U}, /* sensitivities fL2 fC12 fC23 fS1 fS2 fS3 */
-    {"MSO6", three_tank_gen_4, NULL, THREE_TANK_SIGM_U | THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
-     FDI_GEN_SENS_MASK(0x00000327U), 4U, 0U}, /* sensitivities fP fL1 fL2 fC23 fS2 fS3 */
-    {"MSO9", three_tank_gen_5, NULL, THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
-     FDI_GEN_SENS_MASK(0x000003DCU), 3U, 0U}, /* sensitivities fL2 fL3 fC12 fC3 fS1 fS2 fS3 */
+/* The filter bank: every filtered signal of the generators once (b[k].x1 = y, b[k].x2 = dy; fdi_gen.h). */
+static const fdi_gen_bank_filter_t three_tank_bank[4] = {
+    {THREE_TANK_SIG_U, FDI_GEN_BANK_RAW, 0U}, /* b[0]: u */
+    {THREE_TANK_SIG_Y1, FDI_GEN_BANK_RAW, 0U}, /* b[1]: y1 */
+    {THREE_TANK_SIG_Y2, FDI_GEN_BANK_RAW, 0U}, /* b[2]: y2 */
+    {THREE_TANK_SIG_Y3, FDI_GEN_BANK_RAW, 0U}, /* b[3]: y3 */
 };
+
+
+static void three_tank_gen_step(fdi_gen_io_t *io);
+
+/* name, step (NULL: the set's), domain, signals read, sensitivities (bit j = fault j, ascending), filters, observer
+   states, set, slot */
+const fdi_gen_desc_t fdi_three_tank_generators[FDI_THREE_TANK_N_GENERATORS] = {
+    {"MSO1", NULL, NULL, THREE_TANK_SIGM_U | THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2,
+     FDI_GEN_SENS_MASK(0x00000193U), 0U, 0U, &fdi_three_tank_gen_set, 0U}, /* sensitivities fP fL1 fC12 fS1 fS2 */
+    {"MSO2", NULL, NULL, THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
+     FDI_GEN_SENS_MASK(0x00000368U), 0U, 0U, &fdi_three_tank_gen_set, 1U}, /* sensitivities fL3 fC23 fC3 fS2 fS3 */
+    {"MSO3", NULL, NULL, THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
+     FDI_GEN_SENS_MASK(0x000003B4U), 0U, 0U, &fdi_three_tank_gen_set, 2U}, /* sensitivities fL2 fC12 fC23 fS1 fS2 fS3 */
+    {"MSO6", NULL, NULL, THREE_TANK_SIGM_U | THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
+     FDI_GEN_SENS_MASK(0x00000327U), 0U, 0U, &fdi_three_tank_gen_set, 3U}, /* sensitivities fP fL1 fL2 fC23 fS2 fS3 */
+    {"MSO9", NULL, NULL, THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
+     FDI_GEN_SENS_MASK(0x000003DCU), 0U, 0U, &fdi_three_tank_gen_set, 4U}, /* sensitivities fL2 fL3 fC12 fC3 fS1 fS2 fS3 */
+};
+
+const fdi_gen_set_t fdi_three_tank_gen_set = {"three_tank", three_tank_gen_step, three_tank_bank, 4U, FDI_THREE_TANK_N_GENERATORS};
+
+/* Every slot of io->run in one pass (fdi_gen.h): the terms shared by several slots once, then each slot. */
+static void three_tank_gen_step(fdi_gen_io_t *io)
+{
+    const fdi_svf_t *const b = io->bank;
+    const uint32_t run = io->run;
+    float t0 = 0.0f;
+    float t1 = 0.0f;
+    float t2 = 0.0f;
+    float t3 = 0.0f;
+    float t4 = 0.0f;
+    float t5 = 0.0f;
+    float t6 = 0.0f;
+    float t7 = 0.0f;
+    float t8 = 0.0f;
+    if ((run & 0x00000015U) != 0U)
+    {
+        t0 = (b[1].x1 + (-b[2].x1));
+        t1 = (0.000110736175f * t0 * (1.0f / (sqrtf(fabsf(t0)))));
+    }
+    if ((run & 0x00000009U) != 0U)
+    {
+        t2 = ((-b[0].x1) + (0.0154f * b[1].x2));
+    }
+    if ((run & 0x0000000EU) != 0U)
+    {
+        t3 = (b[2].x1 + (-b[3].x1));
+        t4 = (0.000110736175f * t3 * (1.0f / (sqrtf(fabsf(t3)))));
+    }
+    if ((run & 0x00000012U) != 0U)
+    {
+        t5 = ((0.0154f * b[3].x2) + (0.000110736175f * sqrtf(fabsf(b[3].x1))));
+    }
+    if ((run & 0x00000014U) != 0U)
+    {
+        t6 = (-t1);
+    }
+    if ((run & 0x0000001CU) != 0U)
+    {
+        t7 = (0.0154f * b[2].x2);
+    }
+    if ((run & 0x0000000CU) != 0U)
+    {
+        t8 = (t4 + t7);
+    }
+    if ((run & 0x00000001U) != 0U) /* MSO1: T1 V12 P S1 S2 D1 */
+    {
+        const float value = (t1 + t2);
+        io->r[io->at[0]] = value;
+        if (!fdi_float_is_finite(value))
+        {
+            io->failed |= 0x00000001U;
+        }
+#if FDI_GEN_SENSITIVITIES
+        if ((io->sens_mask & 0x00000001U) != 0U) /* d r / d f: fP fL1 fC12 fS1 fS2 */
+        {
+            float *const sv = &io->sens[io->sens_at[0]];
+            const float s0 = fabsf(t0);
+            const float s1 = ((0.000110736175f * (1.0f / (sqrtf(s0)))) + (5.5368087e-05f * (1.0f / (s0 * sqrtf(s0))) * t0 * fdi_gen_sign(((-b[1].x1) + b[2].x1))));
+            sv[0] = 1.0f; /* fP */
+            sv[1] = -1.0f; /* fL1 */
+            sv[2] = -1.0f; /* fC12 */
+            sv[3] = s1; /* fS1 */
+            sv[4] = (-s1); /* fS2 */
+        }
+#endif
+    }
+    if ((run & 0x00000002U) != 0U) /* MSO2: T3 V23 V3 S2 S3 D3 */
+    {
+        const float value = ((-t4) + t5);
+        io->r[io->at[1]] = value;
+        if (!fdi_float_is_finite(value))
+        {
+            io->failed |= 0x00000002U;
+        }
+#if FDI_GEN_SENSITIVITIES
+        if ((io->sens_mask & 0x00000002U) != 0U) /* d r / d f: fL3 fC23 fC3 fS2 fS3 */
+        {
+            float *const sv = &io->sens[io->sens_at[1]];
+            const float s0 = fabsf(t3);
+            const float s1 = ((0.000110736175f * (1.0f / (sqrtf(s0)))) + (5.5368087e-05f * (1.0f / (s0 * sqrtf(s0))) * t3 * fdi_gen_sign(((-b[2].x1) + b[3].x1))));
+            sv[0] = -1.0f; /* fL3 */
+            sv[1] = 1.0f; /* fC23 */
+            sv[2] = -1.0f; /* fC3 */
+            sv[3] = (-s1); /* fS2 */
+            sv[4] = (s1 + (5.5368087e-05f * (1.0f / (sqrtf(fabsf(b[3].x1)))) * fdi_gen_sign(b[3].x1))); /* fS3 */
+        }
+#endif
+    }
+    if ((run & 0x00000004U) != 0U) /* MSO3: T2 V12 V23 S1 S2 S3 D2 */
+    {
+        const float value = (t6 + t8);
+        io->r[io->at[2]] = value;
+        if (!fdi_float_is_finite(value))
+        {
+            io->failed |= 0x00000004U;
+        }
+#if FDI_GEN_SENSITIVITIES
+        if ((io->sens_mask & 0x00000004U) != 0U) /* d r / d f: fL2 fC12 fC23 fS1 fS2 fS3 */
+        {
+            float *const sv = &io->sens[io->sens_at[2]];
+            const float s0 = fabsf(t0);
+            const float s1 = ((0.000110736175f * (1.0f / (sqrtf(s0)))) + (5.5368087e-05f * (1.0f / (s0 * sqrtf(s0))) * t0 * fdi_gen_sign(((-b[1].x1) + b[2].x1))));
+            const float s2 = fabsf(t3);
+            const float s3 = ((0.000110736175f * (1.0f / (sqrtf(s2)))) + (5.5368087e-05f * (1.0f / (s2 * sqrtf(s2))) * t3 * fdi_gen_sign(((-b[2].x1) + b[3].x1))));
+            sv[0] = -1.0f; /* fL2 */
+            sv[1] = 1.0f; /* fC12 */
+            sv[2] = -1.0f; /* fC23 */
+            sv[3] = (-s1); /* fS1 */
+            sv[4] = (s1 + s3); /* fS2 */
+            sv[5] = (-s3); /* fS3 */
+        }
+#endif
+    }
+    if ((run & 0x00000008U) != 0U) /* MSO6: T1 T2 V23 P S1 S2 S3 D1 D2 */
+    {
+        const float value = (t2 + t8);
+        io->r[io->at[3]] = value;
+        if (!fdi_float_is_finite(value))
+        {
+            io->failed |= 0x00000008U;
+        }
+#if FDI_GEN_SENSITIVITIES
+        if ((io->sens_mask & 0x00000008U) != 0U) /* d r / d f: fP fL1 fL2 fC23 fS2 fS3 */
+        {
+            float *const sv = &io->sens[io->sens_at[3]];
+            const float s0 = fabsf(t3);
+            const float s1 = ((0.000110736175f * (1.0f / (sqrtf(s0)))) + (5.5368087e-05f * (1.0f / (s0 * sqrtf(s0))) * t3 * fdi_gen_sign(((-b[2].x1) + b[3].x1))));
+            sv[0] = 1.0f; /* fP */
+            sv[1] = -1.0f; /* fL1 */
+            sv[2] = -1.0f; /* fL2 */
+            sv[3] = -1.0f; /* fC23 */
+            sv[4] = s1; /* fS2 */
+            sv[5] = (-s1); /* fS3 */
+        }
+#endif
+    }
+    if ((run & 0x00000010U) != 0U) /* MSO9: T2 T3 V12 V3 S1 S2 S3 D2 D3 */
+    {
+        const float value = (t5 + t6 + t7);
+        io->r[io->at[4]] = value;
+        if (!fdi_float_is_finite(value))
+        {
+            io->failed |= 0x00000010U;
+        }
+#if FDI_GEN_SENSITIVITIES
+        if ((io->sens_mask & 0x00000010U) != 0U) /* d r / d f: fL2 fL3 fC12 fC3 fS1 fS2 fS3 */
+        {
+            float *const sv = &io->sens[io->sens_at[4]];
+            const float s0 = fabsf(t0);
+            const float s1 = ((0.000110736175f * (1.0f / (sqrtf(s0)))) + (5.5368087e-05f * (1.0f / (s0 * sqrtf(s0))) * t0 * fdi_gen_sign(((-b[1].x1) + b[2].x1))));
+            sv[0] = -1.0f; /* fL2 */
+            sv[1] = -1.0f; /* fL3 */
+            sv[2] = 1.0f; /* fC12 */
+            sv[3] = -1.0f; /* fC3 */
+            sv[4] = (-s1); /* fS1 */
+            sv[5] = s1; /* fS2 */
+            sv[6] = (5.5368087e-05f * (1.0f / (sqrtf(fabsf(b[3].x1)))) * fdi_gen_sign(b[3].x1)); /* fS3 */
+        }
+#endif
+    }
+}
