@@ -273,7 +273,7 @@ def bus_file(dbc: Path, node: str, db_name: str, vehicle: str, roles: Sequence[S
     dsnake = camel_to_snake_case(d.name)
     diag = DiagMessage(d.name, d.frame_id, f"{db_name.upper()}_{dsnake.upper()}_FRAME_ID", d.length,
                        int(_attr(db, d, "E2EDataID")), dsnake, camel_to_snake_case(_by_suffix(d, "CRC").name), fields)
-    return BusFile(banner, vehicle, db_name, dbc.as_posix() if not dbc.is_absolute() else dbc.name, node,
+    return BusFile(banner, vehicle, db_name, dbc.name, node,
                    f"fdi_{vehicle}_signals", tuple(inputs), diag)
 
 
