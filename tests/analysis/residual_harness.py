@@ -188,7 +188,8 @@ def committed_generators(repo: Path, model: Model) -> list[Generator]:
     block = src.split("fdi_romo_table_equations")[1].split("};")[0]
     sets = re.findall(r'"([^"]*)"', block)
     gens_c = (repo / ROMO / "generated" / "fdi_romo_generators.c").read_text()
-    labels = re.findall(r'^    \{"(\w+)", \w+_gen_\d+,', gens_c, flags=re.M)
+    table = gens_c.split("fdi_romo_generators[FDI_ROMO_N_GENERATORS] = {", 1)[1].split("};", 1)[0]
+    labels = re.findall(r'^    \{"(\w+)",', table, flags=re.M)
+    assert len(labels) == len(sets), (labels, len(sets))  # one descriptor per test, in test order
     reference = Thresholds.load(repo / "analysis/models/romo_thresholds.toml").observer_reference()
-    return [synthesize(model, s.split(), labels[k] if k < len(labels) else f"T{k + 1}", reference=reference)
-            for k, s in enumerate(sets)]
+    return [synthesize(model, s.split(), labels[k], reference=reference) for k, s in enumerate(sets)]
