@@ -20,6 +20,8 @@ EXAMPLES = """examples:
                                                       # 30 min fault-free
   fdi-quality --table romo --quick --out out/quality-quick   # CI size: cornering, one seed, 0.3 min fault-free
   fdi-quality --table romo --faults f6 f10 --scenarios cornering slalom --shapes step ramp --multipliers 1 2
+  fdi-quality --table romo --trace f6:straight:2001 --out out/trace   # one case step by step: alarms, candidates,
+                                                                      # ratios plot (trace-f6-straight-2001.png)
 """
 
 
@@ -42,8 +44,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--shapes", nargs="+", default=None, choices=("step", "ramp"))
     p.add_argument("--fault-free-minutes", type=float, default=None, help="fault-free driving (default 30)")
     p.add_argument("--sizes", type=Path, default=DEFAULT_SIZES, help="required fault sizes (TOML [requirement])")
+    p.add_argument("--trace", metavar="FAULT:SCENARIO:SEED", default=None,
+                   help="instead of the suite: one step-fault case at its required size (x the first multiplier), "
+                        "its alarms and candidates step by step (and a plot of the ratios in --out)")
     p.add_argument("-o", "--out", type=Path, default=None, help="folder for quality.json and quality.md")
     args = p.parse_args(argv)
+    if args.trace is not None:
+        return _trace(args)
     base = quick_config(args.table) if args.quick else SuiteConfig(table=args.table)
     try:
         cfg = SuiteConfig(
@@ -73,6 +80,25 @@ def main(argv: list[str] | None = None) -> int:
         write_json(result, args.out / "quality.json")
         write_markdown(result, args.out / "quality.md")
         print(f"wrote {args.out / 'quality.json'} and {args.out / 'quality.md'}")
+    return 0
+
+
+def _trace(args: argparse.Namespace) -> int:
+    from fdi_host.quality import trace
+
+    try:
+        fault, scenario, seed = trace.parse_case(args.trace)
+        mult = args.multipliers[0] if args.multipliers else 1.0
+        case = trace.trace_case(args.table, fault, scenario, seed, mult, SuiteConfig(table=args.table,
+                                                                                     sizes_file=args.sizes))
+        print(trace.report(case))
+        if args.out is not None:
+            args.out.mkdir(parents=True, exist_ok=True)
+            png = args.out / f"trace-{fault}-{scenario}-{seed}.png"
+            trace.plot(case, png)
+            print(f"wrote {png}")
+    except (QualityError, OSError) as exc:
+        return fail("fdi-quality", exc)
     return 0
 
 

@@ -1,0 +1,134 @@
+"""One case of the quality suite, step by step: why a fault was (not) isolated.
+
+`fdi-quality --trace f6:straight:2001` runs the case exactly as the suite does (the same drive, fault onset,
+required size and replay through the C ECU core) and reports, in the order they happened, the changes of the
+alarm pattern and of the candidate set, naming for every alarmed test whether its signature contains the fault
+(a test structurally blind to the fault that alarms excludes it, whatever the other tests say). The plot shows
+each test's normalised ratio |r| / (gate sigma) over time, blind tests dashed, with the candidate count below.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.traffic import build_frames
+from fdi_host.ecu.bindings import EcuResult, TableInfo, table_info
+from fdi_host.ecu.offline import replay
+from fdi_host.quality.suite import QualityError, SuiteConfig, load_fault_sizes
+from fdi_host.sim.faults import FAULT_IDS, FaultSpec
+from fdi_host.sim.scenario import SCENARIOS, load_scenario
+from fdi_host.sim.vehicle_sim import faulty_drive, simulate
+
+AFTER_ONSET_S = 4.0  # how long after the onset the trace looks
+
+
+@dataclass(frozen=True)
+class CaseTrace:
+    table: TableInfo
+    spec: FaultSpec
+    scenario: str
+    seed: int
+    results: tuple[EcuResult, ...]
+
+    @property
+    def fault_index(self) -> int:
+        return FAULT_IDS.index(self.spec.fault)
+
+    def blind(self, test: int) -> bool:
+        """Whether test `test`'s signature lacks the fault (it cannot react to it structurally)."""
+        return not self.table.test_fault_masks[test] >> self.fault_index & 1
+
+
+def parse_case(text: str) -> tuple[str, str, int]:
+    """'f6:straight:2001' -> ('f6', 'straight', 2001)."""
+    parts = text.split(":")
+    if len(parts) != 3 or parts[0] not in FAULT_IDS or parts[1] not in SCENARIOS or not parts[2].isdigit():
+        raise QualityError(f"bad case {text!r}; expected FAULT:SCENARIO:SEED, e.g. f6:straight:2001 "
+                           f"(scenarios {', '.join(SCENARIOS)})")
+    return parts[0], parts[1], int(parts[2])
+
+
+def trace_case(table: str, fault: str, scenario: str, seed: int, multiplier: float = 1.0,
+               cfg: SuiteConfig | None = None) -> CaseTrace:
+    """Run one step-fault case as `run_suite` does (onset, required size x multiplier, pre-onset replay)."""
+    cfg = cfg if cfg is not None else SuiteConfig(table=table)
+    info = table_info(table)
+    size = load_fault_sizes(cfg.sizes_file).get(fault)
+    if size is None:
+        raise QualityError(f"no required size for {fault} in {cfg.sizes_file} [requirement]")
+    base = simulate(load_scenario(scenario), [], seed=seed)
+    onset = round(cfg.onset_fraction * float(base.t[-1]), 3)
+    spec = FaultSpec(fault, onset, size * multiplier)
+    frames = build_frames(faulty_drive(base, spec), RomoDatabase())
+    res = replay(table, frames, t_start=max(0.0, onset - cfg.pre_onset_s))
+    kept = tuple(r for r in res if r.t_us * 1e-6 <= onset + AFTER_ONSET_S)
+    return CaseTrace(info, spec, scenario, seed, kept)
+
+
+def _short(name: str) -> str:
+    return name.split(":")[0]
+
+
+def events(trace: CaseTrace) -> list[str]:
+    """The changes after the onset of the alarm pattern and of the candidates, one line each."""
+    lines: list[str] = []
+    prev: tuple[int, int, bool] | None = None
+    names = [_short(n) for n in trace.table.test_names]
+    for r in trace.results:
+        t = r.t_us * 1e-6
+        if t < trace.spec.onset:
+            continue
+        key = (r.alarm_mask, r.candidates, r.isolated)
+        if key == prev:
+            continue
+        prev = key
+        alarmed = [i for i in range(trace.table.n_tests) if r.alarm_mask >> i & 1]
+        tests = ", ".join(f"{names[i]}{' (blind)' if trace.blind(i) else ''} {r.ratios[i]:.1f}" for i in alarmed)
+        cands = "{" + ", ".join(r.candidate_labels()) + "}"
+        state = "isolated" if r.isolated else ("detected" if r.detected else "quiet")
+        lines.append(f"{t - trace.spec.onset:+6.2f} s  {state:8s} candidates {cands}  alarms: {tests or '-'}")
+    return lines
+
+
+def report(trace: CaseTrace) -> str:
+    j = trace.fault_index
+    head = (f"{trace.spec.fault} at {trace.spec.magnitude:g} ({trace.table.fault_names[j]}), {trace.scenario}, "
+            f"seed {trace.seed}, onset {trace.spec.onset:g} s, table {trace.table.name}; expected class "
+            f"{{{', '.join(trace.table.fault_labels(trace.table.iso_class[j]))}}}")
+    blind = [_short(n) for i, n in enumerate(trace.table.test_names) if trace.blind(i)]
+    return "\n".join([head, f"tests blind to {trace.spec.fault}: {', '.join(blind) or '-'}",
+                      "time after onset, state, candidates, alarmed tests with their ratio |r| / (gate sigma):",
+                      *events(trace)])
+
+
+def plot(trace: CaseTrace, path: Path) -> None:
+    """Ratios of every test (blind ones dashed) and the number of candidates over time."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    res: Sequence[EcuResult] = trace.results
+    t = [r.t_us * 1e-6 - trace.spec.onset for r in res]
+    fig, (ax, axc) = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True, height_ratios=(3, 1))
+    for i, name in enumerate(trace.table.test_names):
+        y = [max(r.ratios[i], 1e-3) for r in res]
+        ax.plot(t, y, "--" if trace.blind(i) else "-", lw=1.2, label=_short(name) + (" (blind)" if trace.blind(i)
+                                                                                     else ""))
+    ax.axhline(1.0, color="k", lw=0.8)
+    ax.set_yscale("log")
+    ax.set_ylim(1e-2, None)
+    ax.set_ylabel("|r| / (gate sigma)")
+    ax.legend(ncol=4, fontsize=7, loc="upper left")
+    ax.set_title(f"{trace.spec.fault} {trace.spec.magnitude:g}, {trace.scenario}, seed {trace.seed} "
+                 f"(table {trace.table.name}): ratios, tests blind to the fault dashed")
+    axc.step(t, [bin(r.candidates).count("1") for r in res], where="post", label="candidates")
+    axc.step(t, [int(r.isolated) for r in res], where="post", label="isolated")
+    axc.set_xlabel("time after the fault onset [s]")
+    axc.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
