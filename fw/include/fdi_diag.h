@@ -152,6 +152,7 @@ typedef struct
     uint32_t alarm;     /* tests in alarm (last step) */
     uint32_t evaluable; /* tests evaluable (last step) */
     uint32_t set_tests; /* tests whose generator is a slot of the set */
+    uint32_t size_tests; /* tests with a reaction size for a fault they give no sensitivity of (fdi_iso) */
     uint32_t bank_live; /* signals whose bank filters ran at the last step */
     fdi_iso_result_t iso;
     fdi_eval_t eval[FDI_DIAG_MAX_TESTS];
@@ -172,6 +173,7 @@ typedef struct
     float r_slow[FDI_DIAG_MAX_TESTS];       /* ... and over 0.3 s (whether it has settled) */
     uint32_t fresh;                         /* tests whose sensitivities were computed at the last step */
     uint32_t latched; /* faults isolated first in the episode (exonerated no more), or FDI_DIAG_CONTRADICTED */
+    uint32_t undecided; /* faults that explain every accused test and are not latched (on-line exoneration) */
     uint8_t sens_offset[FDI_DIAG_MAX_TESTS + 1U]; /* test i: sens[sens_offset[i] .. sens_offset[i + 1] - 1] */
     float sens[FDI_DIAG_MAX_SENS];
     uint8_t sens_fault[FDI_DIAG_MAX_SENS]; /* the fault of sens[k] */

@@ -181,6 +181,48 @@ static bool gen_layout(fdi_diag_t *self, const fdi_table_t *t)
     return used <= FDI_DIAG_MAX_FILTERS;
 }
 
+/* The tests a quiet test may clear a fault by its reaction size for: test_size > 0 for a fault of no on-line
+   sensitivity (the pairs fdi_iso_size_cleared() looks at). */
+static uint32_t size_rule_tests(const fdi_table_t *t)
+{
+    uint32_t out = 0U;
+    uint32_t i;
+    for (i = 0U; i < (uint32_t)t->n_tests; ++i)
+    {
+        const uint32_t sens = (t->tests[i].gen != NULL) ? t->tests[i].gen->sens_mask : 0U;
+        uint32_t j;
+        for (j = 0U; j < (uint32_t)t->n_faults; ++j)
+        {
+            if ((t->test_size[(j * (uint32_t)t->n_tests) + i] > 0.0f) && ((sens & ((uint32_t)1U << j)) == 0U))
+            {
+                out |= (uint32_t)1U << i;
+            }
+        }
+    }
+    return out;
+}
+
+/* The faults whose on-line exoneration can still change the candidates of the episode: those that explain every
+   accused test and are not latched (none once the episode is contradicted). The accused tests only grow during an
+   episode, so a fault outside this set stays outside until the episode ends. */
+static uint32_t undecided_faults(const fdi_diag_t *self)
+{
+    uint32_t undecided = 0U;
+    if (self->latched != FDI_DIAG_CONTRADICTED)
+    {
+        uint32_t j;
+        for (j = 0U; j < (uint32_t)self->n_faults; ++j)
+        {
+            if ((self->accused & ~self->table->fault_signature[j]) == 0U)
+            {
+                undecided |= (uint32_t)1U << j;
+            }
+        }
+        undecided &= ~self->latched;
+    }
+    return undecided;
+}
+
 static fdi_status_t check_config(const fdi_diag_config_t *cfg)
 {
     fdi_status_t st = fdi_table_check(cfg->table);
@@ -287,6 +329,8 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             self->alarm = 0U;
             self->evaluable = 0U;
             self->bank_live = 0U;
+            self->size_tests = size_rule_tests(t);
+            self->undecided = undecided_faults(self);
             self->iso.candidates = 0U;
             self->iso.class_mask = 0U;
             self->iso.n_classes = 0U;
@@ -425,27 +469,6 @@ static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t
 static uint16_t sat_inc(uint16_t x)
 {
     return (x < 0xFFFFU) ? (uint16_t)(x + 1U) : x;
-}
-
-/* The faults whose on-line exoneration can still change the candidates of the episode: those that explain every
-   accused test and are not latched (none once the episode is contradicted). The accused tests only grow during an
-   episode, so a fault outside this set stays outside until the episode ends. */
-static uint32_t undecided_faults(const fdi_diag_t *self)
-{
-    uint32_t undecided = 0U;
-    if (self->latched != FDI_DIAG_CONTRADICTED)
-    {
-        uint32_t j;
-        for (j = 0U; j < (uint32_t)self->n_faults; ++j)
-        {
-            if ((self->accused & ~self->table->fault_signature[j]) == 0U)
-            {
-                undecided |= (uint32_t)1U << j;
-            }
-        }
-        undecided &= ~self->latched;
-    }
-    return undecided;
 }
 
 /* The tests whose sensitivities the exoneration may read at this step (decided before the evaluation, so a
@@ -643,11 +666,11 @@ static void track_episode(fdi_diag_t *self, uint32_t alarm)
 
 /* The faults the exoneration clears this step (see "Isolation episodes" in fdi_diag.h): on line by the settled
    quiet tests' fresh sensitivities (confirmed for clear_confirm steps), and by reaction sizes for the pairs
-   without an on-line sensitivity. Only the undecided faults (undecided_faults()) can change the candidates: the
+   without an on-line sensitivity. Only the undecided faults (self->undecided) can change the candidates: the
    implied sizes and on-line decisions of the others are left alone. */
 static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
 {
-    const uint32_t undecided = undecided_faults(self);
+    const uint32_t undecided = self->undecided;
     uint32_t settled = 0U;
     uint32_t online = 0U;
     uint32_t cleared = 0U;
@@ -693,7 +716,12 @@ static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
         self->cleared_run[i] = ((online & fbit) != 0U) ? sat_inc(self->cleared_run[i]) : 0U;
         cleared |= (self->cleared_run[i] >= self->clear_confirm) ? fbit : 0U;
     }
-    return cleared | fdi_iso_size_cleared(self->table, self->accused, settled);
+    /* only the tests of size_tests can clear by reaction sizes (fdi_iso_size_cleared gives 0 for the others) */
+    if ((settled & self->size_tests) != 0U)
+    {
+        cleared |= fdi_iso_size_cleared(self->table, self->accused, settled & self->size_tests);
+    }
+    return cleared;
 }
 
 /* The first class isolated in the episode is latched; an accused test it cannot explain contradicts it for the
@@ -724,6 +752,8 @@ static void latch(fdi_diag_t *self)
 /* Episode bookkeeping and the isolation of this step (see "Isolation episodes" in fdi_diag.h). */
 static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable)
 {
+    const uint32_t accused = self->accused;
+    uint32_t latched = self->latched;
     uint32_t cleared = 0U;
     fdi_status_t st;
     uint32_t i;
@@ -735,6 +765,11 @@ static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable
         self->alarm_run[i] = ((alarm & bit) != 0U) ? sat_inc(self->alarm_run[i]) : 0U;
     }
     track_episode(self, alarm);
+    if ((self->accused != accused) || (self->latched != latched))
+    {
+        self->undecided = undecided_faults(self);
+        latched = self->latched;
+    }
     if ((self->mode == FDI_ISO_EXONERATION) && (self->accused != 0U))
     {
         cleared = exonerated(self, alarm);
@@ -745,6 +780,10 @@ static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable
     if (st == FDI_OK)
     {
         latch(self);
+        if (self->latched != latched)
+        {
+            self->undecided = undecided_faults(self);
+        }
     }
     return st;
 }
@@ -760,7 +799,7 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
     {
         uint32_t usable = fdi_frame_finite_mask(frame, validity & self->signals);
         const bool episode = (self->mode == FDI_ISO_EXONERATION) && (self->accused != 0U);
-        const uint32_t undecided = episode ? undecided_faults(self) : 0U;
+        const uint32_t undecided = episode ? self->undecided : 0U;
         uint32_t want = 0U;
         uint32_t run = 0U;
         uint32_t alarm = 0U;
