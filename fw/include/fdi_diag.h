@@ -152,6 +152,8 @@ typedef struct
     uint32_t alarm;     /* tests in alarm (last step) */
     uint32_t evaluable; /* tests evaluable (last step) */
     uint32_t set_tests; /* tests whose generator is a slot of the set */
+    uint32_t sens_tests; /* tests whose generator outputs at least one sensitivity */
+    bool slots_in_order; /* every test of the set is its slot (masks of tests are masks of slots) */
     uint32_t size_tests; /* tests with a reaction size for a fault they give no sensitivity of (fdi_iso) */
     uint32_t bank_live; /* signals whose bank filters ran at the last step */
     fdi_iso_result_t iso;

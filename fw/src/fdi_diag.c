@@ -154,6 +154,20 @@ static bool gen_layout(fdi_diag_t *self, const fdi_table_t *t)
             self->slot_sens[g->slot & 31U] = self->sens_offset[i];
         }
     }
+    self->slots_in_order = true;
+    self->sens_tests = 0U;
+    for (i = 0U; i < (uint32_t)t->n_tests; ++i)
+    {
+        const fdi_gen_desc_t *g = t->tests[i].gen;
+        if ((g != NULL) && (g->set != NULL) && ((uint32_t)g->slot != i))
+        {
+            self->slots_in_order = false;
+        }
+        if (self->sens_offset[i + 1U] > self->sens_offset[i])
+        {
+            self->sens_tests |= (uint32_t)1U << i;
+        }
+    }
     if (self->set != NULL)
     {
         used = (uint32_t)self->set->n_bank;
@@ -387,30 +401,75 @@ static bool sens_finite(const fdi_diag_t *self, uint32_t i)
     return finite;
 }
 
+/* The slots of the set of the tests of `tests` (the identity when every test of the set is its slot, as in the
+   generated tables). */
+static uint32_t slots_of(const fdi_diag_t *self, uint32_t tests)
+{
+    uint32_t slots = tests;
+    if (!self->slots_in_order)
+    {
+        uint32_t i;
+        slots = 0U;
+        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+        {
+            if ((tests & ((uint32_t)1U << i)) != 0U)
+            {
+                slots |= (uint32_t)1U << (self->table->tests[i].gen->slot & 31U);
+            }
+        }
+    }
+    return slots;
+}
+
+/* The tests of the set's slots `slots` (inverse of slots_of). */
+static uint32_t tests_of(const fdi_diag_t *self, uint32_t slots)
+{
+    uint32_t tests = slots;
+    if (!self->slots_in_order)
+    {
+        uint32_t k;
+        tests = 0U;
+        for (k = 0U; k < (uint32_t)self->set->n_slots; ++k)
+        {
+            if ((slots & ((uint32_t)1U << k)) != 0U)
+            {
+                tests |= (uint32_t)1U << (self->slot_test[k] & 31U);
+            }
+        }
+    }
+    return tests;
+}
+
 /* The generators of the tests of `run` (inputs usable, in their domain): the set's slots in one call, the
    hand-written ones one by one; r[i] and the returned mask (bit i: finite residual and sensitivities). The
    sensitivities of the tests of `want` are computed into self->sens (and the tests marked fresh). */
 static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t run, uint32_t want, float *r)
 {
+    const uint32_t hand = run & ~self->set_tests;
+    const uint32_t set = run & self->set_tests;
     uint32_t ok = 0U;
     uint32_t i;
-    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+    if (hand != 0U)
     {
-        const uint32_t bit = (uint32_t)1U << i;
-        if ((run & ~self->set_tests & bit) != 0U)
+        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
         {
-            float *sens = (((want & bit) != 0U) && (self->sens_offset[i + 1U] > self->sens_offset[i]))
-                              ? &self->sens[self->sens_offset[i]]
-                              : NULL;
-            if (run_hand_written(self, i, in, &r[i], sens) == FDI_OK)
+            const uint32_t bit = (uint32_t)1U << i;
+            if ((hand & bit) != 0U)
             {
-                ok |= bit;
-                self->fresh |= (sens != NULL) ? bit : 0U;
+                float *sens = ((want & self->sens_tests & bit) != 0U) ? &self->sens[self->sens_offset[i]] : NULL;
+                if (run_hand_written(self, i, in, &r[i], sens) == FDI_OK)
+                {
+                    ok |= bit;
+                    self->fresh |= (sens != NULL) ? bit : 0U;
+                }
             }
         }
     }
-    if (((run & self->set_tests) != 0U) && (self->set != NULL))
+    if ((set != 0U) && (self->set != NULL))
     {
+        const uint32_t with_sens = set & want & self->sens_tests;
+        uint32_t check;
+        uint32_t failed;
         fdi_gen_io_t io;
         io.par = &self->par;
         io.in = in;
@@ -420,47 +479,23 @@ static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t
         io.at = self->slot_test;
         io.sens = self->sens;
         io.sens_at = self->slot_sens;
-        io.run = 0U;
-        io.restart = 0U;
-        io.sens_mask = 0U;
+        io.run = slots_of(self, set);
+        io.restart = slots_of(self, set & self->rearm);
+        io.sens_mask = slots_of(self, with_sens);
         io.failed = 0U;
-        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
-        {
-            const uint32_t bit = (uint32_t)1U << i;
-            if ((run & self->set_tests & bit) != 0U)
-            {
-                const uint32_t slot = (uint32_t)1U << (self->table->tests[i].gen->slot & 31U);
-                io.run |= slot;
-                io.restart |= ((self->rearm & bit) != 0U) ? slot : 0U;
-                io.sens_mask |= (((want & bit) != 0U) && (self->sens_offset[i + 1U] > self->sens_offset[i])) ? slot
-                                                                                                          : 0U;
-            }
-        }
         self->set->step(&io);
-        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+        failed = tests_of(self, io.failed & io.run);
+        ok |= set & ~failed & ~with_sens; /* a non-finite residual or state is rejected by the evaluation */
+        check = with_sens & ~failed;
+        for (i = 0U; (check != 0U) && (i < (uint32_t)self->n_tests); ++i)
         {
             const uint32_t bit = (uint32_t)1U << i;
-            if ((run & self->set_tests & bit) != 0U)
+            if (((check & bit) != 0U) && sens_finite(self, i)) /* a non-finite sensitivity fails the step too */
             {
-                const uint32_t slot = (uint32_t)1U << (self->table->tests[i].gen->slot & 31U);
-                if ((io.failed & slot) != 0U)
-                {
-                    /* not finite: rejected by the evaluation */
-                }
-                else if ((io.sens_mask & slot) == 0U)
-                {
-                    ok |= bit;
-                }
-                else if (sens_finite(self, i))
-                {
-                    ok |= bit;
-                    self->fresh |= bit;
-                }
-                else
-                {
-                    /* a non-finite sensitivity fails the step like a non-finite residual */
-                }
+                ok |= bit;
+                self->fresh |= bit;
             }
+            check &= ~bit;
         }
     }
     return ok;
