@@ -57,12 +57,13 @@
  * of the faults of its sens_mask (fdi_gen.h) and keeps the last ones: the result lists them per test (sens_offset,
  * sens; all offsets 0 without cfg->sensitivities). Without cfg->sensitivities they are computed only during an
  * isolation episode (from its second step, with exoneration), and only those the on-line rule reads at the step
- * (above); outside episodes none (no cost). They are 0 while a test lacks its inputs or its domain; a non-finite sensitivity makes the step
- * fail like a non-finite residual (the test is "not evaluable" and restarts).
+ * (above); outside episodes none (no cost). They are 0 while a test lacks its inputs or its domain; a non-finite
+ * sensitivity makes the step fail like a non-finite residual (the test is "not evaluable" and restarts).
  *
  * Cost per step: the bank (~20 flops per filter) + the set's step (the shared terms once, each evaluated test's own
- * terms, the sensitivities the on-line rule reads during an episode, all with cfg->sensitivities) + the hand-written generators + ~25 operations per test for
- * evaluation + n_faults iterations of isolation + one finiteness compare pair per signal. Measured by
+ * terms, the sensitivities the on-line rule reads during an episode, all of them with cfg->sensitivities) + the
+ * hand-written generators + ~25 operations per test for evaluation + n_faults iterations of isolation + the
+ * finiteness of the signals (fdi_frame_finite_mask). Measured by
  * scripts/bench_fw.sh (instructions per step of the vehicle tables it benchmarks over a simulated drive on x86-64
  * with callgrind and on Cortex-M4F under qemu -icount: fault-free, in an episode, largest step).
  * Memory: sizeof(fdi_diag_t) ~ 152 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28) +
