@@ -28,7 +28,9 @@
  * response_steps (table) plus set_count (the alarm's confirmation) and the episode is that old. It clears
  * fault j
  *   - on line, where its generator gives j's sensitivity (gen->sens_mask): during an episode the diagnoser
- *     asks the generators for their sensitivities s_ij = d r_i / d f_j at the current operating point. Each
+ *     asks the generators for their sensitivities s_ij = d r_i / d f_j at the current operating point (those
+ *     the rule reads at the step: of the tests in alarm for their response time or settled and quiet, and
+ *     only while one of their faults is undecided: it explains every accused test and is not latched). Each
  *     test i in alarm for at least its response_steps, whose residual has settled (within a fifth plus 2
  *     sigma of both its 0.1 s and 0.3 s averages: a step through a filtered derivative first kicks a residual
  *     far above its steady value), bounds the size of every fault j of its sensitivities from below,
@@ -51,20 +53,21 @@
  * point, FDI_DIAG_SETTLE_TAUS time constants of every filter stage (2 stages: 2 * 6 / (zeta * W)) and
  * of the observer (6 / L), rounded up to whole steps.
  *
- * Fault sensitivities: during an isolation episode (from its second step, with exoneration) and at every
- * step with cfg->sensitivities, the diagnoser asks every generator for d r / d f_j of the faults of its
- * sens_mask (fdi_gen.h) and keeps the last ones: the result lists them per test (sens_offset, sens; all
- * offsets 0 without cfg->sensitivities). Outside episodes and without cfg->sensitivities none is computed
- * (no cost). They are 0 while a test lacks its inputs or its domain; a non-finite sensitivity makes the step
- * fail like a non-finite residual (the test is "not evaluable" and restarts).
+ * Fault sensitivities: at every step with cfg->sensitivities the diagnoser asks every generator for d r / d f_j
+ * of the faults of its sens_mask (fdi_gen.h) and keeps the last ones: the result lists them per test (sens_offset,
+ * sens; all offsets 0 without cfg->sensitivities). Without cfg->sensitivities they are computed only during an
+ * isolation episode (from its second step, with exoneration), and only those the on-line rule reads at the step
+ * (above); outside episodes none (no cost). They are 0 while a test lacks its inputs or its domain; a non-finite
+ * sensitivity makes the step fail like a non-finite residual (the test is "not evaluable" and restarts).
  *
  * Cost per step: the bank (~20 flops per filter) + the set's step (the shared terms once, each evaluated test's own
- * terms, all sensitivities during an episode) + the hand-written generators + ~25 operations per test for
- * evaluation + n_faults iterations of isolation + one finiteness compare pair per signal. Measured by
+ * terms, the sensitivities the on-line rule reads during an episode, all of them with cfg->sensitivities) + the
+ * hand-written generators + ~25 operations per test for evaluation + n_faults iterations of isolation + the
+ * finiteness of the signals (fdi_frame_finite_mask). Measured by
  * scripts/bench_fw.sh (instructions per step of the vehicle tables it benchmarks over a simulated drive on x86-64
  * with callgrind and on Cortex-M4F under qemu -icount: fault-free, in an episode, largest step).
  * Memory: sizeof(fdi_diag_t) ~ 152 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28) +
- * 12 * FDI_DIAG_MAX_FILTERS + 4 * FDI_DIAG_MAX_SENS + 6 * FDI_TABLE_MAX_FAULTS + FDI_GEN_MAX_SLOTS bytes (bound
+ * 12 * FDI_DIAG_MAX_FILTERS + 5 * FDI_DIAG_MAX_SENS + 6 * FDI_TABLE_MAX_FAULTS + FDI_GEN_MAX_SLOTS bytes (bound
  * asserted below; scripts/bench_fw.sh prints the value), caller-owned (static or stack); the library itself has no
  * .data/.bss.
  */
@@ -150,6 +153,9 @@ typedef struct
     uint32_t alarm;     /* tests in alarm (last step) */
     uint32_t evaluable; /* tests evaluable (last step) */
     uint32_t set_tests; /* tests whose generator is a slot of the set */
+    uint32_t sens_tests; /* tests whose generator outputs at least one sensitivity */
+    bool slots_in_order; /* every test of the set is its slot (masks of tests are masks of slots) */
+    uint32_t size_tests; /* tests with a reaction size for a fault they give no sensitivity of (fdi_iso) */
     uint32_t bank_live; /* signals whose bank filters ran at the last step */
     fdi_iso_result_t iso;
     fdi_eval_t eval[FDI_DIAG_MAX_TESTS];
@@ -170,15 +176,17 @@ typedef struct
     float r_slow[FDI_DIAG_MAX_TESTS];       /* ... and over 0.3 s (whether it has settled) */
     uint32_t fresh;                         /* tests whose sensitivities were computed at the last step */
     uint32_t latched; /* faults isolated first in the episode (exonerated no more), or FDI_DIAG_CONTRADICTED */
+    uint32_t undecided; /* faults that explain every accused test and are not latched (on-line exoneration) */
     uint8_t sens_offset[FDI_DIAG_MAX_TESTS + 1U]; /* test i: sens[sens_offset[i] .. sens_offset[i + 1] - 1] */
     float sens[FDI_DIAG_MAX_SENS];
+    uint8_t sens_fault[FDI_DIAG_MAX_SENS]; /* the fault of sens[k] */
 } fdi_diag_t; /* opaque by convention */
 
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
 FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (152U + (sizeof(void *) * 2U) +
                                          (FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28U)) +
                                          (sizeof(fdi_svf_t) * FDI_DIAG_MAX_FILTERS) +
-                                         (sizeof(float) * FDI_DIAG_MAX_SENS) +
+                                         ((sizeof(float) + 1U) * FDI_DIAG_MAX_SENS) +
                                          ((sizeof(float) + sizeof(uint16_t)) * FDI_TABLE_MAX_FAULTS) +
                                          (sizeof(uint16_t) * FDI_GEN_MAX_SLOTS)),
                   fdi_sa_diag_size);

@@ -9,8 +9,9 @@
  * caller's CAN layer clears it on timeout, checksum or range errors). Generators declare the signals they read
  * as such a mask; the diagnoser reports a test "not evaluable" when any of them is invalid or not finite.
  *
- * fdi_frame_finite_mask() returns the signals of a mask whose value is finite: one compare pair per bit up to
- * the highest bit of the mask.
+ * fdi_frame_finite_mask() returns the signals of a mask whose value is finite: one multiply and add per signal up
+ * to the highest bit of the mask (the sum of value * 0 is finite iff every value is), and one compare pair per
+ * such signal only when some value is not finite.
  * Memory: fdi_frame_t is FDI_FRAME_MAX_SIGNALS floats (128 bytes), asserted below.
  */
 #ifndef FDI_FRAME_H

@@ -52,15 +52,25 @@ static uint32_t settle_steps(const fdi_table_design_t *d)
     return steps;
 }
 
-/* Sensitivity offsets of the table's tests; false when they exceed FDI_DIAG_MAX_SENS. */
-static bool sens_layout(const fdi_table_t *t, uint8_t *offset)
+/* Sensitivity offsets of the table's tests and the fault of every entry (fault[k]: the fault of sens[k]); false
+   when they exceed FDI_DIAG_MAX_SENS. */
+static bool sens_layout(const fdi_table_t *t, uint8_t *offset, uint8_t *fault)
 {
     uint32_t total = 0U;
     uint32_t i;
     for (i = 0U; i < (uint32_t)t->n_tests; ++i)
     {
+        const uint32_t mask = (t->tests[i].gen != NULL) ? t->tests[i].gen->sens_mask : 0U;
+        uint32_t j;
         offset[i] = (uint8_t)((total < FDI_DIAG_MAX_SENS) ? total : FDI_DIAG_MAX_SENS);
-        total += fdi_gen_sens_count(t->tests[i].gen);
+        for (j = 0U; j < (uint32_t)t->n_faults; ++j)
+        {
+            if (((mask & ((uint32_t)1U << j)) != 0U) && (total < FDI_DIAG_MAX_SENS))
+            {
+                fault[total] = (uint8_t)j;
+            }
+            total += ((mask & ((uint32_t)1U << j)) != 0U) ? 1U : 0U;
+        }
     }
     for (i = (uint32_t)t->n_tests; i <= FDI_DIAG_MAX_TESTS; ++i)
     {
@@ -144,6 +154,20 @@ static bool gen_layout(fdi_diag_t *self, const fdi_table_t *t)
             self->slot_sens[g->slot & 31U] = self->sens_offset[i];
         }
     }
+    self->slots_in_order = true;
+    self->sens_tests = 0U;
+    for (i = 0U; i < (uint32_t)t->n_tests; ++i)
+    {
+        const fdi_gen_desc_t *g = t->tests[i].gen;
+        if ((g != NULL) && (g->set != NULL) && ((uint32_t)g->slot != i))
+        {
+            self->slots_in_order = false;
+        }
+        if (self->sens_offset[i + 1U] > self->sens_offset[i])
+        {
+            self->sens_tests |= (uint32_t)1U << i;
+        }
+    }
     if (self->set != NULL)
     {
         used = (uint32_t)self->set->n_bank;
@@ -169,6 +193,48 @@ static bool gen_layout(fdi_diag_t *self, const fdi_table_t *t)
         self->obs[i].g_prev = 0.0f;
     }
     return used <= FDI_DIAG_MAX_FILTERS;
+}
+
+/* The tests a quiet test may clear a fault by its reaction size for: test_size > 0 for a fault of no on-line
+   sensitivity (the pairs fdi_iso_size_cleared() looks at). */
+static uint32_t size_rule_tests(const fdi_table_t *t)
+{
+    uint32_t out = 0U;
+    uint32_t i;
+    for (i = 0U; i < (uint32_t)t->n_tests; ++i)
+    {
+        const uint32_t sens = (t->tests[i].gen != NULL) ? t->tests[i].gen->sens_mask : 0U;
+        uint32_t j;
+        for (j = 0U; j < (uint32_t)t->n_faults; ++j)
+        {
+            if ((t->test_size[(j * (uint32_t)t->n_tests) + i] > 0.0f) && ((sens & ((uint32_t)1U << j)) == 0U))
+            {
+                out |= (uint32_t)1U << i;
+            }
+        }
+    }
+    return out;
+}
+
+/* The faults whose on-line exoneration can still change the candidates of the episode: those that explain every
+   accused test and are not latched (none once the episode is contradicted). The accused tests only grow during an
+   episode, so a fault outside this set stays outside until the episode ends. */
+static uint32_t undecided_faults(const fdi_diag_t *self)
+{
+    uint32_t undecided = 0U;
+    if (self->latched != FDI_DIAG_CONTRADICTED)
+    {
+        uint32_t j;
+        for (j = 0U; j < (uint32_t)self->n_faults; ++j)
+        {
+            if ((self->accused & ~self->table->fault_signature[j]) == 0U)
+            {
+                undecided |= (uint32_t)1U << j;
+            }
+        }
+        undecided &= ~self->latched;
+    }
+    return undecided;
 }
 
 static fdi_status_t check_config(const fdi_diag_config_t *cfg)
@@ -218,7 +284,7 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             gcfg.param[i] = cfg->gen_param[i];
         }
         st = fdi_gen_param_init(&self->par, &gcfg);
-        if ((st == FDI_OK) && !sens_layout(t, self->sens_offset) &&
+        if ((st == FDI_OK) && !sens_layout(t, self->sens_offset, self->sens_fault) &&
             (cfg->sensitivities || (cfg->mode == FDI_ISO_EXONERATION)))
         {
             st = FDI_BAD_ARG;
@@ -277,6 +343,8 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             self->alarm = 0U;
             self->evaluable = 0U;
             self->bank_live = 0U;
+            self->size_tests = size_rule_tests(t);
+            self->undecided = undecided_faults(self);
             self->iso.candidates = 0U;
             self->iso.class_mask = 0U;
             self->iso.n_classes = 0U;
@@ -333,30 +401,75 @@ static bool sens_finite(const fdi_diag_t *self, uint32_t i)
     return finite;
 }
 
-/* The generators of the tests of `run` (inputs usable, in their domain): the set's slots in one call, the
-   hand-written ones one by one; r[i] and the returned mask (bit i: finite residual and sensitivities). With
-   want_sens every test's sensitivities are computed into self->sens (and the test marked fresh). */
-static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t run, bool want_sens, float *r)
+/* The slots of the set of the tests of `tests` (the identity when every test of the set is its slot, as in the
+   generated tables). */
+static uint32_t slots_of(const fdi_diag_t *self, uint32_t tests)
 {
-    uint32_t ok = 0U;
-    uint32_t i;
-    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+    uint32_t slots = tests;
+    if (!self->slots_in_order)
     {
-        const uint32_t bit = (uint32_t)1U << i;
-        if ((run & ~self->set_tests & bit) != 0U)
+        uint32_t i;
+        slots = 0U;
+        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
         {
-            float *sens = (want_sens && (self->sens_offset[i + 1U] > self->sens_offset[i]))
-                              ? &self->sens[self->sens_offset[i]]
-                              : NULL;
-            if (run_hand_written(self, i, in, &r[i], sens) == FDI_OK)
+            if ((tests & ((uint32_t)1U << i)) != 0U)
             {
-                ok |= bit;
-                self->fresh |= (sens != NULL) ? bit : 0U;
+                slots |= (uint32_t)1U << (self->table->tests[i].gen->slot & 31U);
             }
         }
     }
-    if (((run & self->set_tests) != 0U) && (self->set != NULL))
+    return slots;
+}
+
+/* The tests of the set's slots `slots` (inverse of slots_of). */
+static uint32_t tests_of(const fdi_diag_t *self, uint32_t slots)
+{
+    uint32_t tests = slots;
+    if (!self->slots_in_order)
     {
+        uint32_t k;
+        tests = 0U;
+        for (k = 0U; k < (uint32_t)self->set->n_slots; ++k)
+        {
+            if ((slots & ((uint32_t)1U << k)) != 0U)
+            {
+                tests |= (uint32_t)1U << (self->slot_test[k] & 31U);
+            }
+        }
+    }
+    return tests;
+}
+
+/* The generators of the tests of `run` (inputs usable, in their domain): the set's slots in one call, the
+   hand-written ones one by one; r[i] and the returned mask (bit i: finite residual and sensitivities). The
+   sensitivities of the tests of `want` are computed into self->sens (and the tests marked fresh). */
+static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t run, uint32_t want, float *r)
+{
+    const uint32_t hand = run & ~self->set_tests;
+    const uint32_t set = run & self->set_tests;
+    uint32_t ok = 0U;
+    uint32_t i;
+    if (hand != 0U)
+    {
+        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+        {
+            const uint32_t bit = (uint32_t)1U << i;
+            if ((hand & bit) != 0U)
+            {
+                float *sens = ((want & self->sens_tests & bit) != 0U) ? &self->sens[self->sens_offset[i]] : NULL;
+                if (run_hand_written(self, i, in, &r[i], sens) == FDI_OK)
+                {
+                    ok |= bit;
+                    self->fresh |= (sens != NULL) ? bit : 0U;
+                }
+            }
+        }
+    }
+    if ((set != 0U) && (self->set != NULL))
+    {
+        const uint32_t with_sens = set & want & self->sens_tests;
+        uint32_t check;
+        uint32_t failed;
         fdi_gen_io_t io;
         io.par = &self->par;
         io.in = in;
@@ -366,49 +479,55 @@ static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t
         io.at = self->slot_test;
         io.sens = self->sens;
         io.sens_at = self->slot_sens;
-        io.run = 0U;
-        io.restart = 0U;
-        io.sens_mask = 0U;
+        io.run = slots_of(self, set);
+        io.restart = slots_of(self, set & self->rearm);
+        io.sens_mask = slots_of(self, with_sens);
         io.failed = 0U;
-        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
-        {
-            const uint32_t bit = (uint32_t)1U << i;
-            if ((run & self->set_tests & bit) != 0U)
-            {
-                const uint32_t slot = (uint32_t)1U << (self->table->tests[i].gen->slot & 31U);
-                io.run |= slot;
-                io.restart |= ((self->rearm & bit) != 0U) ? slot : 0U;
-                io.sens_mask |= (want_sens && (self->sens_offset[i + 1U] > self->sens_offset[i])) ? slot : 0U;
-            }
-        }
         self->set->step(&io);
-        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+        failed = tests_of(self, io.failed & io.run);
+        ok |= set & ~failed & ~with_sens; /* a non-finite residual or state is rejected by the evaluation */
+        check = with_sens & ~failed;
+        for (i = 0U; (check != 0U) && (i < (uint32_t)self->n_tests); ++i)
         {
             const uint32_t bit = (uint32_t)1U << i;
-            if ((run & self->set_tests & bit) != 0U)
+            if (((check & bit) != 0U) && sens_finite(self, i)) /* a non-finite sensitivity fails the step too */
             {
-                const uint32_t slot = (uint32_t)1U << (self->table->tests[i].gen->slot & 31U);
-                if ((io.failed & slot) != 0U)
-                {
-                    /* not finite: rejected by the evaluation */
-                }
-                else if ((io.sens_mask & slot) == 0U)
-                {
-                    ok |= bit;
-                }
-                else if (sens_finite(self, i))
-                {
-                    ok |= bit;
-                    self->fresh |= bit;
-                }
-                else
-                {
-                    /* a non-finite sensitivity fails the step like a non-finite residual */
-                }
+                ok |= bit;
+                self->fresh |= bit;
             }
+            check &= ~bit;
         }
     }
     return ok;
+}
+
+static uint16_t sat_inc(uint16_t x)
+{
+    return (x < 0xFFFFU) ? (uint16_t)(x + 1U) : x;
+}
+
+/* The tests whose sensitivities the exoneration may read at this step (decided before the evaluation, so a
+   superset): a sensitivity of an undecided fault, and in alarm for its response time should it alarm now, or settled
+   and quiet should it stay quiet (the conditions of exonerated() on this step's counters). */
+static uint32_t sens_wanted(const fdi_diag_t *self, uint32_t undecided)
+{
+    const uint32_t age = (uint32_t)sat_inc(self->episode_age);
+    uint32_t want = 0U;
+    uint32_t i;
+    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+    {
+        const fdi_test_desc_t *d = &self->table->tests[i];
+        const uint32_t bit = (uint32_t)1U << i;
+        const uint32_t resp = (uint32_t)d->response_steps + (uint32_t)self->set_count;
+        if ((d->gen != NULL) && ((d->gen->sens_mask & undecided) != 0U))
+        {
+            const bool alarm_ready = (uint32_t)sat_inc(self->alarm_run[i]) >= resp;
+            const bool quiet_ready = ((self->accused & bit) == 0U) && ((uint32_t)sat_inc(self->quiet_run[i]) >= resp) &&
+                                     (age >= resp);
+            want |= (alarm_ready || quiet_ready) ? bit : 0U;
+        }
+    }
+    return want;
 }
 
 /* Evaluation of test i after its generator ran (ok: a finite residual r); true if it is evaluable this step (then
@@ -456,11 +575,6 @@ static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r, bool *alarm
     return evaluable;
 }
 
-static uint16_t sat_inc(uint16_t x)
-{
-    return (x < 0xFFFFU) ? (uint16_t)(x + 1U) : x;
-}
-
 /* Sigma of test i's residual (only asked for during episodes). */
 static float test_sigma(const fdi_diag_t *self, uint32_t i)
 {
@@ -468,9 +582,9 @@ static float test_sigma(const fdi_diag_t *self, uint32_t i)
 }
 
 /* Test i is in alarm and has been for its response time: once its residual has settled, its average and its fresh
-   sensitivities bound the size of each fault of its sens_mask from below; the episode keeps the largest bound (see
-   fdi_diag.h). */
-static void raise_implied(fdi_diag_t *self, uint32_t i)
+   sensitivities bound the size of each undecided fault of its sens_mask from below; the episode keeps the largest
+   bound (see fdi_diag.h). */
+static void raise_implied(fdi_diag_t *self, uint32_t i, uint32_t undecided)
 {
     const fdi_gen_desc_t *g = self->table->tests[i].gen;
     const float sigma = test_sigma(self, i);
@@ -483,49 +597,42 @@ static void raise_implied(fdi_diag_t *self, uint32_t i)
     const float excess = least - (self->noise_allowance * sigma);
     if ((g != NULL) && settled && (excess > 0.0f))
     {
-        uint32_t k = (uint32_t)self->sens_offset[i];
-        uint32_t j;
-        for (j = 0U; j < (uint32_t)self->table->n_faults; ++j)
+        uint32_t k;
+        for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
         {
-            if ((g->sens_mask & ((uint32_t)1U << j)) != 0U)
+            const uint32_t j = (uint32_t)self->sens_fault[k];
+            const float s = fabsf(self->sens[k]);
+            if (((undecided & ((uint32_t)1U << j)) != 0U) && (s > 0.0f))
             {
-                const float s = fabsf(self->sens[k]);
-                if (s > 0.0f)
+                const float f = excess / s;
+                if (fdi_float_is_finite(f) && (f > self->implied[j]))
                 {
-                    const float f = excess / s;
-                    if (fdi_float_is_finite(f) && (f > self->implied[j]))
-                    {
-                        self->implied[j] = f;
-                    }
+                    self->implied[j] = f;
                 }
-                ++k;
             }
         }
     }
 }
 
-/* The faults a settled quiet test i clears with its fresh sensitivities: |s_ij| F_j >= margin * gate * sigma. */
-static uint32_t quiet_clears(const fdi_diag_t *self, uint32_t i)
+/* The undecided faults a settled quiet test i clears with its fresh sensitivities: |s_ij| F_j >= margin * gate *
+   sigma. */
+static uint32_t quiet_clears(const fdi_diag_t *self, uint32_t i, uint32_t undecided)
 {
     const fdi_test_desc_t *d = &self->table->tests[i];
     uint32_t out = 0U;
     if (d->gen != NULL)
     {
         const float need = self->table->sensitivity_margin * d->gate * test_sigma(self, i);
-        uint32_t k = (uint32_t)self->sens_offset[i];
-        uint32_t j;
-        for (j = 0U; j < (uint32_t)self->table->n_faults; ++j)
+        uint32_t k;
+        for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
         {
-            const uint32_t fbit = (uint32_t)1U << j;
-            if ((d->gen->sens_mask & fbit) != 0U)
+            const uint32_t j = (uint32_t)self->sens_fault[k];
+            if ((fabsf(self->sens[k]) * self->implied[j]) >= need)
             {
-                if ((fabsf(self->sens[k]) * self->implied[j]) >= need)
-                {
-                    out |= fbit;
-                }
-                ++k;
+                out |= (uint32_t)1U << j;
             }
         }
+        out &= undecided;
     }
     return out;
 }
@@ -594,9 +701,11 @@ static void track_episode(fdi_diag_t *self, uint32_t alarm)
 
 /* The faults the exoneration clears this step (see "Isolation episodes" in fdi_diag.h): on line by the settled
    quiet tests' fresh sensitivities (confirmed for clear_confirm steps), and by reaction sizes for the pairs
-   without an on-line sensitivity. */
+   without an on-line sensitivity. Only the undecided faults (self->undecided) can change the candidates: the
+   implied sizes and on-line decisions of the others are left alone. */
 static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
 {
+    const uint32_t undecided = self->undecided;
     uint32_t settled = 0U;
     uint32_t online = 0U;
     uint32_t cleared = 0U;
@@ -611,7 +720,7 @@ static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
         const uint32_t resp = (uint32_t)self->table->tests[i].response_steps + (uint32_t)self->set_count;
         if (((self->fresh & alarm & bit) != 0U) && ((uint32_t)self->alarm_run[i] >= resp))
         {
-            raise_implied(self, i);
+            raise_implied(self, i, undecided);
         }
         if (((self->accused & bit) == 0U) && ((uint32_t)self->quiet_run[i] >= resp) &&
             ((uint32_t)self->episode_age >= resp))
@@ -628,7 +737,7 @@ static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
         }
         else if ((self->fresh & bit) != 0U)
         {
-            self->clears[i] = quiet_clears(self, i);
+            self->clears[i] = quiet_clears(self, i, undecided);
         }
         else
         {
@@ -642,7 +751,12 @@ static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
         self->cleared_run[i] = ((online & fbit) != 0U) ? sat_inc(self->cleared_run[i]) : 0U;
         cleared |= (self->cleared_run[i] >= self->clear_confirm) ? fbit : 0U;
     }
-    return cleared | fdi_iso_size_cleared(self->table, self->accused, settled);
+    /* only the tests of size_tests can clear by reaction sizes (fdi_iso_size_cleared gives 0 for the others) */
+    if ((settled & self->size_tests) != 0U)
+    {
+        cleared |= fdi_iso_size_cleared(self->table, self->accused, settled & self->size_tests);
+    }
+    return cleared;
 }
 
 /* The first class isolated in the episode is latched; an accused test it cannot explain contradicts it for the
@@ -673,6 +787,8 @@ static void latch(fdi_diag_t *self)
 /* Episode bookkeeping and the isolation of this step (see "Isolation episodes" in fdi_diag.h). */
 static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable)
 {
+    const uint32_t accused = self->accused;
+    uint32_t latched = self->latched;
     uint32_t cleared = 0U;
     fdi_status_t st;
     uint32_t i;
@@ -684,6 +800,11 @@ static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable
         self->alarm_run[i] = ((alarm & bit) != 0U) ? sat_inc(self->alarm_run[i]) : 0U;
     }
     track_episode(self, alarm);
+    if ((self->accused != accused) || (self->latched != latched))
+    {
+        self->undecided = undecided_faults(self);
+        latched = self->latched;
+    }
     if ((self->mode == FDI_ISO_EXONERATION) && (self->accused != 0U))
     {
         cleared = exonerated(self, alarm);
@@ -694,6 +815,10 @@ static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable
     if (st == FDI_OK)
     {
         latch(self);
+        if (self->latched != latched)
+        {
+            self->undecided = undecided_faults(self);
+        }
     }
     return st;
 }
@@ -708,7 +833,9 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
     else
     {
         uint32_t usable = fdi_frame_finite_mask(frame, validity & self->signals);
-        const bool want_sens = self->sensitivities || ((self->mode == FDI_ISO_EXONERATION) && (self->accused != 0U));
+        const bool episode = (self->mode == FDI_ISO_EXONERATION) && (self->accused != 0U);
+        const uint32_t undecided = episode ? self->undecided : 0U;
+        uint32_t want = 0U;
         uint32_t run = 0U;
         uint32_t alarm = 0U;
         uint32_t evaluable = 0U;
@@ -741,7 +868,19 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
                 run |= bit;
             }
         }
-        ok = run_generators(self, frame, run, want_sens, r);
+        if (self->sensitivities)
+        {
+            want = 0xFFFFFFFFU;
+        }
+        else if (undecided != 0U)
+        {
+            want = sens_wanted(self, undecided);
+        }
+        else
+        {
+            /* none needed */
+        }
+        ok = run_generators(self, frame, run, want, r);
         for (i = 0U; i < (uint32_t)self->n_tests; ++i)
         {
             const uint32_t bit = (uint32_t)1U << i;

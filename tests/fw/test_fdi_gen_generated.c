@@ -9,7 +9,8 @@
  * the analytic reference vehicle (same filters, same relation times w^2), and the operating domain: a tyre-law
  * test is "not evaluable" in fdi_diag below its minimum speed and restarts with a warm-up when the speed returns,
  * while the kinematic tests stay evaluable; the observer building blocks (fdi_gen_obs_predict/store, heaviside,
- * sign, max, min) against the exact solution of x' = J x + b.
+ * sign, max, min) against the exact solution of x' = J x + b; a table listing the slots in another order gives
+ * each test the same residual and sensitivities.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -439,6 +440,84 @@ static void test_diag_sensitivities(void **state)
     }
 }
 
+/* A table whose tests list the set's slots in another order (reversed): the diagnoser maps tests to slots (restart,
+   sensitivities, failures) and gives each test the residual, sensitivities and isolation of the table in order. */
+static void test_diag_slots_out_of_order(void **state)
+{
+    enum { NT = FDI_ROMO_N_GENERATORS };
+    static fdi_test_desc_t tests[NT];
+    static uint32_t signature[FDI_TABLE_MAX_FAULTS];
+    static float size[FDI_TABLE_MAX_FAULTS * NT];
+    static fdi_table_t rev;
+    static fdi_diag_t d0;
+    static fdi_diag_t d1;
+    static fdi_diag_result_t r0;
+    static fdi_diag_result_t r1;
+    fdi_diag_config_t cfg;
+    fdi_frame_t in;
+    uint32_t i;
+    uint32_t j;
+    int n;
+    (void)state;
+    rev = fdi_romo_table;
+    for (i = 0U; i < (uint32_t)NT; ++i)
+    {
+        tests[i] = fdi_romo_table.tests[(uint32_t)NT - 1U - i];
+    }
+    for (j = 0U; j < (uint32_t)fdi_romo_table.n_faults; ++j)
+    {
+        signature[j] = 0U;
+        for (i = 0U; i < (uint32_t)NT; ++i)
+        {
+            if ((fdi_romo_table.fault_signature[j] & ((uint32_t)1U << ((uint32_t)NT - 1U - i))) != 0U)
+            {
+                signature[j] |= (uint32_t)1U << i;
+            }
+            size[(j * (uint32_t)NT) + i] = fdi_romo_table.test_size[(j * (uint32_t)NT) + (uint32_t)NT - 1U - i];
+        }
+    }
+    rev.tests = tests;
+    rev.fault_signature = signature;
+    rev.test_size = size;
+    assert_int_equal(fdi_table_check(&rev), FDI_OK);
+    for (n = 0; n < 2; ++n)
+    {
+        assert_int_equal(fdi_diag_config_default(&cfg, (n == 0) ? &fdi_romo_table : &rev), FDI_OK);
+        cfg.gen_param[FDI_ROMO_KIN_PARAM_D_X] = (float)VEH_DX;
+        cfg.gen_param[FDI_ROMO_KIN_PARAM_D_Y] = (float)VEH_DY;
+        cfg.warmup_steps = 300U;
+        cfg.sensitivities = true;
+        assert_int_equal(fdi_diag_init((n == 0) ? &d0 : &d1, &cfg), FDI_OK);
+    }
+    for (n = 0; n < 500; ++n)
+    {
+        frame(&in, 12.0f + (0.5f * sinf(0.01f * (float)n)));
+        in.value[ROMO_SIG_PSIDOT_M] = 0.3f + (0.05f * cosf(0.02f * (float)n));
+        in.value[ROMO_SIG_DELTA1_M] = 0.02f;
+        in.value[ROMO_SIG_ITM1_M] = 15.0f;
+        /* a restart of some slots: vy_m invalid for a while */
+        assert_int_equal(fdi_diag_step(&d0, &in, ((n >= 100) && (n < 110)) ? (ROMO_SIGM_ALL & ~ROMO_SIGM_VY_M)
+                                                                             : ROMO_SIGM_ALL), FDI_OK);
+        assert_int_equal(fdi_diag_step(&d1, &in, ((n >= 100) && (n < 110)) ? (ROMO_SIGM_ALL & ~ROMO_SIGM_VY_M)
+                                                                             : ROMO_SIGM_ALL), FDI_OK);
+        assert_int_equal(fdi_diag_result(&d0, &r0), FDI_OK);
+        assert_int_equal(fdi_diag_result(&d1, &r1), FDI_OK);
+        assert_int_equal(r0.iso.candidates, r1.iso.candidates);
+        for (i = 0U; i < (uint32_t)NT; ++i)
+        {
+            const uint32_t k = (uint32_t)NT - 1U - i; /* test i of rev is test k of the table */
+            assert_int_equal((r1.evaluable_mask >> i) & 1U, (r0.evaluable_mask >> k) & 1U);
+            assert_int_equal((r1.alarm_mask >> i) & 1U, (r0.alarm_mask >> k) & 1U);
+            assert_true(memcmp(&r1.residual[i], &r0.residual[k], sizeof(float)) == 0);
+            assert_int_equal((uint32_t)r1.sens_offset[i + 1U] - (uint32_t)r1.sens_offset[i],
+                             (uint32_t)r0.sens_offset[k + 1U] - (uint32_t)r0.sens_offset[k]);
+            assert_true(memcmp(&r1.sens[r1.sens_offset[i]], &r0.sens[r0.sens_offset[k]],
+                               sizeof(float) * ((uint32_t)r0.sens_offset[k + 1U] - (uint32_t)r0.sens_offset[k])) == 0);
+        }
+    }
+    assert_int_equal(r1.evaluable_mask, ((uint32_t)1U << NT) - 1U);
+}
+
 static void test_observer_building_blocks(void **state)
 {
     /* x' = J x + b with constant b: one predict step is the exact exp(J dt) solution, for a slow, a stiff
@@ -496,6 +575,7 @@ int main(void)
         cmocka_unit_test(test_operating_domain),
         cmocka_unit_test(test_sensitivities_leave_the_residual_alone),
         cmocka_unit_test(test_diag_sensitivities),
+        cmocka_unit_test(test_diag_slots_out_of_order),
         cmocka_unit_test(test_observer_building_blocks),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
