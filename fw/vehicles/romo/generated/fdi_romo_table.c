@@ -40,40 +40,40 @@ static const fdi_test_desc_t romo_tests[13] = {
      .gate = 5.0f, .variance = 0.00117f, .response_steps = 43U},
     {.gen = &fdi_romo_generators[1], .interpretation = "kinematics; measured ay_m, psidot_m, vx_m, vy_m",
      .mso_id = 2U, .fault_mask = 0x0000001EU, .input_mask = ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
-     .gate = 5.0f, .variance = 0.0005476f, .response_steps = 43U},
+     .gate = 5.0f, .variance = 0.0005712f, .response_steps = 43U},
     {.gen = &fdi_romo_generators[2], .interpretation = "kinematics; wheel 1 (tyre, spin); measured ax_m, ay_m, vx_m, vy_m, delta1_m, iTM1_m, P_f_m, omega1_m",
      .mso_id = 12U, .fault_mask = 0x0022223BU, .input_mask = ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M,
      .gate = 5.0f, .variance = 3672.0f, .response_steps = 62U},
     {.gen = &fdi_romo_generators[3], .interpretation = "kinematics; wheel 1 (tyre, spin); measured psidot_m, vx_m, vy_m, delta1_m, iTM1_m, P_f_m, omega1_m",
      .mso_id = 39U, .fault_mask = 0x0022223CU, .input_mask = ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M,
-     .gate = 5.0f, .variance = 3192.0f, .response_steps = 43U},
+     .gate = 5.0f, .variance = 3600.0f, .response_steps = 43U},
     {.gen = &fdi_romo_generators[4], .interpretation = "kinematics; wheel 2 (tyre, spin); measured psidot_m, vx_m, vy_m, delta2_m, iTM2_m, P_f_m, omega2_m",
      .mso_id = 49U, .fault_mask = 0x0044445CU, .input_mask = ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M,
-     .gate = 5.0f, .variance = 4679.0f, .response_steps = 43U},
+     .gate = 5.0f, .variance = 5027.0f, .response_steps = 43U},
     {.gen = &fdi_romo_generators[5], .interpretation = "kinematics; wheel 3 (tyre, spin); measured psidot_m, vx_m, vy_m, delta3_m, iTM3_m, P_r_m, omega3_m",
      .mso_id = 59U, .fault_mask = 0x0088889CU, .input_mask = ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA3_M,
-     .gate = 5.0f, .variance = 4998.0f, .response_steps = 43U},
+     .gate = 5.0f, .variance = 5580.0f, .response_steps = 43U},
     {.gen = &fdi_romo_generators[6], .interpretation = "body dynamics; kinematics; wheel 1 (tyre, spin); wheel 3 (tyre); wheel 2 (tyre, spin); wheel 4 (tyre, spin); measured ay_m, psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta3_m, delta4_m, iTM1_m, iTM2_m, iTM4_m, P_f_m, P_r_m, omega2_m, omega3_m, omega4_m",
      .mso_id = 1670U, .fault_mask = 0x01DF77FEU, .input_mask = ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M | ROMO_SIGM_OMEGA4_M,
-     .gate = 5.0f, .variance = 1764.0f, .response_steps = 62U},
+     .gate = 5.0f, .variance = 2285.0f, .response_steps = 62U},
     {.gen = &fdi_romo_generators[7], .interpretation = "body dynamics; kinematics; wheel 1 (tyre); wheel 2 (tyre); wheel 4 (tyre, spin); measured ax_m, psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta4_m, iTM4_m, P_r_m, omega1_m, omega2_m",
      .mso_id = 1958U, .fault_mask = 0x0077117DU, .input_mask = ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M,
-     .gate = 5.0f, .variance = 17420.0f, .response_steps = 62U},
+     .gate = 5.0f, .variance = 24020.0f, .response_steps = 62U},
     {.gen = &fdi_romo_generators[8], .interpretation = "body dynamics; kinematics; wheel 1 (tyre); wheel 2 (tyre, spin); wheel 3 (tyre); measured psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta3_m, iTM2_m, P_f_m, omega1_m, omega3_m",
      .mso_id = 2058U, .fault_mask = 0x00AE44FCU, .input_mask = ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA3_M,
-     .gate = 5.0f, .variance = 51980.0f, .response_steps = 62U},
+     .gate = 5.0f, .variance = 80090.0f, .response_steps = 62U},
     {.gen = &fdi_romo_generators[9], .interpretation = "body dynamics; kinematics; wheel 1 (tyre); wheel 3 (tyre); wheel 4 (tyre, spin); measured ay_m, psidot_m, vx_m, vy_m, delta1_m, delta3_m, delta4_m, iTM4_m, P_r_m, omega1_m, omega3_m",
      .mso_id = 2065U, .fault_mask = 0x00BB11BEU, .input_mask = ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA3_M,
-     .gate = 5.0f, .variance = 60020.0f, .response_steps = 62U},
+     .gate = 5.0f, .variance = 62000.0f, .response_steps = 62U},
     {.gen = &fdi_romo_generators[10], .interpretation = "body dynamics; kinematics; wheel 2 (tyre); wheel 3 (tyre, spin); wheel 4 (tyre); measured psidot_m, vx_m, vy_m, delta2_m, delta3_m, delta4_m, iTM3_m, P_r_m, omega2_m, omega4_m",
      .mso_id = 2443U, .fault_mask = 0x015C89DCU, .input_mask = ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA4_M,
-     .gate = 5.0f, .variance = 60520.0f, .response_steps = 62U},
+     .gate = 5.0f, .variance = 75080.0f, .response_steps = 62U},
     {.gen = &fdi_romo_generators[11], .interpretation = "body dynamics; kinematics; wheel 1 (tyre, spin); wheel 4 (tyre); wheel 2 (tyre, spin); measured psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta4_m, iTM1_m, iTM2_m, P_f_m, omega2_m, omega4_m",
      .mso_id = 3805U, .fault_mask = 0x0156677CU, .input_mask = ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA4_M,
-     .gate = 5.0f, .variance = 21900.0f, .response_steps = 62U},
+     .gate = 5.0f, .variance = 46660.0f, .response_steps = 62U},
     {.gen = &fdi_romo_generators[12], .interpretation = "body dynamics; kinematics; wheel 3 (tyre); wheel 2 (tyre, spin); wheel 4 (tyre, spin); measured ay_m, psidot_m, vx_m, delta2_m, delta3_m, delta4_m, iTM2_m, iTM4_m, P_f_m, P_r_m, omega2_m, omega3_m, omega4_m",
      .mso_id = 4195U, .fault_mask = 0x01DD55CEU, .input_mask = ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M | ROMO_SIGM_OMEGA4_M,
-     .gate = 5.0f, .variance = 309.8f, .response_steps = 62U},
+     .gate = 5.0f, .variance = 436.8f, .response_steps = 62U},
 };
 
 /* Row j: bit i set when test i is sensitive to fault j. */
@@ -138,29 +138,29 @@ static const uint32_t romo_iso_class[25] = {
 static const float romo_test_size[25 * 13] = {
     0.15f, 0.0f, 0.7f, 0.0f, 0.0f, 0.0f, 0.0f, 0.5f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f1 */
     0.0f, 0.1f, 0.0f, 0.0f, 0.0f, 0.0f, 20.0f, 0.0f, 0.0f, 0.7f, 0.0f, 0.0f, 0.05f, /* f2 */
-    0.15f, 0.007f, 0.0f, 0.2f, 0.05f, 2.0f, 0.7f, 0.015f, 0.03f, 0.02f, 0.02f, 0.015f, 0.003f, /* f3 */
-    0.1f, 0.3f, 0.3f, 0.07f, 0.07f, 0.07f, 0.05f, 0.05f, 0.07f, 0.07f, 0.05f, 0.07f, 0.1f, /* f4 */
-    0.5f, 0.07f, 5.0f, 0.0f, 20.0f, 0.0f, 0.5f, 0.02f, 0.03f, 0.05f, 0.05f, 0.02f, 0.0f, /* f5 */
-    0.0f, 0.0f, 0.5f, 0.15f, 0.0f, 0.0f, 0.07f, 0.005f, 0.01f, 0.5f, 0.0f, 0.007f, 0.0f, /* f6 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.15f, 0.0f, 0.05f, 0.003f, 0.005f, 0.0f, 0.5f, 0.003f, 0.1f, /* f7 */
+    0.15f, 0.007f, 0.0f, 0.2f, 0.05f, 2.0f, 0.7f, 0.015f, 0.05f, 0.02f, 0.02f, 0.02f, 0.003f, /* f3 */
+    0.1f, 0.3f, 0.3f, 0.07f, 0.07f, 0.1f, 0.07f, 0.07f, 0.1f, 0.07f, 0.07f, 0.07f, 0.1f, /* f4 */
+    0.5f, 0.07f, 5.0f, 0.0f, 20.0f, 0.0f, 0.5f, 0.02f, 0.05f, 0.05f, 0.05f, 0.05f, 0.0f, /* f5 */
+    0.0f, 0.0f, 0.5f, 0.2f, 0.0f, 0.0f, 0.1f, 0.007f, 0.01f, 0.5f, 0.0f, 0.007f, 0.0f, /* f6 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.15f, 0.0f, 0.05f, 0.005f, 0.007f, 0.0f, 0.5f, 0.005f, 0.1f, /* f7 */
     0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.2f, 0.3f, 0.0f, 0.5f, 0.01f, 0.01f, 0.0f, 0.01f, /* f8 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.15f, 0.2f, 0.0f, 0.007f, 0.007f, 0.2f, 0.005f, /* f9 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.2f, 0.2f, 0.0f, 0.007f, 0.007f, 0.7f, 0.005f, /* f9 */
     0.0f, 0.0f, 500.0f, 70.0f, 0.0f, 0.0f, 50.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f10 */
-    0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 50.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 100.0f, /* f11 */
+    0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 50.0f, 0.0f, 0.0f, 0.0f, 0.0f, 100.0f, 100.0f, /* f11 */
     0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f12 */
     0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 50.0f, 70.0f, 0.0f, 0.0f, 0.0f, 0.0f, 100.0f, /* f13 */
     0.0f, 0.0f, 500.0f, 70.0f, 0.0f, 0.0f, 50.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f14 */
-    0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 50.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 100.0f, /* f15 */
+    0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 50.0f, 0.0f, 0.0f, 0.0f, 0.0f, 100.0f, 100.0f, /* f15 */
     0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f16 */
     0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 50.0f, 70.0f, 0.0f, 0.0f, 0.0f, 0.0f, 100.0f, /* f17 */
-    0.0f, 0.0f, 700.0f, 200.0f, 0.0f, 0.0f, 0.0f, 150.0f, 700.0f, 500.0f, 0.0f, 150.0f, 0.0f, /* f18 */
-    0.0f, 0.0f, 0.0f, 0.0f, 300.0f, 0.0f, 0.0f, 100.0f, 200.0f, 0.0f, 500.0f, 200.0f, 0.0f, /* f19 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 300.0f, 150.0f, 0.0f, 500.0f, 200.0f, 200.0f, 0.0f, 200.0f, /* f20 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 300.0f, 700.0f, 200.0f, 200.0f, /* f21 */
-    0.0f, 0.0f, 3.0f, 0.2f, 0.0f, 0.0f, 0.0f, 2.0f, 0.5f, 0.7f, 0.0f, 0.0f, 0.0f, /* f22 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.2f, 0.0f, 50.0f, 0.2f, 0.0f, 0.0f, 0.5f, 1.5f, 15.0f, /* f23 */
+    0.0f, 0.0f, 700.0f, 200.0f, 0.0f, 0.0f, 0.0f, 200.0f, 700.0f, 500.0f, 0.0f, 200.0f, 0.0f, /* f18 */
+    0.0f, 0.0f, 0.0f, 0.0f, 300.0f, 0.0f, 0.0f, 100.0f, 300.0f, 0.0f, 700.0f, 200.0f, 0.0f, /* f19 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 300.0f, 150.0f, 0.0f, 500.0f, 200.0f, 300.0f, 0.0f, 200.0f, /* f20 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 300.0f, 1000.0f, 500.0f, 200.0f, /* f21 */
+    0.0f, 0.0f, 3.0f, 0.3f, 0.0f, 0.0f, 0.0f, 3.0f, 0.7f, 0.7f, 0.0f, 0.0f, 0.0f, /* f22 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.2f, 0.0f, 50.0f, 0.2f, 0.0f, 0.0f, 0.5f, 2.0f, 20.0f, /* f23 */
     0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.3f, 0.2f, 0.0f, 0.7f, 0.7f, 0.0f, 0.0f, 2.0f, /* f24 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 30.0f, 0.0f, 0.0f, 0.0f, 0.3f, 0.2f, 2.0f, /* f25 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 50.0f, 0.0f, 0.0f, 0.0f, 0.5f, 0.3f, 2.0f, /* f25 */
 };
 
 const char *const fdi_romo_table_equations[13] = {
