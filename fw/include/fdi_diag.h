@@ -36,7 +36,11 @@
  *     far above its steady value), bounds the size of every fault j of its sensitivities from below,
  *     f_j >= (min(|r_i|, |0.1 s average|) - noise_allowance sigma_i) / |s_ij|,
  *     and the largest recent bound is the size the alarms imply, F_j (the bounds are forgotten with a 1 s time
- *     constant: where an alarmed test's sensitivity passes near zero its bound spikes). A settled quiet test q
+ *     constant: where an alarmed test's sensitivity passes near zero its bound spikes). A fault j of test i's
+ *     signature that its generator lists no sensitivity for, while it lists others, has a steady-state
+ *     sensitivity of exactly zero (fdi_gen.h: it reaches r_i only through a filtered derivative, e.g. a vx
+ *     offset in a_x = d vx / dt - psidot vy): no size of j explains the settled alarm, F_j is unbounded and any
+ *     settled quiet test with a nonzero sensitivity to j clears it. A settled quiet test q
  *     clears j when |s_qj| F_j >= sensitivity_margin * gate_q * sigma_q: at that size it would have crossed its
  *     gate with margin. The decision is re-made at every step (operating points change); j leaves the
  *     candidates once the rule has cleared it for 0.1 s in a row;

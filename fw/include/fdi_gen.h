@@ -119,7 +119,9 @@ typedef struct
     fdi_gen_step_fn_t step;        /* hand-written: its step; NULL for a slot of a set (the set's step runs it) */
     fdi_gen_domain_fn_t in_domain; /* NULL: always in its domain */
     uint32_t input_mask;           /* frame signals the step and the domain read (non-zero) */
-    uint32_t sens_mask;            /* faults (bit j = fault j of the table) whose d r / d f_j the step outputs */
+    uint32_t sens_mask;            /* faults (bit j = fault j of the table) whose d r / d f_j the step outputs;
+                                      when non-zero, a fault of the test's signature left out has a steady-state
+                                      sensitivity of exactly zero (the diagnoser relies on it, fdi_diag.h) */
     uint8_t n_filters;             /* hand-written: instance filter states it uses (<= FDI_GEN_MAX_FILTERS); slot: 0 */
     uint8_t n_obs;                 /* observer states it uses: 0 or 1 */
     const fdi_gen_set_t *set;      /* the set of a generated generator; NULL for a hand-written one */

@@ -32,6 +32,11 @@
    candidates only once the on-line rule has cleared it for CLEAR_CONFIRM_S. */
 #define IMPLIED_TAU_S 1.0f
 #define CLEAR_CONFIRM_S 0.1f
+/* The size a settled alarm implies for a fault of the test's signature that its generator lists no sensitivity for
+   although it lists others: that fault's steady-state sensitivity is identically zero (it reaches the residual
+   only through a filtered derivative, fdi_gen.h), so no size of it explains a settled residual. Finite, so that
+   |s| * size stays a number (it may round to +Inf, which compares as intended). */
+#define UNBOUNDED_SIZE 1.0e30f
 
 /* Settling time of the design point in steps (see fdi_diag.h); 0 if it is not representable. */
 static uint32_t settle_steps(const fdi_table_design_t *d)
@@ -583,7 +588,8 @@ static float test_sigma(const fdi_diag_t *self, uint32_t i)
 
 /* Test i is in alarm and has been for its response time: once its residual has settled, its average and its fresh
    sensitivities bound the size of each undecided fault of its sens_mask from below; the episode keeps the largest
-   bound (see fdi_diag.h). */
+   bound (see fdi_diag.h). A fault of its signature without a sensitivity (while the generator lists some) cannot
+   explain a settled residual at all: its bound is UNBOUNDED_SIZE. */
 static void raise_implied(fdi_diag_t *self, uint32_t i, uint32_t undecided)
 {
     const fdi_gen_desc_t *g = self->table->tests[i].gen;
@@ -608,6 +614,17 @@ static void raise_implied(fdi_diag_t *self, uint32_t i, uint32_t undecided)
                 if (fdi_float_is_finite(f) && (f > self->implied[j]))
                 {
                     self->implied[j] = f;
+                }
+            }
+        }
+        if (g->sens_mask != 0U)
+        {
+            const uint32_t unexplained = self->table->tests[i].fault_mask & ~g->sens_mask & undecided;
+            for (k = 0U; k < (uint32_t)self->n_faults; ++k)
+            {
+                if ((unexplained & ((uint32_t)1U << k)) != 0U)
+                {
+                    self->implied[k] = UNBOUNDED_SIZE;
                 }
             }
         }

@@ -9,7 +9,8 @@
  * evaluators' set count of 2). With test 0 in alarm at a settled residual R and test 1 quiet, the alarms imply
  * b >= (R - 3) / |d r0 / d b| (noise allowance 3 sigma), and test 1 clears b when |d r1 / d b| times that size
  * reaches 1.5 * 5 = 7.5 for 10 steps (0.1 s) in a row. Test 2 stays quiet and weak (d r2 / d a = 0.1) unless a
- * case says otherwise.
+ * case says otherwise. In table_zero_b, test 0's generator lists d r0 / d a only: b is in its signature with a
+ * steady-state sensitivity of exactly zero (as a fault that enters through a filtered derivative).
  */
 #include <math.h>
 #include <setjmp.h>
@@ -79,13 +80,57 @@ static const uint32_t iso_class[2] = {0x1U, 0x2U};
 static const float test_size[2 * 3] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f}; /* no reaction sizes: on-line rule */
 static const fdi_table_t table = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f, 0.7071f, 2.0f}, 7U, 2U, 3U, signal_names,
                                   fault_names, tests, signature, iso_class, test_size, 2.0f, 1.5f};
+/* test 0 of table_zero_b: the same residual, a sensitivity to a only */
+static fdi_status_t gen0z_step(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
+                               float *sens)
+{
+    (void)g;
+    (void)par;
+    *r = reset ? 0.0f : in->value[0];
+    if (sens != NULL)
+    {
+        sens[0] = in->value[1];
+    }
+    return FDI_OK;
+}
+
+/* test 0 of table_no_sens: the same residual, no sensitivities at all (nothing is known about b's) */
+static fdi_status_t gen0n_step(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
+                               float *sens)
+{
+    (void)g;
+    (void)par;
+    (void)sens;
+    *r = reset ? 0.0f : in->value[0];
+    return FDI_OK;
+}
+
+static const fdi_gen_desc_t gen0z = {"t0z", gen0z_step, NULL, 0x07U, 0x1U, 0U, 0U, NULL, 0U};
+static const fdi_gen_desc_t gen0n = {"t0n", gen0n_step, NULL, 0x07U, 0x0U, 0U, 0U, NULL, 0U};
+static const fdi_test_desc_t tests_zero_b[3] = {
+    {&gen0z, "t0", 1U, 0x3U, 0x07U, 5.0f, 1.0f, RESP},
+    {&gen1, "t1", 2U, 0x2U, 0x18U, 5.0f, 1.0f, RESP},
+    {&gen2, "t2", 3U, 0x1U, 0x60U, 5.0f, 1.0f, RESP},
+};
+static const fdi_test_desc_t tests_no_sens[3] = {
+    {&gen0n, "t0", 1U, 0x3U, 0x07U, 5.0f, 1.0f, RESP},
+    {&gen1, "t1", 2U, 0x2U, 0x18U, 5.0f, 1.0f, RESP},
+    {&gen2, "t2", 3U, 0x1U, 0x60U, 5.0f, 1.0f, RESP},
+};
+static const fdi_table_t table_zero_b = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f, 0.7071f, 2.0f}, 7U, 2U, 3U,
+                                         signal_names, fault_names, tests_zero_b, signature, iso_class, test_size,
+                                         2.0f, 1.5f};
+static const fdi_table_t table_no_sens = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f, 0.7071f, 2.0f}, 7U, 2U, 3U,
+                                          signal_names, fault_names, tests_no_sens, signature, iso_class, test_size,
+                                          2.0f, 1.5f};
+static const fdi_table_t *active = &table; /* the table init() uses */
 static float s2a = 0.1f; /* test 2's sensitivity to a (weak unless a case raises it) */
 static float r1_now = 0.0f; /* test 1's residual (quiet unless a case raises it) */
 
 static void init(fdi_diag_t *d, fdi_iso_mode_t mode)
 {
     fdi_diag_config_t c;
-    assert_int_equal(fdi_diag_config_default(&c, &table), FDI_OK);
+    assert_int_equal(fdi_diag_config_default(&c, active), FDI_OK);
     c.set_count = (uint16_t)SET;
     c.clear_count = 1U;
     c.mode = mode;
@@ -215,6 +260,34 @@ static void test_implied_size_follows_recent_evidence(void **state)
     assert_int_equal(run(&d, 200U, 9.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0x3U);
 }
 
+static void test_a_fault_without_steady_state_sensitivity_cannot_explain_a_settled_alarm(void **state)
+{
+    fdi_diag_t d;
+    uint32_t k;
+    (void)state;
+    /* test 0 lists no sensitivity to b although b is in its signature: no size of b explains its settled alarm,
+       so even a quiet test that is barely sensitive to b (d r1 / d b = 0.001) clears it: {a} */
+    active = &table_zero_b;
+    warm(&d, FDI_ISO_EXONERATION);
+    assert_int_equal(run(&d, 100U, 20.0f, 1.0f, 1.0f, 0.0f, 0.001f), 0x1U);
+    /* a quiet test that is blind to b (d r1 / d b = 0) never clears it */
+    warm(&d, FDI_ISO_EXONERATION);
+    assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 0.0f), 0x3U);
+    /* the alarm must have settled first: a decaying kick (as in test_implied_size_needs_a_settled_residual)
+       clears nothing, however long it lasts */
+    warm(&d, FDI_ISO_EXONERATION);
+    for (k = 0U; k < 60U; ++k)
+    {
+        const uint32_t c = run(&d, 1U, (400.0f * powf(0.95f, (float)k)) + 6.0f, 1.0f, 1.0f, 0.0f, 0.001f);
+        assert_true((c == 0U) || (c == 0x3U));
+    }
+    /* a generator that lists no sensitivities at all says nothing about b's: b stays a candidate */
+    active = &table_no_sens;
+    warm(&d, FDI_ISO_EXONERATION);
+    assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 0.001f), 0x3U);
+    active = &table;
+}
+
 static void test_the_first_isolation_is_latched(void **state)
 {
     fdi_diag_t d;
@@ -244,6 +317,7 @@ int main(void)
         cmocka_unit_test(test_implied_size_follows_recent_evidence),
         cmocka_unit_test(test_a_weak_spell_resets_the_confirmation),
         cmocka_unit_test(test_the_first_isolation_is_latched),
+        cmocka_unit_test(test_a_fault_without_steady_state_sensitivity_cannot_explain_a_settled_alarm),
     };
     return cmocka_run_group_tests(list, NULL, NULL);
 }
