@@ -24,6 +24,9 @@ def test_trace_is_the_suite_case_and_names_blind_alarms(tmp_path: Path, capsys: 
     j = case.fault_index
     det, _, outcome, _, _, _, pre = evaluate_case(case.results, case.spec, case.spec.onset, case.table.iso_class[j])
     assert det and pre == 0
+    # a sensor fault leaves the vehicle as it was: the same motion as the fault-free drive, and a real one
+    assert case.motion[0] == case.motion[1]
+    assert case.motion[0][1] > 0.1 and case.motion[0][2] > 5.0
     lines = trace.events(case)
     assert lines and all(" s  " in ln for ln in lines)
     # every alarmed test in the listing is marked blind exactly when its signature lacks f4
@@ -37,6 +40,14 @@ def test_trace_is_the_suite_case_and_names_blind_alarms(tmp_path: Path, capsys: 
     assert code == 0
     assert (tmp_path / "trace-f4-cornering-2001.png").stat().st_size > 10_000
     assert "expected class {f4}" in capsys.readouterr().out
+
+
+def test_trace_reports_how_an_actuator_fault_moves_the_vehicle() -> None:
+    # a steering offset under the straight drive's braking yaws the vehicle; the fault-free drive does not
+    case = trace.trace_case("romo", "f6", "straight", 2001)
+    (vy, yaw, _), (vy0, yaw0, _) = case.motion
+    assert yaw > 10 * max(yaw0, 1e-3) and vy > vy0
+    assert "largest |yaw rate|" in trace.report(case)
 
 
 def test_trace_cli_reports_a_bad_case(capsys: pytest.CaptureFixture[str]) -> None:

@@ -9,9 +9,12 @@ each test's normalised ratio |r| / (gate sigma) over time, blind tests dashed, w
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
 
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.can.traffic import build_frames
@@ -23,6 +26,7 @@ from fdi_host.sim.scenario import SCENARIOS, load_scenario
 from fdi_host.sim.vehicle_sim import faulty_drive, simulate
 
 AFTER_ONSET_S = 4.0  # how long after the onset the trace looks
+FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
@@ -32,6 +36,9 @@ class CaseTrace:
     scenario: str
     seed: int
     results: tuple[EcuResult, ...]
+    # the vehicle after the onset (true states of the simulator), faulty and fault-free: largest |vy| [m/s],
+    # largest |psidot| [rad/s], smallest vx [m/s]; a fault that makes the vehicle spin leaves every model's domain
+    motion: tuple[tuple[float, float, float], tuple[float, float, float]] = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
 
     @property
     def fault_index(self) -> int:
@@ -62,10 +69,17 @@ def trace_case(table: str, fault: str, scenario: str, seed: int, multiplier: flo
     base = simulate(load_scenario(scenario), [], seed=seed)
     onset = round(cfg.onset_fraction * float(base.t[-1]), 3)
     spec = FaultSpec(fault, onset, size * multiplier)
-    frames = build_frames(faulty_drive(base, spec), RomoDatabase())
+    drive = faulty_drive(base, spec)
+    frames = build_frames(drive, RomoDatabase())
     res = replay(table, frames, t_start=max(0.0, onset - cfg.pre_onset_s))
     kept = tuple(r for r in res if r.t_us * 1e-6 <= onset + AFTER_ONSET_S)
-    return CaseTrace(info, spec, scenario, seed, kept)
+    window = (drive.t >= onset) & (drive.t <= onset + AFTER_ONSET_S)
+
+    def motion(true: Mapping[str, FloatArray]) -> tuple[float, float, float]:
+        return (float(np.max(np.abs(true["vy"][window]))), float(np.max(np.abs(true["psidot"][window]))),
+                float(np.min(true["vx"][window])))
+
+    return CaseTrace(info, spec, scenario, seed, kept, (motion(drive.true), motion(base.true)))
 
 
 def _short(name: str) -> str:
@@ -99,7 +113,10 @@ def report(trace: CaseTrace) -> str:
             f"seed {trace.seed}, onset {trace.spec.onset:g} s, table {trace.table.name}; expected class "
             f"{{{', '.join(trace.table.fault_labels(trace.table.iso_class[j]))}}}")
     blind = [_short(n) for i, n in enumerate(trace.table.test_names) if trace.blind(i)]
-    return "\n".join([head, f"tests blind to {trace.spec.fault}: {', '.join(blind) or '-'}",
+    (vy, r, vx), (vy0, r0, vx0) = trace.motion
+    motion = (f"vehicle within {AFTER_ONSET_S:g} s of the onset (fault-free drive in brackets): largest |vy| {vy:.2f} "
+              f"({vy0:.2f}) m/s, largest |yaw rate| {r:.2f} ({r0:.2f}) rad/s, smallest vx {vx:.2f} ({vx0:.2f}) m/s")
+    return "\n".join([head, motion, f"tests blind to {trace.spec.fault}: {', '.join(blind) or '-'}",
                       "time after onset, state, candidates, alarmed tests with their ratio |r| / (gate sigma):",
                       *events(trace)])
 
