@@ -23,7 +23,8 @@ fi
 .venv/bin/fdi-analyze practical analysis/models/romo_grouped.toml --screening analysis/models/romo_screening.json.gz \
   --thresholds analysis/models/romo_thresholds.toml -o out/practical
 # analysis/models/romo_thresholds.toml [generated]  <- fault-free simulated drives, their CAN frames as the ECU's
-#   steps see them (fdi_host.can.ecu_view), through the generators (~1.5 min; checked by test_calibration_current.py)
+#   steps see them (fdi_host.can.ecu_view), through the generators (12 noise seeds per scenario, ~3 min; checked by
+#   test_calibration_current.py)
 .venv/bin/fdi-tune calibrate analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml
 # host_tools/scenarios/fault_sizes.toml [per_test.*]  <- step-fault sweep through the generators in cornering, the
 # pairs it leaves without a size in the other scenarios [per_test_scenario.*] (~25 min; only with FDI_SWEEP_SIZES=1;

@@ -1,7 +1,7 @@
 """The calibrated sigmas of the generated residuals (analysis/models/romo_thresholds.toml [generated]) are
 reproducible and up to date: `fdi-tune calibrate --check` recomputes them (in another process, on another
 floating-point path) from the fault-free drives as the
-ECU sees them and finds the committed table equal (~1.5 min); a stale table is reported and left untouched."""
+ECU sees them and finds the committed table equal (~3 min); a stale table is reported and left untouched."""
 
 from __future__ import annotations
 
