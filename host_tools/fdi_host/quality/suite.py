@@ -42,7 +42,7 @@ from fdi_host.ecu.bindings import EcuResult, TableInfo, table_info
 from fdi_host.ecu.offline import replay
 from fdi_host.sim.faults import FAULT_IDS, FaultSpec
 from fdi_host.sim.scenario import FAULT_SIZES_FILE, SCENARIOS, load_scenario
-from fdi_host.sim.vehicle_sim import faulty_drive, simulate
+from fdi_host.sim.vehicle_sim import SimResult, faulty_drive, simulate
 
 DEFAULT_SIZES = FAULT_SIZES_FILE
 DELAY_GOAL_S = 0.3  # detection within 300 ms of the onset
@@ -217,6 +217,16 @@ def fault_cases(cfg: SuiteConfig, table: TableInfo, sizes: dict[str, float]) -> 
     return run, skipped
 
 
+def case_onset(cfg: SuiteConfig, base: SimResult) -> float:
+    """The fault onset of a case on the fault-free drive `base`."""
+    return round(cfg.onset_fraction * float(base.t[-1]), 3)
+
+
+def replay_case(cfg: SuiteConfig, drive: SimResult, onset: float, db: RomoDatabase) -> list[EcuResult]:
+    """The ECU's steps of one case's faulty drive, replayed from pre_onset_s before the fault onset."""
+    return replay(cfg.table, build_frames(drive, db), t_start=max(0.0, onset - cfg.pre_onset_s))
+
+
 def run_suite(cfg: SuiteConfig, progress: Callable[[str], None] | None = None) -> SuiteResult:
     """Run every case and the fault-free drives of `cfg`; `progress(text)` after each unit of work."""
     table = table_info(cfg.table)
@@ -228,8 +238,7 @@ def run_suite(cfg: SuiteConfig, progress: Callable[[str], None] | None = None) -
         scen = load_scenario(scen_name)
         for seed in cfg.seeds:
             base = simulate(scen, [], seed=seed)
-            duration = float(base.t[-1])
-            onset = round(cfg.onset_fraction * duration, 3)
+            onset = case_onset(cfg, base)
             for fid in faults:
                 j = FAULT_IDS.index(fid)
                 for shape in cfg.shapes:
@@ -241,8 +250,7 @@ def run_suite(cfg: SuiteConfig, progress: Callable[[str], None] | None = None) -
                         else:
                             spec = FaultSpec(fid, onset, mag, shape="ramp", ramp=cfg.ramp_s)
                             t_ref = onset + cfg.ramp_s / mult  # the ramp reaches the required size
-                        frames = build_frames(faulty_drive(base, spec), db)
-                        res = replay(cfg.table, frames, t_start=max(0.0, onset - cfg.pre_onset_s))
+                        res = replay_case(cfg, faulty_drive(base, spec), onset, db)
                         det, delay, outcome, iso_delay, share, final, pre = evaluate_case(
                             res, spec, t_ref, table.iso_class[j])
                         result.cases.append(CaseResult(

@@ -17,10 +17,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fdi_host.can.dbc import RomoDatabase
-from fdi_host.can.traffic import build_frames
 from fdi_host.ecu.bindings import EcuResult, TableInfo, table_info
-from fdi_host.ecu.offline import replay
-from fdi_host.quality.suite import QualityError, SuiteConfig, load_fault_sizes
+from fdi_host.quality.suite import QualityError, SuiteConfig, case_onset, load_fault_sizes, replay_case
 from fdi_host.sim.faults import FAULT_IDS, FaultSpec
 from fdi_host.sim.scenario import SCENARIOS, load_scenario
 from fdi_host.sim.vehicle_sim import faulty_drive, simulate
@@ -67,11 +65,10 @@ def trace_case(table: str, fault: str, scenario: str, seed: int, multiplier: flo
     if size is None:
         raise QualityError(f"no required size for {fault} in {cfg.sizes_file} [requirement]")
     base = simulate(load_scenario(scenario), [], seed=seed)
-    onset = round(cfg.onset_fraction * float(base.t[-1]), 3)
+    onset = case_onset(cfg, base)
     spec = FaultSpec(fault, onset, size * multiplier)
     drive = faulty_drive(base, spec)
-    frames = build_frames(drive, RomoDatabase())
-    res = replay(table, frames, t_start=max(0.0, onset - cfg.pre_onset_s))
+    res = replay_case(cfg, drive, onset, RomoDatabase())
     kept = tuple(r for r in res if r.t_us * 1e-6 <= onset + AFTER_ONSET_S)
     window = (drive.t >= onset) & (drive.t <= onset + AFTER_ONSET_S)
 
