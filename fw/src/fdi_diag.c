@@ -587,10 +587,10 @@ static float test_sigma(const fdi_diag_t *self, uint32_t i)
 }
 
 /* Test i is in alarm and has been for its response time: once its residual has settled, its average and its fresh
-   sensitivities bound the size of each undecided fault of its sens_mask from below; the episode keeps the largest
-   bound (see fdi_diag.h). A fault of its signature without a sensitivity (while the generator lists some) cannot
-   explain a settled residual at all: its bound is UNBOUNDED_SIZE. */
-static void raise_implied(fdi_diag_t *self, uint32_t i, uint32_t undecided)
+   sensitivities (when `fresh`) bound the size of each undecided fault of its sens_mask from below; the episode keeps
+   the largest bound (see fdi_diag.h). A fault of its signature without a sensitivity (while the generator lists
+   some) cannot explain a settled residual at all: its bound is UNBOUNDED_SIZE, with or without fresh sensitivities. */
+static void raise_implied(fdi_diag_t *self, uint32_t i, uint32_t undecided, bool fresh)
 {
     const fdi_gen_desc_t *g = self->table->tests[i].gen;
     const float sigma = test_sigma(self, i);
@@ -601,25 +601,28 @@ static void raise_implied(fdi_diag_t *self, uint32_t i, uint32_t undecided)
                          (fabsf(r - slow) <= ((SETTLE_REL * fabsf(slow)) + (SETTLE_NOISE_SIGMA * sigma)));
     const float least = fminf(fabsf(r), fabsf(fast));
     const float excess = least - (self->noise_allowance * sigma);
-    if ((g != NULL) && settled && (excess > 0.0f))
+    if ((g != NULL) && (g->sens_mask != 0U) && settled && (excess > 0.0f))
     {
+        const uint32_t unexplained = self->table->tests[i].fault_mask & ~g->sens_mask & undecided;
         uint32_t k;
-        for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
+        if (fresh)
         {
-            const uint32_t j = (uint32_t)self->sens_fault[k];
-            const float s = fabsf(self->sens[k]);
-            if (((undecided & ((uint32_t)1U << j)) != 0U) && (s > 0.0f))
+            for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
             {
-                const float f = excess / s;
-                if (fdi_float_is_finite(f) && (f > self->implied[j]))
+                const uint32_t j = (uint32_t)self->sens_fault[k];
+                const float s = fabsf(self->sens[k]);
+                if (((undecided & ((uint32_t)1U << j)) != 0U) && (s > 0.0f))
                 {
-                    self->implied[j] = f;
+                    const float f = excess / s;
+                    if (fdi_float_is_finite(f) && (f > self->implied[j]))
+                    {
+                        self->implied[j] = f;
+                    }
                 }
             }
         }
-        if (g->sens_mask != 0U)
+        if (unexplained != 0U)
         {
-            const uint32_t unexplained = self->table->tests[i].fault_mask & ~g->sens_mask & undecided;
             for (k = 0U; k < (uint32_t)self->n_faults; ++k)
             {
                 if ((unexplained & ((uint32_t)1U << k)) != 0U)
@@ -735,9 +738,9 @@ static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
     {
         const uint32_t bit = (uint32_t)1U << i;
         const uint32_t resp = (uint32_t)self->table->tests[i].response_steps + (uint32_t)self->set_count;
-        if (((self->fresh & alarm & bit) != 0U) && ((uint32_t)self->alarm_run[i] >= resp))
+        if (((alarm & bit) != 0U) && ((uint32_t)self->alarm_run[i] >= resp))
         {
-            raise_implied(self, i, undecided);
+            raise_implied(self, i, undecided, (self->fresh & bit) != 0U);
         }
         if (((self->accused & bit) == 0U) && ((uint32_t)self->quiet_run[i] >= resp) &&
             ((uint32_t)self->episode_age >= resp))
