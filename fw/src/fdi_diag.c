@@ -855,6 +855,9 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
         uint32_t usable = fdi_frame_finite_mask(frame, validity & self->signals);
         const bool episode = (self->mode == FDI_ISO_EXONERATION) && (self->accused != 0U);
         const uint32_t undecided = episode ? self->undecided : 0U;
+        fdi_gen_domain_fn_t domain_fn = NULL;
+        bool domain_ok = false;
+        bool have_domain = false;
         uint32_t want = 0U;
         uint32_t run = 0U;
         uint32_t alarm = 0U;
@@ -872,8 +875,21 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
         {
             const fdi_test_desc_t *d = &self->table->tests[i];
             const uint32_t bit = (uint32_t)1U << i;
+            bool in_domain = false;
             r[i] = 0.0f;
-            if ((d->gen == NULL) || ((usable & d->input_mask) != d->input_mask) || !fdi_gen_in_domain(d->gen, frame))
+            if ((d->gen != NULL) && ((usable & d->input_mask) == d->input_mask))
+            {
+                /* a domain function shared with the test before (generated tables give every distinct condition
+                   one function) is evaluated once per step: it reads only the frame */
+                if (!have_domain || (d->gen->in_domain != domain_fn))
+                {
+                    domain_fn = d->gen->in_domain;
+                    domain_ok = fdi_gen_in_domain(d->gen, frame);
+                    have_domain = true;
+                }
+                in_domain = domain_ok;
+            }
+            if (!in_domain)
             {
                 if ((self->rearm & bit) == 0U)
                 {

@@ -538,14 +538,21 @@ def render(f: GeneratorsFile) -> tuple[str, str]:
                                    count=len(f.slots), n_bank=len(f.bank), max_sens=max(len(c.sens_faults)
                                                                                         for c in f.slots),
                                    n_sens=sum(len(c.sens_faults) for c in f.slots))
+    # one domain function per distinct condition (the diagnoser evaluates a function shared by consecutive tests
+    # once per step, fdi_diag.c), named after the first slot that has it
+    first: dict[str, SlotCode] = {}
+    for c in f.slots:
+        if c.domain_condition:
+            first.setdefault(c.domain_condition, c)
     descriptors = "\n".join(DESCRIPTOR_FMT.substitute(
-        name=c.name, domain=f"{n.vehicle}_gen_{c.slot + 1}_in_domain" if c.domain_condition else "NULL",
+        name=c.name,
+        domain=f"{n.vehicle}_gen_{first[c.domain_condition].slot + 1}_in_domain" if c.domain_condition else "NULL",
         inputs=c.inputs, sens_mask=f"{c.sens_mask:08X}", n_obs=c.n_obs, set=n.gen_set, slot=c.slot,
         sens_note=("sensitivities " + " ".join(c.sens_faults)) if c.sens_faults else "no sensitivities")
         for c in f.slots)
-    domains = "".join(DOMAIN_FMT.substitute(name=c.name, note=comment_text(c.domain_note),
-                                            function=f"{n.vehicle}_gen_{c.slot + 1}", condition=c.domain_condition)
-                      + "\n" for c in f.slots if c.domain_condition)
+    domains = "".join(DOMAIN_FMT.substitute(
+        name=", ".join(d.name for d in f.slots if d.domain_condition == cond), note=comment_text(c.domain_note),
+        function=f"{n.vehicle}_gen_{c.slot + 1}", condition=cond) + "\n" for cond, c in first.items())
     body = f.shared + "\n" + "\n".join(c.body for c in f.slots)
     source = SOURCE_FMT.substitute(banner=f.banner, base=n.generators, signals=n.signals, vehicle=n.vehicle,
                                    bank=_bank_text(f), domains=domains, count_macro=n.n_generators,

@@ -37,68 +37,8 @@ static const fdi_gen_bank_filter_t romo_bank[19] = {
     {ROMO_SIG_OMEGA4_M, FDI_GEN_BANK_RAW, 0U}, /* b[18]: omega4_m */
 };
 
-/* MSO12: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
+/* MSO12, MSO39, MSO49, MSO59, MSO1670, MSO1958, MSO2058, MSO2065, MSO2443, MSO3805, MSO4195: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
 static bool romo_gen_3_in_domain(const fdi_frame_t *in)
-{
-    return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
-}
-
-/* MSO39: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
-static bool romo_gen_4_in_domain(const fdi_frame_t *in)
-{
-    return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
-}
-
-/* MSO49: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
-static bool romo_gen_5_in_domain(const fdi_frame_t *in)
-{
-    return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
-}
-
-/* MSO59: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
-static bool romo_gen_6_in_domain(const fdi_frame_t *in)
-{
-    return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
-}
-
-/* MSO1670: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
-static bool romo_gen_7_in_domain(const fdi_frame_t *in)
-{
-    return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
-}
-
-/* MSO1958: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
-static bool romo_gen_8_in_domain(const fdi_frame_t *in)
-{
-    return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
-}
-
-/* MSO2058: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
-static bool romo_gen_9_in_domain(const fdi_frame_t *in)
-{
-    return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
-}
-
-/* MSO2065: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
-static bool romo_gen_10_in_domain(const fdi_frame_t *in)
-{
-    return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
-}
-
-/* MSO2443: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
-static bool romo_gen_11_in_domain(const fdi_frame_t *in)
-{
-    return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
-}
-
-/* MSO3805: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
-static bool romo_gen_12_in_domain(const fdi_frame_t *in)
-{
-    return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
-}
-
-/* MSO4195: |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law) */
-static bool romo_gen_13_in_domain(const fdi_frame_t *in)
 {
     return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
 }
@@ -115,25 +55,25 @@ const fdi_gen_desc_t fdi_romo_generators[FDI_ROMO_N_GENERATORS] = {
      FDI_GEN_SENS_MASK(0x0000000EU), 0U, 0U, &fdi_romo_gen_set, 1U}, /* sensitivities f2 f3 f4 */
     {"MSO12", NULL, romo_gen_3_in_domain, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M,
      FDI_GEN_SENS_MASK(0x0022223BU), 0U, 1U, &fdi_romo_gen_set, 2U}, /* sensitivities f1 f2 f4 f5 f6 f10 f14 f18 f22 */
-    {"MSO39", NULL, romo_gen_4_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M,
+    {"MSO39", NULL, romo_gen_3_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M,
      FDI_GEN_SENS_MASK(0x0022223CU), 0U, 0U, &fdi_romo_gen_set, 3U}, /* sensitivities f3 f4 f5 f6 f10 f14 f18 f22 */
-    {"MSO49", NULL, romo_gen_5_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M,
+    {"MSO49", NULL, romo_gen_3_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M,
      FDI_GEN_SENS_MASK(0x0044445CU), 0U, 0U, &fdi_romo_gen_set, 4U}, /* sensitivities f3 f4 f5 f7 f11 f15 f19 f23 */
-    {"MSO59", NULL, romo_gen_6_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA3_M,
+    {"MSO59", NULL, romo_gen_3_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA3_M,
      FDI_GEN_SENS_MASK(0x0088889CU), 0U, 0U, &fdi_romo_gen_set, 5U}, /* sensitivities f3 f4 f5 f8 f12 f16 f20 f24 */
-    {"MSO1670", NULL, romo_gen_7_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M | ROMO_SIGM_OMEGA4_M,
+    {"MSO1670", NULL, romo_gen_3_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M | ROMO_SIGM_OMEGA4_M,
      FDI_GEN_SENS_MASK(0x01DF77FEU), 0U, 1U, &fdi_romo_gen_set, 6U}, /* sensitivities f2 f3 f4 f5 f6 f7 f8 f9 f10 f11 f13 f14 f15 f17 f18 f19 f20 f21 f23 f24 f25 */
-    {"MSO1958", NULL, romo_gen_8_in_domain, ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M,
+    {"MSO1958", NULL, romo_gen_3_in_domain, ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M,
      FDI_GEN_SENS_MASK(0x0077117DU), 0U, 1U, &fdi_romo_gen_set, 7U}, /* sensitivities f1 f3 f4 f5 f6 f7 f9 f13 f17 f18 f19 f21 f22 f23 */
-    {"MSO2058", NULL, romo_gen_9_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA3_M,
+    {"MSO2058", NULL, romo_gen_3_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA3_M,
      FDI_GEN_SENS_MASK(0x00AE44FCU), 0U, 1U, &fdi_romo_gen_set, 8U}, /* sensitivities f3 f4 f5 f6 f7 f8 f11 f15 f18 f19 f20 f22 f24 */
-    {"MSO2065", NULL, romo_gen_10_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA3_M,
+    {"MSO2065", NULL, romo_gen_3_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA3_M,
      FDI_GEN_SENS_MASK(0x00BB11BEU), 0U, 1U, &fdi_romo_gen_set, 9U}, /* sensitivities f2 f3 f4 f5 f6 f8 f9 f13 f17 f18 f20 f21 f22 f24 */
-    {"MSO2443", NULL, romo_gen_11_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA4_M,
+    {"MSO2443", NULL, romo_gen_3_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA4_M,
      FDI_GEN_SENS_MASK(0x015C89DCU), 0U, 1U, &fdi_romo_gen_set, 10U}, /* sensitivities f3 f4 f5 f7 f8 f9 f12 f16 f19 f20 f21 f23 f25 */
-    {"MSO3805", NULL, romo_gen_12_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA4_M,
+    {"MSO3805", NULL, romo_gen_3_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA4_M,
      FDI_GEN_SENS_MASK(0x0156677CU), 0U, 1U, &fdi_romo_gen_set, 11U}, /* sensitivities f3 f4 f5 f6 f7 f9 f10 f11 f14 f15 f18 f19 f21 f23 f25 */
-    {"MSO4195", NULL, romo_gen_13_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M | ROMO_SIGM_OMEGA4_M,
+    {"MSO4195", NULL, romo_gen_3_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M | ROMO_SIGM_OMEGA4_M,
      FDI_GEN_SENS_MASK(0x01DD55CEU), 0U, 1U, &fdi_romo_gen_set, 12U}, /* sensitivities f2 f3 f4 f7 f8 f9 f11 f13 f15 f17 f19 f20 f21 f23 f24 f25 */
 };
 
