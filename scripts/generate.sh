@@ -13,7 +13,8 @@ cd "$top"
 romo=fw/vehicles/romo/generated
 tank=fw/vehicles/three_tank/generated
 # analysis/models/romo_screening.json.gz  <- every realizable candidate's fault-to-noise ratio at the required fault
-#   sizes along the fault-free drives (~30 min on 2 workers; only with FDI_SCREEN=1)
+#   sizes along the fault-free drives, sigmas over the calibration's noise seeds (~22 min on 2 workers; only with
+#   FDI_SCREEN=1; tests/analysis/test_screening_current.py checks that its criterion is this code's)
 if [ "${FDI_SCREEN:-0}" = 1 ]; then
   .venv/bin/fdi-tune screen analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \
     --sizes host_tools/scenarios/fault_sizes.toml --out analysis/models/romo_screening.json.gz

@@ -42,8 +42,12 @@
  *     offset in a_x = d vx / dt - psidot vy): no size of j explains the settled alarm, F_j is unbounded and any
  *     settled quiet test with a nonzero sensitivity to j clears it. A settled quiet test q
  *     clears j when |s_qj| F_j >= sensitivity_margin * gate_q * sigma_q: at that size it would have crossed its
- *     gate with margin. The decision is re-made at every step (operating points change); j leaves the
- *     candidates once the rule has cleared it for 0.1 s in a row;
+ *     gate with margin. Several settled quiet tests clear j together where none does alone: with the
+ *     sensitivities taken sensitivity_margin times smaller, test q would show a response its residual lacks by
+ *     d_q = (|s_qj| F_j / sensitivity_margin - max(|r_q|, |0.1 s average|)) / (gate_q sigma_q) gates, and j is
+ *     cleared when the positive d_q reach 1 in the sum of their squares (for one test with a zero residual
+ *     this is the single-test rule). The decision is re-made at every step (operating points change); j leaves
+ *     the candidates once the rule has cleared it for 0.1 s in a row;
  *   - by the reaction sizes (test_size) for the pairs without an on-line sensitivity (fdi_iso_size_cleared).
  * The first class isolated in an episode is latched: exoneration no longer removes its faults (the on-line
  * rule is a linearisation: a later operating point may make a quiet test look as if it should have seen the
@@ -66,8 +70,9 @@
  *
  * Cost per step: the bank (~20 flops per filter) + the set's step (the shared terms once, each evaluated test's own
  * terms, the sensitivities the on-line rule reads during an episode, all of them with cfg->sensitivities) + the
- * hand-written generators + ~25 operations per test for evaluation + n_faults iterations of isolation + the
- * finiteness of the signals (fdi_frame_finite_mask). Measured by
+ * hand-written generators + ~25 operations per test for evaluation + n_faults iterations of isolation (during an
+ * episode, ~5 more per sensitivity of a settled quiet test for the joint rule) + the finiteness of the signals
+ * (fdi_frame_finite_mask). Measured by
  * scripts/bench_fw.sh (instructions per step of the vehicle tables it benchmarks over a simulated drive on x86-64
  * with callgrind and on Cortex-M4F under qemu -icount: fault-free, in an episode, largest step).
  * Memory: sizeof(fdi_diag_t) ~ 152 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28) +

@@ -37,6 +37,8 @@
    only through a filtered derivative, fdi_gen.h), so no size of it explains a settled residual. Finite, so that
    |s| * size stays a number (it may round to +Inf, which compares as intended). */
 #define UNBOUNDED_SIZE 1.0e30f
+/* largest missing response (in gates) one quiet test adds to the joint rule: finite squares for unbounded sizes */
+#define JOINT_LACK_CAP 1.0e3f
 
 /* Settling time of the design point in steps (see fdi_diag.h); 0 if it is not representable. */
 static uint32_t settle_steps(const fdi_table_design_t *d)
@@ -657,6 +659,51 @@ static uint32_t quiet_clears(const fdi_diag_t *self, uint32_t i, uint32_t undeci
     return out;
 }
 
+/* The undecided faults of `faults` that the settled quiet tests of `settled` clear together (see fdi_diag.h): at
+   the implied size F_j, with its sensitivity taken margin times smaller, quiet test q would show a response its
+   residual lacks by d_q = (|s_qj| F_j / margin - max(|r_q|, |0.1 s average|)) / (gate_q sigma_q); j is cleared
+   when the d_q > 0 reach 1 in the sum of their squares (together the tests miss a response worth a gate). */
+static uint32_t joint_clears(const fdi_diag_t *self, uint32_t settled, uint32_t faults)
+{
+    float missing[FDI_TABLE_MAX_FAULTS];
+    const float per_margin = 1.0f / self->table->sensitivity_margin;
+    uint32_t out = 0U;
+    uint32_t i;
+    for (i = 0U; i < (uint32_t)self->n_faults; ++i)
+    {
+        missing[i] = 0.0f;
+    }
+    for (i = 0U; (faults != 0U) && (i < (uint32_t)self->n_tests); ++i)
+    {
+        const fdi_test_desc_t *d = &self->table->tests[i];
+        if (((settled & ((uint32_t)1U << i)) != 0U) && (d->gen != NULL) && ((d->gen->sens_mask & faults) != 0U))
+        {
+            const float per_gate = 1.0f / (d->gate * test_sigma(self, i));
+            const float seen = fmaxf(fabsf(self->residual[i]), fabsf(self->r_fast[i]));
+            uint32_t k;
+            for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
+            {
+                const uint32_t j = (uint32_t)self->sens_fault[k];
+                if ((faults & ((uint32_t)1U << j)) != 0U)
+                {
+                    /* capped: an unbounded implied size stays finite here */
+                    const float expect = fabsf(self->sens[k]) * self->implied[j] * per_margin;
+                    const float lack = fminf(JOINT_LACK_CAP, (expect - seen) * per_gate);
+                    if (lack > 0.0f)
+                    {
+                        missing[j] += lack * lack;
+                    }
+                }
+            }
+        }
+    }
+    for (i = 0U; i < (uint32_t)self->n_faults; ++i)
+    {
+        out |= (missing[i] >= 1.0f) ? ((uint32_t)1U << i) : 0U;
+    }
+    return out & faults;
+}
+
 /* The residuals' averages over SETTLE_FAST_S and SETTLE_SLOW_S (restarted when a test becomes evaluable again). */
 static void track_residuals(fdi_diag_t *self, uint32_t evaluable, uint32_t before)
 {
@@ -765,6 +812,7 @@ static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
         }
         online |= self->clears[i];
     }
+    online |= joint_clears(self, settled, undecided & ~online);
     for (i = 0U; i < (uint32_t)self->n_faults; ++i)
     {
         const uint32_t fbit = (uint32_t)1U << i;

@@ -101,10 +101,11 @@ def test_screening_file_round_trip(tmp_path) -> None:  # type: ignore[no-untyped
                          {"f1": FaultScreen({"a": 0.9, "b": 0.1}, {"a": 12.0, "b": 3.0}),
                           "f2": FaultScreen({"a": 0.0, "b": 0.85}, {"a": 0.1, "b": 9.0})})
     c2 = CandidateScreen("MSO9", "A D", (), float("nan"), 0.0, 0, {}, "observer diverges")
-    scr = Screening("m", "cmd", 5.0, 1.5, 0.8, {"f1": 1.0, "f2": 2.0}, ("a", "b"), (c1, c2))
+    scr = Screening("m", "cmd", 5.0, 1.5, 0.8, {"f1": 1.0, "f2": 2.0}, ("a", "b"), (c1, c2), 0.3, (1001, 1002))
     path = tmp_path / "s.json"
     scr.dump(path)
     back = Screening.load(path)
+    assert (back.detect_s, back.seeds) == (0.3, (1001, 1002))
     assert back.candidates[0] == c1 and back.candidates[1].rejected == "observer diverges"
     pc = back.practical_candidates()
     assert len(pc) == 1 and pc[0].detects == frozenset({("f1", "a"), ("f2", "b")})

@@ -10,7 +10,8 @@
  * b >= (R - 3) / |d r0 / d b| (noise allowance 3 sigma), and test 1 clears b when |d r1 / d b| times that size
  * reaches 1.5 * 5 = 7.5 for 10 steps (0.1 s) in a row. Test 2 stays quiet and weak (d r2 / d a = 0.1) unless a
  * case says otherwise. In table_zero_b, test 0's generator lists d r0 / d a only: b is in its signature with a
- * steady-state sensitivity of exactly zero (as a fault that enters through a filtered derivative).
+ * steady-state sensitivity of exactly zero (as a fault that enters through a filtered derivative). In
+ * table_two_quiet, test 2 sees b instead of a (d r2 / d b = frame[6]): two quiet tests that may clear b together.
  */
 #include <math.h>
 #include <setjmp.h>
@@ -123,9 +124,21 @@ static const fdi_table_t table_zero_b = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f,
 static const fdi_table_t table_no_sens = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f, 0.7071f, 2.0f}, 7U, 2U, 3U,
                                           signal_names, fault_names, tests_no_sens, signature, iso_class, test_size,
                                           2.0f, 1.5f};
+/* table_two_quiet: test 2 sees b instead of a (r2 = frame[5], d r2 / d b = frame[6]): two quiet tests of b */
+static const fdi_gen_desc_t gen2b = {"t2b", gen2_step, NULL, 0x60U, 0x2U, 0U, 0U, NULL, 0U};
+static const fdi_test_desc_t tests_two_quiet[3] = {
+    {&gen0, "t0", 1U, 0x3U, 0x07U, 5.0f, 1.0f, RESP},
+    {&gen1, "t1", 2U, 0x2U, 0x18U, 5.0f, 1.0f, RESP},
+    {&gen2b, "t2", 3U, 0x2U, 0x60U, 5.0f, 1.0f, RESP},
+};
+static const uint32_t signature_two_quiet[2] = {0x1U, 0x7U};
+static const fdi_table_t table_two_quiet = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f, 0.7071f, 2.0f}, 7U, 2U, 3U,
+                                            signal_names, fault_names, tests_two_quiet, signature_two_quiet,
+                                            iso_class, test_size, 2.0f, 1.5f};
 static const fdi_table_t *active = &table; /* the table init() uses */
 static float s2a = 0.1f; /* test 2's sensitivity to a (weak unless a case raises it) */
 static float r1_now = 0.0f; /* test 1's residual (quiet unless a case raises it) */
+static float r2_now = 0.0f; /* test 2's residual */
 
 static void init(fdi_diag_t *d, fdi_iso_mode_t mode)
 {
@@ -155,7 +168,7 @@ static uint32_t run(fdi_diag_t *d, uint32_t steps, float r0, float s0a, float s0
     in.value[2] = s0b;
     in.value[3] = r1 + r1_now;
     in.value[4] = s1b;
-    in.value[5] = 0.0f;
+    in.value[5] = r2_now;
     in.value[6] = s2a;
     for (k = 0U; k < steps; ++k)
     {
@@ -170,6 +183,7 @@ static void warm(fdi_diag_t *d, fdi_iso_mode_t mode)
 {
     s2a = 0.1f;
     r1_now = 0.0f;
+    r2_now = 0.0f;
     init(d, mode);
     assert_int_equal(run(d, 400U, 0.0f, 1.0f, 1.0f, 0.0f, 1.0f), 0U);
 }
@@ -307,6 +321,30 @@ static void test_the_first_isolation_is_latched(void **state)
     assert_int_equal(run(&d, 200U, 9.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0x3U); /* a new one starts afresh */
 }
 
+static void test_quiet_tests_clear_together_what_each_misses(void **state)
+{
+    fdi_diag_t d;
+    (void)state;
+    active = &table_two_quiet;
+    /* b implied >= 17; tests 1 and 2 with |d r / d b| = 0.35 would show 0.35 * 17 = 5.95 < 7.5 each: neither
+       clears b alone; together, at 17 / 1.5 each lacks (5.95 / 1.5) / 5 = 0.79 gates, 0.63 + 0.63 >= 1: {a} */
+    warm(&d, FDI_ISO_EXONERATION);
+    s2a = 0.35f;
+    assert_int_equal(run(&d, 100U, 20.0f, 1.0f, 1.0f, 0.0f, 0.35f), 0x1U);
+    /* one of them alone (test 2 blind to b now): 0.63 < 1, b stays */
+    warm(&d, FDI_ISO_EXONERATION);
+    s2a = 0.0f;
+    assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 0.35f), 0x3U);
+    /* both, but their residuals (quiet, at 1 sigma) already show part of the response: each lacks
+       (3.97 - 1) / 5 = 0.59 gates, 0.35 + 0.35 < 1: b stays */
+    warm(&d, FDI_ISO_EXONERATION);
+    s2a = 0.35f;
+    r1_now = 1.0f;
+    r2_now = 1.0f;
+    assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 0.35f), 0x3U);
+    active = &table;
+}
+
 int main(void)
 {
     const struct CMUnitTest list[] = {
@@ -318,6 +356,7 @@ int main(void)
         cmocka_unit_test(test_a_weak_spell_resets_the_confirmation),
         cmocka_unit_test(test_the_first_isolation_is_latched),
         cmocka_unit_test(test_a_fault_without_steady_state_sensitivity_cannot_explain_a_settled_alarm),
+        cmocka_unit_test(test_quiet_tests_clear_together_what_each_misses),
     };
     return cmocka_run_group_tests(list, NULL, NULL);
 }

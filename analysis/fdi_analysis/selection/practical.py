@@ -40,6 +40,10 @@ SHARE = 0.8  # ... at this share of a manoeuvre's operating points
 DETECT_S = 0.27
 
 
+class ScreeningError(ValueError):
+    """A screening file that this code cannot use (malformed, or made by a screening with another criterion)."""
+
+
 @dataclass(frozen=True)
 class FaultScreen:
     """One fault of a candidate's signature: per scenario the share of operating points where the test
@@ -79,6 +83,8 @@ class Screening:
     sizes: dict[str, float]
     scenarios: tuple[str, ...]
     candidates: tuple[CandidateScreen, ...]
+    detect_s: float = DETECT_S  # the slow-generator margin's detection time (see DETECT_S)
+    seeds: tuple[int, ...] = ()  # noise seeds of the sigma drives besides each scenario's own
 
     def dump(self, path: Path) -> None:
         """Write as JSON, gzip-compressed (no time stamp) when the name ends in .gz."""
@@ -95,6 +101,10 @@ class Screening:
     def load(path: Path) -> Screening:
         raw = path.read_bytes()
         doc = json.loads(gzip.decompress(raw) if path.suffix == ".gz" else raw)
+        missing = [k for k in ("detect_s", "seeds") if k not in doc]
+        if missing:
+            raise ScreeningError(f"{path}: no {' and no '.join(missing)}: made by an older `fdi-tune screen` whose "
+                                 "criterion differs from this code's; rerun it (FDI_SCREEN=1 scripts/generate.sh)")
         cands = tuple(
             CandidateScreen(c["label"], c["equations"], tuple(c["faults"]),
                             float(c["sigma"]) if c["sigma"] is not None else math.nan, float(c["min_speed"]),
@@ -104,7 +114,7 @@ class Screening:
             for c in doc["candidates"])
         return Screening(doc["model"], doc["provenance"], float(doc["gate"]), float(doc["margin"]),
                          float(doc["share"]), {k: float(v) for k, v in doc["sizes"].items()},
-                         tuple(doc["scenarios"]), cands)
+                         tuple(doc["scenarios"]), cands, float(doc["detect_s"]), tuple(int(x) for x in doc["seeds"]))
 
     def practical_candidates(self) -> list[PracticalCandidate]:
         """The screened candidates (those with a generator) as the selection sees them."""

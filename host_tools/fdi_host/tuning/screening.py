@@ -291,7 +291,10 @@ def _work(chunk: Sequence[Candidate]) -> list[CandidateScreen]:
     assert setup is not None
     solver, solver_f = Solver(setup.model), Solver(setup.model, keep_faults=True)
     bank = NodeBank(setup.calibration, setup.design)
-    return [screen_candidate(setup, c, solver, solver_f, bank) for c in chunk]
+    # a candidate whose observer diverges on a drive gives overflows and NaNs on the way: they are handled (a
+    # non-finite effect counts as not detecting), and numpy's warnings about them would only bury the progress
+    with np.errstate(all="ignore"):
+        return [screen_candidate(setup, c, solver, solver_f, bank) for c in chunk]
 
 
 def screen(setup: ScreenSetup, candidates: Sequence[Candidate], workers: int = 2,

@@ -2,7 +2,7 @@
 without one.
 
 Some pairs of the structural signatures are nearly silent in steady cornering for physical reasons, not for
-noise: a torque fault of wheel 2 enters the body-balance test MSO2058 through the moment about wheel 4, where
+noise: a torque fault of wheel 2 enters a body-balance test through the moment about wheel 4, where
 the longitudinal force of wheel 2 has no lever arm; an accelerometer offset moves the computed tyre load, which
 changes a tyre force in proportion to the force itself, small at constant speed. Accelerating, braking and
 transient steering excite them. For such a pair each other scenario is driven whole with the fault as a step

@@ -8,23 +8,22 @@
  *   fdi_romo_generators[2]  MSO12: residual W1.FL; derivative causality for domega1; observer for vx (integrates D1, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 8 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
  *   fdi_romo_generators[3]  MSO39: residual W1.FL; derivative causality for dvx, dvy, domega1; 7 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
  *   fdi_romo_generators[4]  MSO49: residual W2.FL; derivative causality for dvx, dvy, domega2; 7 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- *   fdi_romo_generators[5]  MSO59: residual W3.FL; derivative causality for dvx, dvy, domega3; 7 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- *   fdi_romo_generators[6]  MSO1670: residual B1; derivative causality for dvx, domega2, domega4; observer for omega1 (integrates W1.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 16 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- *   fdi_romo_generators[7]  MSO1958: residual B1; derivative causality for dpsidot, dvy; observer for omega4 (integrates W4.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 11 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- *   fdi_romo_generators[8]  MSO2058: residual B1; derivative causality for dpsidot, dvx, dvy; observer for omega2 (integrates W2.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 10 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- *   fdi_romo_generators[9]  MSO2065: residual B1; derivative causality for dpsidot, dvx; observer for omega4 (integrates W4.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 11 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- *   fdi_romo_generators[10]  MSO2443: residual B1; derivative causality for dpsidot, dvx, dvy; observer for omega3 (integrates W3.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 10 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- *   fdi_romo_generators[11]  MSO3805: residual B1; derivative causality for dpsidot, dvx, dvy, domega2; observer for omega1 (integrates W1.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 11 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
- *   fdi_romo_generators[12]  MSO4195: residual B1; derivative causality for dpsidot, dvx, domega2, domega4; observer for vy (integrates D2, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 13 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
+ *   fdi_romo_generators[5]  MSO1379: residual B1; derivative causality for dvx, domega1, domega2; observer for omega3 (integrates W3.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 16 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
+ *   fdi_romo_generators[6]  MSO2137: residual B1; derivative causality for dpsidot, dvx, dvy; observer for omega4 (integrates W4.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 10 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
+ *   fdi_romo_generators[7]  MSO2142: residual B1; derivative causality for dpsidot, dvx; observer for omega1 (integrates W1.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 11 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
+ *   fdi_romo_generators[8]  MSO2374: residual B1; derivative causality for dpsidot; observer for omega3 (integrates W3.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 12 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
+ *   fdi_romo_generators[9]  MSO3146: residual B1; derivative causality for dpsidot, dvx, dvy, domega2; observer for omega4 (integrates W4.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 12 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
+ *   fdi_romo_generators[10]  MSO3480: residual B1; derivative causality for dpsidot, dvx, domega1, domega3; observer for vy (integrates D2, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 13 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
+ *   fdi_romo_generators[11]  MSO4785: residual B1; derivative causality for dpsidot, domega1, domega3; observer for omega2 (integrates W2.D, run-time gain -max(lambda + a, 0) c / (c^2 + eps), lambda = 12.6 1/s); 15 filters, level 1; domain |vx_m| >= 2 m/s (4 x v_eps = 0.5, the slip regularisation floor of the tyre law)
  */
 #ifndef FDI_ROMO_GENERATORS_H
 #define FDI_ROMO_GENERATORS_H
 
 #include "fdi_gen.h"
 
-/* 145 sensitivities in all (at most 21 per generator): a diagnoser listing them needs
-   FDI_DIAG_MAX_SENS >= 145 */
-#define FDI_ROMO_N_GENERATORS 13U
+/* 144 sensitivities in all (at most 21 per generator): a diagnoser listing them needs
+   FDI_DIAG_MAX_SENS >= 144 */
+#define FDI_ROMO_N_GENERATORS 12U
 
 extern const fdi_gen_set_t fdi_romo_gen_set;
 extern const fdi_gen_desc_t fdi_romo_generators[FDI_ROMO_N_GENERATORS];

@@ -34,7 +34,7 @@ static const char *const romo_fault_names[25] = {
     "f25 wheel speed sensor fault, wheel 4",
 };
 
-static const fdi_test_desc_t romo_tests[13] = {
+static const fdi_test_desc_t romo_tests[12] = {
     {.gen = &fdi_romo_generators[0], .interpretation = "kinematics; measured ax_m, psidot_m, vx_m, vy_m",
      .mso_id = 1U, .fault_mask = 0x0000001DU, .input_mask = ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
      .gate = 5.0f, .variance = 0.00117f, .response_steps = 43U},
@@ -50,59 +50,56 @@ static const fdi_test_desc_t romo_tests[13] = {
     {.gen = &fdi_romo_generators[4], .interpretation = "kinematics; wheel 2 (tyre, spin); measured psidot_m, vx_m, vy_m, delta2_m, iTM2_m, P_f_m, omega2_m",
      .mso_id = 49U, .fault_mask = 0x0044445CU, .input_mask = ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M,
      .gate = 5.0f, .variance = 5027.0f, .response_steps = 43U},
-    {.gen = &fdi_romo_generators[5], .interpretation = "kinematics; wheel 3 (tyre, spin); measured psidot_m, vx_m, vy_m, delta3_m, iTM3_m, P_r_m, omega3_m",
-     .mso_id = 59U, .fault_mask = 0x0088889CU, .input_mask = ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA3_M,
-     .gate = 5.0f, .variance = 5580.0f, .response_steps = 43U},
-    {.gen = &fdi_romo_generators[6], .interpretation = "body dynamics; kinematics; wheel 1 (tyre, spin); wheel 3 (tyre); wheel 2 (tyre, spin); wheel 4 (tyre, spin); measured ay_m, psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta3_m, delta4_m, iTM1_m, iTM2_m, iTM4_m, P_f_m, P_r_m, omega2_m, omega3_m, omega4_m",
-     .mso_id = 1670U, .fault_mask = 0x01DF77FEU, .input_mask = ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M | ROMO_SIGM_OMEGA4_M,
-     .gate = 5.0f, .variance = 2285.0f, .response_steps = 62U},
-    {.gen = &fdi_romo_generators[7], .interpretation = "body dynamics; kinematics; wheel 1 (tyre); wheel 2 (tyre); wheel 4 (tyre, spin); measured ax_m, psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta4_m, iTM4_m, P_r_m, omega1_m, omega2_m",
-     .mso_id = 1958U, .fault_mask = 0x0077117DU, .input_mask = ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M,
-     .gate = 5.0f, .variance = 24020.0f, .response_steps = 62U},
-    {.gen = &fdi_romo_generators[8], .interpretation = "body dynamics; kinematics; wheel 1 (tyre); wheel 2 (tyre, spin); wheel 3 (tyre); measured psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta3_m, iTM2_m, P_f_m, omega1_m, omega3_m",
-     .mso_id = 2058U, .fault_mask = 0x00AE44FCU, .input_mask = ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA3_M,
-     .gate = 5.0f, .variance = 80090.0f, .response_steps = 62U},
-    {.gen = &fdi_romo_generators[9], .interpretation = "body dynamics; kinematics; wheel 1 (tyre); wheel 3 (tyre); wheel 4 (tyre, spin); measured ay_m, psidot_m, vx_m, vy_m, delta1_m, delta3_m, delta4_m, iTM4_m, P_r_m, omega1_m, omega3_m",
-     .mso_id = 2065U, .fault_mask = 0x00BB11BEU, .input_mask = ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA3_M,
-     .gate = 5.0f, .variance = 62000.0f, .response_steps = 62U},
-    {.gen = &fdi_romo_generators[10], .interpretation = "body dynamics; kinematics; wheel 2 (tyre); wheel 3 (tyre, spin); wheel 4 (tyre); measured psidot_m, vx_m, vy_m, delta2_m, delta3_m, delta4_m, iTM3_m, P_r_m, omega2_m, omega4_m",
-     .mso_id = 2443U, .fault_mask = 0x015C89DCU, .input_mask = ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA4_M,
-     .gate = 5.0f, .variance = 75080.0f, .response_steps = 62U},
-    {.gen = &fdi_romo_generators[11], .interpretation = "body dynamics; kinematics; wheel 1 (tyre, spin); wheel 4 (tyre); wheel 2 (tyre, spin); measured psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta4_m, iTM1_m, iTM2_m, P_f_m, omega2_m, omega4_m",
-     .mso_id = 3805U, .fault_mask = 0x0156677CU, .input_mask = ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA4_M,
-     .gate = 5.0f, .variance = 46660.0f, .response_steps = 62U},
-    {.gen = &fdi_romo_generators[12], .interpretation = "body dynamics; kinematics; wheel 3 (tyre); wheel 2 (tyre, spin); wheel 4 (tyre, spin); measured ay_m, psidot_m, vx_m, delta2_m, delta3_m, delta4_m, iTM2_m, iTM4_m, P_f_m, P_r_m, omega2_m, omega3_m, omega4_m",
-     .mso_id = 4195U, .fault_mask = 0x01DD55CEU, .input_mask = ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M | ROMO_SIGM_OMEGA4_M,
-     .gate = 5.0f, .variance = 436.8f, .response_steps = 62U},
+    {.gen = &fdi_romo_generators[5], .interpretation = "body dynamics; kinematics; wheel 3 (tyre, spin); wheel 4 (tyre); wheel 1 (tyre, spin); wheel 2 (tyre, spin); measured ay_m, psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta3_m, delta4_m, iTM1_m, iTM2_m, iTM3_m, P_f_m, P_r_m, omega1_m, omega2_m, omega4_m",
+     .mso_id = 1379U, .fault_mask = 0x017EEFFEU, .input_mask = ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA4_M,
+     .gate = 5.0f, .variance = 3733.0f, .response_steps = 62U},
+    {.gen = &fdi_romo_generators[6], .interpretation = "body dynamics; kinematics; wheel 2 (tyre); wheel 3 (tyre); wheel 4 (tyre, spin); measured psidot_m, vx_m, vy_m, delta2_m, delta3_m, delta4_m, iTM4_m, P_r_m, omega2_m, omega3_m",
+     .mso_id = 2137U, .fault_mask = 0x00DD11DCU, .input_mask = ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M,
+     .gate = 5.0f, .variance = 28220.0f, .response_steps = 62U},
+    {.gen = &fdi_romo_generators[7], .interpretation = "body dynamics; kinematics; wheel 1 (tyre, spin); wheel 2 (tyre); wheel 3 (tyre); measured ay_m, psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta3_m, iTM1_m, P_f_m, omega2_m, omega3_m",
+     .mso_id = 2142U, .fault_mask = 0x00CE22FEU, .input_mask = ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M,
+     .gate = 5.0f, .variance = 16900.0f, .response_steps = 62U},
+    {.gen = &fdi_romo_generators[8], .interpretation = "body dynamics; kinematics; wheel 1 (tyre); wheel 3 (tyre, spin); wheel 4 (tyre); measured ax_m, ay_m, psidot_m, vx_m, vy_m, delta1_m, delta3_m, delta4_m, iTM3_m, P_r_m, omega1_m, omega4_m",
+     .mso_id = 2374U, .fault_mask = 0x013A89BFU, .input_mask = ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA4_M,
+     .gate = 5.0f, .variance = 26900.0f, .response_steps = 62U},
+    {.gen = &fdi_romo_generators[9], .interpretation = "body dynamics; kinematics; wheel 1 (tyre); wheel 4 (tyre, spin); wheel 2 (tyre, spin); measured psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta4_m, iTM2_m, iTM4_m, P_f_m, P_r_m, omega1_m, omega2_m",
+     .mso_id = 3146U, .fault_mask = 0x0077557CU, .input_mask = ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M,
+     .gate = 5.0f, .variance = 14160.0f, .response_steps = 62U},
+    {.gen = &fdi_romo_generators[10], .interpretation = "body dynamics; kinematics; wheel 2 (tyre); wheel 1 (tyre, spin); wheel 3 (tyre, spin); measured ay_m, psidot_m, vx_m, delta1_m, delta2_m, delta3_m, iTM1_m, iTM3_m, P_f_m, P_r_m, omega1_m, omega2_m, omega3_m",
+     .mso_id = 3480U, .fault_mask = 0x00EEAAEEU, .input_mask = ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M,
+     .gate = 5.0f, .variance = 475.2f, .response_steps = 62U},
+    {.gen = &fdi_romo_generators[11], .interpretation = "body dynamics; kinematics; wheel 2 (tyre, spin); wheel 1 (tyre, spin); wheel 3 (tyre, spin); measured ax_m, ay_m, psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta3_m, iTM1_m, iTM2_m, iTM3_m, P_f_m, P_r_m, omega1_m, omega3_m",
+     .mso_id = 4785U, .fault_mask = 0x00AEEEFFU, .input_mask = ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA3_M,
+     .gate = 5.0f, .variance = 15380.0f, .response_steps = 62U},
 };
 
 /* Row j: bit i set when test i is sensitive to fault j. */
 static const uint32_t romo_fault_signature[25] = {
-    0x00000085U, /* f1 */
-    0x00001246U, /* f2 */
-    0x00001FFBU, /* f3 */
-    0x00001FFFU, /* f4 */
-    0x00000FFFU, /* f5 */
-    0x00000BCCU, /* f6 */
-    0x00001DD0U, /* f7 */
-    0x00001760U, /* f8 */
-    0x00001EC0U, /* f9 */
-    0x0000084CU, /* f10 */
-    0x00001950U, /* f11 */
-    0x00000420U, /* f12 */
-    0x000012C0U, /* f13 */
-    0x0000084CU, /* f14 */
-    0x00001950U, /* f15 */
-    0x00000420U, /* f16 */
-    0x000012C0U, /* f17 */
-    0x00000BCCU, /* f18 */
-    0x00001DD0U, /* f19 */
-    0x00001760U, /* f20 */
-    0x00001EC0U, /* f21 */
-    0x0000038CU, /* f22 */
-    0x00001CD0U, /* f23 */
-    0x00001360U, /* f24 */
-    0x00001C40U, /* f25 */
+    0x00000905U, /* f1 */
+    0x00000DA6U, /* f2 */
+    0x00000FFBU, /* f3 */
+    0x00000FFFU, /* f4 */
+    0x00000BFFU, /* f5 */
+    0x00000FACU, /* f6 */
+    0x00000EF0U, /* f7 */
+    0x00000DE0U, /* f8 */
+    0x00000360U, /* f9 */
+    0x00000CACU, /* f10 */
+    0x00000A30U, /* f11 */
+    0x00000D20U, /* f12 */
+    0x00000240U, /* f13 */
+    0x00000CACU, /* f14 */
+    0x00000A30U, /* f15 */
+    0x00000D20U, /* f16 */
+    0x00000240U, /* f17 */
+    0x00000FACU, /* f18 */
+    0x00000EF0U, /* f19 */
+    0x00000DE0U, /* f20 */
+    0x00000360U, /* f21 */
+    0x00000F2CU, /* f22 */
+    0x000006F0U, /* f23 */
+    0x00000CC0U, /* f24 */
+    0x00000120U, /* f25 */
 };
 
 /* Row j: the faults whose signature equals fault j's (not isolable from it by these tests). */
@@ -135,64 +132,62 @@ static const uint32_t romo_iso_class[25] = {
 };
 
 /* Row j, column i: size of fault j at which test i reacts (reaction sizes from host_tools/scenarios/fault_sizes.toml, 0 = no reaction within the fault's limits). */
-static const float romo_test_size[25 * 13] = {
-    0.15f, 0.0f, 0.7f, 0.0f, 0.0f, 0.0f, 0.0f, 0.5f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f1 */
-    0.0f, 0.1f, 0.0f, 0.0f, 0.0f, 0.0f, 20.0f, 0.0f, 0.0f, 0.7f, 0.0f, 0.0f, 0.05f, /* f2 */
-    0.15f, 0.007f, 0.0f, 0.2f, 0.05f, 2.0f, 0.7f, 0.015f, 0.05f, 0.02f, 0.02f, 0.02f, 0.003f, /* f3 */
-    0.1f, 0.3f, 0.3f, 0.07f, 0.07f, 0.1f, 0.07f, 0.07f, 0.1f, 0.07f, 0.07f, 0.07f, 0.1f, /* f4 */
-    0.5f, 0.07f, 5.0f, 0.0f, 20.0f, 0.0f, 0.5f, 0.02f, 0.05f, 0.05f, 0.05f, 0.05f, 0.0f, /* f5 */
-    0.0f, 0.0f, 0.5f, 0.2f, 0.0f, 0.0f, 0.1f, 0.007f, 0.01f, 0.5f, 0.0f, 0.007f, 0.0f, /* f6 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.15f, 0.0f, 0.05f, 0.005f, 0.007f, 0.0f, 0.5f, 0.005f, 0.1f, /* f7 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.2f, 0.3f, 0.0f, 0.5f, 0.01f, 0.01f, 0.0f, 0.01f, /* f8 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.2f, 0.2f, 0.0f, 0.007f, 0.007f, 0.7f, 0.005f, /* f9 */
-    0.0f, 0.0f, 500.0f, 70.0f, 0.0f, 0.0f, 50.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f10 */
-    0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 50.0f, 0.0f, 0.0f, 0.0f, 0.0f, 100.0f, 100.0f, /* f11 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f12 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 50.0f, 70.0f, 0.0f, 0.0f, 0.0f, 0.0f, 100.0f, /* f13 */
-    0.0f, 0.0f, 500.0f, 70.0f, 0.0f, 0.0f, 50.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f14 */
-    0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 50.0f, 0.0f, 0.0f, 0.0f, 0.0f, 100.0f, 100.0f, /* f15 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, /* f16 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 50.0f, 70.0f, 0.0f, 0.0f, 0.0f, 0.0f, 100.0f, /* f17 */
-    0.0f, 0.0f, 700.0f, 200.0f, 0.0f, 0.0f, 0.0f, 200.0f, 700.0f, 500.0f, 0.0f, 200.0f, 0.0f, /* f18 */
-    0.0f, 0.0f, 0.0f, 0.0f, 300.0f, 0.0f, 0.0f, 100.0f, 300.0f, 0.0f, 700.0f, 200.0f, 0.0f, /* f19 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 300.0f, 150.0f, 0.0f, 500.0f, 200.0f, 300.0f, 0.0f, 200.0f, /* f20 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 300.0f, 1000.0f, 500.0f, 200.0f, /* f21 */
-    0.0f, 0.0f, 3.0f, 0.3f, 0.0f, 0.0f, 0.0f, 3.0f, 0.7f, 0.7f, 0.0f, 0.0f, 0.0f, /* f22 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.2f, 0.0f, 50.0f, 0.2f, 0.0f, 0.0f, 0.5f, 2.0f, 20.0f, /* f23 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.3f, 0.2f, 0.0f, 0.7f, 0.7f, 0.0f, 0.0f, 2.0f, /* f24 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 50.0f, 0.0f, 0.0f, 0.0f, 0.5f, 0.3f, 2.0f, /* f25 */
+static const float romo_test_size[25 * 12] = {
+    0.15f, 0.0f, 0.7f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.7f, 0.0f, 0.0f, 0.7f, /* f1 */
+    0.0f, 0.1f, 0.0f, 0.0f, 0.0f, 20.0f, 0.0f, 0.3f, 0.5f, 0.0f, 0.05f, 0.3f, /* f2 */
+    0.15f, 0.007f, 0.0f, 0.2f, 0.05f, 0.05f, 0.02f, 0.07f, 0.01f, 0.015f, 0.005f, 0.07f, /* f3 */
+    0.1f, 0.3f, 0.3f, 0.07f, 0.07f, 0.05f, 0.07f, 0.07f, 0.1f, 0.2f, 0.15f, 0.7f, /* f4 */
+    0.5f, 0.07f, 5.0f, 0.0f, 20.0f, 0.5f, 0.02f, 0.02f, 0.02f, 0.02f, 0.0f, 0.02f, /* f5 */
+    0.0f, 0.0f, 0.5f, 0.2f, 0.0f, 0.1f, 0.0f, 0.005f, 0.5f, 0.005f, 0.01f, 0.005f, /* f6 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.15f, 0.07f, 0.3f, 0.002f, 0.0f, 0.002f, 0.007f, 0.002f, /* f7 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.2f, 0.007f, 0.3f, 0.007f, 0.0f, 0.3f, 0.2f, /* f8 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.2f, 0.005f, 0.0f, 0.005f, 0.2f, 0.0f, 0.0f, /* f9 */
+    0.0f, 0.0f, 500.0f, 70.0f, 0.0f, 70.0f, 0.0f, 70.0f, 0.0f, 0.0f, 150.0f, 70.0f, /* f10 */
+    0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 70.0f, 0.0f, 0.0f, 0.0f, 50.0f, 0.0f, 0.0f, /* f11 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, 100.0f, 0.0f, 150.0f, 70.0f, /* f12 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, 50.0f, 0.0f, 0.0f, /* f13 */
+    0.0f, 0.0f, 500.0f, 70.0f, 0.0f, 70.0f, 0.0f, 70.0f, 0.0f, 0.0f, 150.0f, 70.0f, /* f14 */
+    0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 70.0f, 0.0f, 0.0f, 0.0f, 50.0f, 0.0f, 0.0f, /* f15 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, 100.0f, 0.0f, 150.0f, 70.0f, /* f16 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, 50.0f, 0.0f, 0.0f, /* f17 */
+    0.0f, 0.0f, 700.0f, 200.0f, 0.0f, 0.0f, 0.0f, 150.0f, 300.0f, 150.0f, 300.0f, 150.0f, /* f18 */
+    0.0f, 0.0f, 0.0f, 0.0f, 300.0f, 0.0f, 300.0f, 150.0f, 0.0f, 150.0f, 300.0f, 150.0f, /* f19 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 200.0f, 200.0f, 200.0f, 0.0f, 0.0f, 0.0f, /* f20 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 200.0f, 200.0f, 0.0f, 200.0f, 0.0f, 0.0f, 0.0f, /* f21 */
+    0.0f, 0.0f, 3.0f, 0.3f, 0.0f, 70.0f, 0.0f, 0.0f, 0.5f, 2.0f, 3.0f, 2.0f, /* f22 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.2f, 70.0f, 0.2f, 2.0f, 0.0f, 1.5f, 2.0f, 0.0f, /* f23 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 2.0f, 0.3f, 0.0f, 0.0f, 20.0f, 70.0f, /* f24 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.2f, 0.0f, 0.0f, 1.5f, 0.0f, 0.0f, 0.0f, /* f25 */
 };
 
-const char *const fdi_romo_table_equations[13] = {
+const char *const fdi_romo_table_equations[12] = {
     "K1 D1 S1 S3 S4 S5",
     "K2 D2 S2 S3 S4 S5",
     "K1 D1 W1.FL W1.dyn W1.D S1 S2 S4 S5 S.omega1",
     "K1 K2 D1 D2 W1.FL W1.dyn W1.D S3 S4 S5 S.omega1",
     "K1 K2 D1 D2 W2.FL W2.dyn W2.D S3 S4 S5 S.omega2",
-    "K1 K2 D1 D2 W3.FL W3.dyn W3.D S3 S4 S5 S.omega3",
-    "B1 K1 D1 W1.FL W3.FL W1.FS W2.FS W3.FS W4.FS W1.Fx W2.Fx W3.Fx W4.Fx W1.dyn W2.dyn W4.dyn W1.D W2.D W4.D S2 S3 S4 S5 S.omega2 S.omega3 S.omega4",
-    "B1 B2 B3 D.psidot K1 K2 D2 W1.FL W2.FL W4.FL W1.FS W2.FS W4.FS W1.Fx W2.Fx W4.Fx W1.Fy W2.Fy W4.Fy W4.dyn W4.D S1 S3 S4 S5 S.omega1 S.omega2",
-    "B1 B2 B3 D.psidot K1 K2 D1 D2 W1.FL W2.FL W3.FL W1.FS W2.FS W3.FS W1.Fx W2.Fx W3.Fx W1.Fy W2.Fy W3.Fy W2.dyn W2.D S3 S4 S5 S.omega1 S.omega3",
-    "B1 B2 B3 D.psidot K1 K2 D1 W1.FL W3.FL W4.FL W1.FS W3.FS W4.FS W1.Fx W3.Fx W4.Fx W1.Fy W3.Fy W4.Fy W4.dyn W4.D S2 S3 S4 S5 S.omega1 S.omega3",
-    "B1 B2 B3 D.psidot K1 K2 D1 D2 W2.FL W3.FL W4.FL W2.FS W3.FS W4.FS W2.Fx W3.Fx W4.Fx W2.Fy W3.Fy W4.Fy W3.dyn W3.D S3 S4 S5 S.omega2 S.omega4",
-    "B1 B2 B3 D.psidot K1 K2 D1 D2 W1.FL W4.FL W1.FS W2.FS W4.FS W1.Fx W2.Fx W4.Fx W1.Fy W2.Fy W4.Fy W1.dyn W2.dyn W1.D W2.D S3 S4 S5 S.omega2 S.omega4",
-    "B1 B2 B3 D.psidot K1 K2 D1 D2 W3.FL W2.FS W3.FS W4.FS W2.Fx W3.Fx W4.Fx W2.Fy W3.Fy W4.Fy W2.dyn W4.dyn W2.D W4.D S2 S3 S4 S.omega2 S.omega3 S.omega4",
+    "B1 K1 D1 W3.FL W4.FL W1.FS W2.FS W3.FS W4.FS W1.Fx W2.Fx W3.Fx W4.Fx W1.dyn W2.dyn W3.dyn W1.D W2.D W3.D S2 S3 S4 S5 S.omega1 S.omega2 S.omega4",
+    "B1 B2 B3 D.psidot K1 K2 D1 D2 W2.FL W3.FL W4.FL W2.FS W3.FS W4.FS W2.Fx W3.Fx W4.Fx W2.Fy W3.Fy W4.Fy W4.dyn W4.D S3 S4 S5 S.omega2 S.omega3",
+    "B1 B2 B3 D.psidot K1 K2 D1 W1.FL W2.FL W3.FL W1.FS W2.FS W3.FS W1.Fx W2.Fx W3.Fx W1.Fy W2.Fy W3.Fy W1.dyn W1.D S2 S3 S4 S5 S.omega2 S.omega3",
+    "B1 B2 B3 D.psidot K1 K2 W1.FL W3.FL W4.FL W1.FS W3.FS W4.FS W1.Fx W3.Fx W4.Fx W1.Fy W3.Fy W4.Fy W3.dyn W3.D S1 S2 S3 S4 S5 S.omega1 S.omega4",
+    "B1 B2 B3 D.psidot K1 K2 D1 D2 W1.FL W4.FL W1.FS W2.FS W4.FS W1.Fx W2.Fx W4.Fx W1.Fy W2.Fy W4.Fy W2.dyn W4.dyn W2.D W4.D S3 S4 S5 S.omega1 S.omega2",
+    "B1 B2 B3 D.psidot K1 K2 D1 D2 W2.FL W1.FS W2.FS W3.FS W1.Fx W2.Fx W3.Fx W1.Fy W2.Fy W3.Fy W1.dyn W3.dyn W1.D W3.D S2 S3 S4 S.omega1 S.omega2 S.omega3",
+    "B1 B2 B3 D.psidot K1 K2 W2.FL W1.FS W2.FS W3.FS W1.Fx W2.Fx W3.Fx W1.Fy W2.Fy W3.Fy W1.dyn W2.dyn W3.dyn W1.D W2.D W3.D S1 S2 S3 S4 S5 S.omega1 S.omega3",
 };
 
-const char *const fdi_romo_table_unknowns[13] = {
+const char *const fdi_romo_table_unknowns[12] = {
     "vx vy psidot dvx ax",
     "vx vy psidot dvy ay",
     "vx vy psidot dvx ax ay FL1 omega1 domega1",
     "vx vy psidot dvx dvy ax ay FL1 omega1 domega1",
     "vx vy psidot dvx dvy ax ay FL2 omega2 domega2",
-    "vx vy psidot dvx dvy ax ay FL3 omega3 domega3",
-    "vx vy psidot dvx ax ay FL1 FL2 FL3 FL4 FS1 FS2 FS3 FS4 Fx1 Fx2 Fx3 Fx4 omega1 omega2 omega3 omega4 domega1 domega2 domega4",
-    "vx vy psidot dvx dvy ax ay FL1 FL2 FL4 FS1 FS2 FS4 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega1 omega2 omega4 domega4 dpsidot",
-    "vx vy psidot dvx dvy ax ay FL1 FL2 FL3 FS1 FS2 FS3 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega1 omega2 omega3 domega2 dpsidot",
-    "vx vy psidot dvx dvy ax ay FL1 FL3 FL4 FS1 FS3 FS4 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega1 omega3 omega4 domega4 dpsidot",
-    "vx vy psidot dvx dvy ax ay FL2 FL3 FL4 FS2 FS3 FS4 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega2 omega3 omega4 domega3 dpsidot",
-    "vx vy psidot dvx dvy ax ay FL1 FL2 FL4 FS1 FS2 FS4 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega1 omega2 omega4 domega1 domega2 dpsidot",
-    "vx vy psidot dvx dvy ax ay FL2 FL3 FL4 FS2 FS3 FS4 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega2 omega3 omega4 domega2 domega4 dpsidot",
+    "vx vy psidot dvx ax ay FL1 FL2 FL3 FL4 FS1 FS2 FS3 FS4 Fx1 Fx2 Fx3 Fx4 omega1 omega2 omega3 omega4 domega1 domega2 domega3",
+    "vx vy psidot dvx dvy ax ay FL2 FL3 FL4 FS2 FS3 FS4 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega2 omega3 omega4 domega4 dpsidot",
+    "vx vy psidot dvx dvy ax ay FL1 FL2 FL3 FS1 FS2 FS3 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega1 omega2 omega3 domega1 dpsidot",
+    "vx vy psidot dvx dvy ax ay FL1 FL3 FL4 FS1 FS3 FS4 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega1 omega3 omega4 domega3 dpsidot",
+    "vx vy psidot dvx dvy ax ay FL1 FL2 FL4 FS1 FS2 FS4 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega1 omega2 omega4 domega2 domega4 dpsidot",
+    "vx vy psidot dvx dvy ax ay FL1 FL2 FL3 FS1 FS2 FS3 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega1 omega2 omega3 domega1 domega3 dpsidot",
+    "vx vy psidot dvx dvy ax ay FL1 FL2 FL3 FS1 FS2 FS3 Fx1 Fx2 Fx3 Fx4 Fy1 Fy2 Fy3 Fy4 omega1 omega2 omega3 domega1 domega2 domega3 dpsidot",
 };
 
 const fdi_table_t fdi_romo_table = {
@@ -200,7 +195,7 @@ const fdi_table_t fdi_romo_table = {
     {0.01f, 1.0f, 0.7071f, 2.0f},
     ROMO_SIG_COUNT,
     25U,
-    13U,
+    12U,
     fdi_romo_signal_names,
     romo_fault_names,
     romo_tests,
