@@ -60,7 +60,7 @@ t "$bin/fdi-analyze" report romo_quasistatic -o report | grep "detectable faults
 t "$bin/fdi-analyze" mso romo_grouped --workers 1 --no-progress > mso.txt && grep "MSO sets (complete)" mso.txt
 t "$bin/fdi-analyze" select three_tank --workers 1 --no-progress -o select > select.txt  # without python-sat
 grep "optimal B" select.txt
-t "$bin/fdi-sim" --list > list.txt && grep -q fig6 list.txt
+t "$bin/fdi-sim" --list > list.txt 2> list_err.txt; grep -q fig6 list.txt; test ! -s list_err.txt
 t "$bin/fdi-sim" --scenario fig6 --duration 12 --out logs/fig6.blf --quiet
 t "$bin/fdi-sim" --scenario cornering --no-scenario-faults --fault f10@3s:-120 --duration 8 --out logs/f10.blf --quiet
 t "$bin/fdi-replay" logs/fig6.blf --offline --truth logs/fig6.truth.json --out-dir replay > replay.txt

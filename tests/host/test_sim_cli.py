@@ -11,6 +11,7 @@ import pytest
 from fdi_host.can.logs import read_log
 from fdi_host.can.traffic import decode_frames
 from fdi_host.cli import main
+from fdi_host.sim.scenario import SCENARIOS
 
 
 def test_help_has_examples(capsys: pytest.CaptureFixture[str]) -> None:
@@ -19,6 +20,15 @@ def test_help_has_examples(capsys: pytest.CaptureFixture[str]) -> None:
     assert exc.value.code == 0
     out = capsys.readouterr().out
     assert "fdi-sim --scenario fig6 --fault f4@5s:0.5 --out drive.blf" in out
+
+
+def test_list_names_the_vehicle_scenarios_only(capsys: pytest.CaptureFixture[str]) -> None:
+    """The scenario folder also holds the fault-size files and the three-tank drives of the generic simulator:
+    --list shows the vehicle scenarios and nothing else, without an error."""
+    assert main(["--list"]) == 0
+    out = capsys.readouterr()
+    assert [line.split()[0] for line in out.out.splitlines()] == sorted(SCENARIOS)
+    assert out.err == ""
 
 
 def test_bad_fault_is_a_usage_error() -> None:

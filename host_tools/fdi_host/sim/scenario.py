@@ -173,8 +173,17 @@ def scenario_from_dict(doc: Mapping[str, Any], source: Path | None = None) -> Sc
 
 
 def available() -> list[str]:
-    """The scenario names of the scenario folder (the fault-size file beside them is not one)."""
-    return sorted(p.stem for p in SCENARIO_DIR.glob("*.toml") if p.name != FAULT_SIZES_FILE.name)
+    """The vehicle scenarios of the scenario folder: the files with a [scenario] table (the fault-size files and the
+    generic simulator's drives, e.g. three_tank.toml, beside them are not ones)."""
+    names = []
+    for p in sorted(SCENARIO_DIR.glob("*.toml")):
+        try:
+            doc = tomllib.loads(p.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+            continue  # loading it by name reports what is wrong
+        if isinstance(doc.get("scenario"), dict):
+            names.append(p.stem)
+    return names
 
 
 def load_scenario(name_or_path: str | Path) -> Scenario:
