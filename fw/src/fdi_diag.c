@@ -665,41 +665,44 @@ static uint32_t quiet_clears(const fdi_diag_t *self, uint32_t i, uint32_t undeci
    when the d_q > 0 reach 1 in the sum of their squares (together the tests miss a response worth a gate). */
 static uint32_t joint_clears(const fdi_diag_t *self, uint32_t settled, uint32_t faults)
 {
-    float missing[FDI_TABLE_MAX_FAULTS];
-    const float per_margin = 1.0f / self->table->sensitivity_margin;
     uint32_t out = 0U;
-    uint32_t i;
-    for (i = 0U; i < (uint32_t)self->n_faults; ++i)
+    if ((faults != 0U) && (settled != 0U)) /* most episode steps: nothing left to decide */
     {
-        missing[i] = 0.0f;
-    }
-    for (i = 0U; (faults != 0U) && (i < (uint32_t)self->n_tests); ++i)
-    {
-        const fdi_test_desc_t *d = &self->table->tests[i];
-        if (((settled & ((uint32_t)1U << i)) != 0U) && (d->gen != NULL) && ((d->gen->sens_mask & faults) != 0U))
+        float missing[FDI_TABLE_MAX_FAULTS];
+        const float per_margin = 1.0f / self->table->sensitivity_margin;
+        uint32_t i;
+        for (i = 0U; i < (uint32_t)self->n_faults; ++i)
         {
-            const float per_gate = 1.0f / (d->gate * test_sigma(self, i));
-            const float seen = fmaxf(fabsf(self->residual[i]), fabsf(self->r_fast[i]));
-            uint32_t k;
-            for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
+            missing[i] = 0.0f;
+        }
+        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+        {
+            const fdi_test_desc_t *d = &self->table->tests[i];
+            if (((settled & ((uint32_t)1U << i)) != 0U) && (d->gen != NULL) && ((d->gen->sens_mask & faults) != 0U))
             {
-                const uint32_t j = (uint32_t)self->sens_fault[k];
-                if ((faults & ((uint32_t)1U << j)) != 0U)
+                const float per_gate = 1.0f / (d->gate * test_sigma(self, i));
+                const float seen = fmaxf(fabsf(self->residual[i]), fabsf(self->r_fast[i]));
+                uint32_t k;
+                for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
                 {
-                    /* capped: an unbounded implied size stays finite here */
-                    const float expect = fabsf(self->sens[k]) * self->implied[j] * per_margin;
-                    const float lack = fminf(JOINT_LACK_CAP, (expect - seen) * per_gate);
-                    if (lack > 0.0f)
+                    const uint32_t j = (uint32_t)self->sens_fault[k];
+                    if ((faults & ((uint32_t)1U << j)) != 0U)
                     {
-                        missing[j] += lack * lack;
+                        /* capped: an unbounded implied size stays finite here */
+                        const float expect = fabsf(self->sens[k]) * self->implied[j] * per_margin;
+                        const float lack = fminf(JOINT_LACK_CAP, (expect - seen) * per_gate);
+                        if (lack > 0.0f)
+                        {
+                            missing[j] += lack * lack;
+                        }
                     }
                 }
             }
         }
-    }
-    for (i = 0U; i < (uint32_t)self->n_faults; ++i)
-    {
-        out |= (missing[i] >= 1.0f) ? ((uint32_t)1U << i) : 0U;
+        for (i = 0U; i < (uint32_t)self->n_faults; ++i)
+        {
+            out |= (missing[i] >= 1.0f) ? ((uint32_t)1U << i) : 0U;
+        }
     }
     return out & faults;
 }

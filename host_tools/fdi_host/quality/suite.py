@@ -49,8 +49,8 @@ DELAY_GOAL_S = 0.3  # detection within 300 ms of the onset
 ISOLATION_GOAL_S = 1.0  # isolation to exactly the structural class within 1 s of the detection
 DETECTION_GOAL_FAULTS = 24  # of 25, in every scenario
 ISOLATION_GOAL_FAULTS = 23  # of 25, in every scenario
-# Noise seeds of the fault cases: none of the calibration (each scenario's own, 1001-1012), the screening (own,
-# 1001, 1002), the fault-size sweep (777, 778 and + 100, 200, 300) or the fault-free drives (1000 + 17 k) uses them.
+# Noise seeds of the fault cases: none of the calibration and the screening (each scenario's own, 1001-1012), the
+# fault-size sweep (777, 778 and + 100, 200, 300) or the fault-free drives (1000 + 17 k) uses them.
 CASE_SEEDS: tuple[int, ...] = (2001, 2002, 2003)
 
 
