@@ -21,6 +21,12 @@
  *    d r / d f_j of the faults of the slot's sens_mask, ascending, at io->sens[io->sens_at[k]] (the linearisation
  *    of the residual in the faults at the current operating point, the steady-state value for an observer slot),
  *    from the same shared terms; the residual is the same with or without them.
+ *  - derived signals (optional): the terms of a residual that contain no derivative, computed from the raw
+ *    signals and filtered as one signal (a filter is linear, so the filtered sum of these terms is exactly what
+ *    the residual needs; the same terms computed from filtered signals would differ wherever the signals change
+ *    fast). The set's derive function writes them into free places of a copy of the frame (signal indices above
+ *    the vehicle's signals); fdi_gen_derive() marks each usable while its sources are usable and it is finite,
+ *    and the bank filters it like any frame signal;
  *   Its descriptors have step == NULL, set == the set and slot == their position; the diagnoser calls the set's
  *   step once per step for all its tests (a table holds at most one set, each slot at most once: fdi_table_check).
  *
@@ -41,7 +47,8 @@
  *
  * Cost per step: the bank, ~20 flops per filter, once for all tests; the set's step (the shared terms once, each
  * running slot's own terms); a hand-written generator's filters and expression. Measured by scripts/bench_fw.sh.
- * Memory: a bank filter 12 bytes (fdi_svf_t), an observer 8 bytes (fdi_obs_t), held by the caller (fdi_diag_t);
+ * Memory: a bank filter 12 bytes (fdi_svf_t), an observer 8 bytes (fdi_obs_t), held by the caller (fdi_diag_t); a
+ * set with derived signals costs the diagnoser a copy of the frame per step (fdi_frame_t, 128 bytes of stack);
  * fdi_gen_param_t 12 + 12 + 4 * FDI_GEN_N_PARAMS = 40 bytes (shared by all tests), asserted below; the set's
  * temporaries are locals of its step function (stack, no RAM).
  */
@@ -145,6 +152,16 @@ typedef struct
     uint8_t order;  /* source != FDI_GEN_BANK_RAW: 0 fed with that filter's y, 1 with its dy; else 0 */
 } fdi_gen_bank_filter_t;
 
+/* A derived signal of a set: its place in the frame and the frame signals it is computed from. */
+typedef struct
+{
+    uint8_t signal;   /* its index in the frame, < FDI_FRAME_MAX_SIGNALS, not one of its sources */
+    uint32_t sources; /* the frame signals it reads (non-zero) */
+} fdi_gen_derived_t;
+
+/* Writes every derived signal of a set into the frame (non-NULL) from the frame's signals. Cannot fail. */
+typedef void (*fdi_gen_derive_fn_t)(fdi_frame_t *frame);
+
 /* What a set's step reads and writes; the caller fills it (the diagnoser once per step). Slot k's bit in the
    masks is bit k; its observer state and residual are at index at[k] of obs[] and r[]. */
 typedef struct
@@ -173,6 +190,9 @@ struct fdi_gen_set_s
     const fdi_gen_bank_filter_t *bank;  /* n_bank filters; NULL only when n_bank is 0 */
     uint8_t n_bank;
     uint8_t n_slots;                    /* 1..FDI_GEN_MAX_SLOTS */
+    fdi_gen_derive_fn_t derive;         /* NULL when the set has no derived signal */
+    const fdi_gen_derived_t *derived;   /* n_derived derived signals; NULL only when n_derived is 0 */
+    uint8_t n_derived;                  /* 0 when derive is NULL, else >= 1 */
 };
 
 /* Design the shared parameters. BAD_ARG / NOT_FINITE on a bad config (see fdi_svf.h, fdi_obs.h). */
@@ -184,11 +204,23 @@ fdi_status_t fdi_gen_param_init(fdi_gen_param_t *par, const fdi_gen_config_t *cf
 fdi_status_t fdi_gen_desc_check(const fdi_gen_desc_t *desc);
 
 /* A usable set: name and step non-NULL, 1..FDI_GEN_MAX_SLOTS slots, every bank filter fed by a signal of the
-   frame or by an earlier filter of the same signal (order 0 or 1). FDI_OK or FDI_BAD_ARG. */
+   frame or by an earlier filter of the same signal (order 0 or 1), derive and n_derived both set or both not, each
+   derived signal in the frame, with sources, not among them and not among another's. FDI_OK or FDI_BAD_ARG. */
 fdi_status_t fdi_gen_set_check(const fdi_gen_set_t *set);
 
 /* The frame signals the bank of a (checked) set filters; 0 for NULL. Cannot fail. */
 uint32_t fdi_gen_bank_signals(const fdi_gen_set_t *set);
+
+/* The frame places of the derived signals of a (checked) set; 0 for NULL or none. Cannot fail. */
+uint32_t fdi_gen_derived_signals(const fdi_gen_set_t *set);
+
+/*
+ * The derived signals of a checked set: writes them into `frame` (the caller's copy of the step's frame) and
+ * returns `usable` with each derived signal whose sources are all usable and whose value is finite; a derived
+ * signal that is not finite although its sources are makes its sources unusable for the step (returned without
+ * them). A set without derived signals, or a NULL argument, returns `usable` unchanged.
+ */
+uint32_t fdi_gen_derive(const fdi_gen_set_t *set, fdi_frame_t *frame, uint32_t usable);
 
 /*
  * One step of the bank of a checked set: bank[0 .. set->n_bank - 1] (the caller's filter states) at the frame `in`.

@@ -904,6 +904,8 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
     else
     {
         uint32_t usable = fdi_frame_finite_mask(frame, validity & self->signals);
+        fdi_frame_t derived; /* the frame with the set's derived signals (fdi_gen.h), when it has any */
+        const fdi_frame_t *in = frame;
         const bool episode = (self->mode == FDI_ISO_EXONERATION) && (self->accused != 0U);
         const uint32_t undecided = episode ? self->undecided : 0U;
         fdi_gen_domain_fn_t domain_fn = NULL;
@@ -919,7 +921,13 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
         self->fresh = 0U;
         if (self->set != NULL)
         {
-            usable &= ~fdi_gen_bank_step(self->set, self->filt, &self->par.svf, frame, usable, self->bank_live);
+            if ((uint32_t)self->set->n_derived > 0U)
+            {
+                derived = *frame;
+                usable = fdi_gen_derive(self->set, &derived, usable);
+                in = &derived;
+            }
+            usable &= ~fdi_gen_bank_step(self->set, self->filt, &self->par.svf, in, usable, self->bank_live);
             self->bank_live = usable;
         }
         for (i = 0U; i < (uint32_t)self->n_tests; ++i)
@@ -935,7 +943,7 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
                 if (!have_domain || (d->gen->in_domain != domain_fn))
                 {
                     domain_fn = d->gen->in_domain;
-                    domain_ok = fdi_gen_in_domain(d->gen, frame);
+                    domain_ok = fdi_gen_in_domain(d->gen, in);
                     have_domain = true;
                 }
                 in_domain = domain_ok;
@@ -967,7 +975,7 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
         {
             /* none needed */
         }
-        ok = run_generators(self, frame, run, want, r);
+        ok = run_generators(self, in, run, want, r);
         for (i = 0U; i < (uint32_t)self->n_tests; ++i)
         {
             const uint32_t bit = (uint32_t)1U << i;

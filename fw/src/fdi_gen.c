@@ -65,6 +65,30 @@ fdi_status_t fdi_gen_set_check(const fdi_gen_set_t *set)
             ok = ((uint32_t)f->source < k) && (set->bank[f->source].signal == f->signal) && (f->order <= 1U);
         }
     }
+    if (ok)
+    {
+        if (set->derive == NULL)
+        {
+            ok = (uint32_t)set->n_derived == 0U;
+        }
+        else
+        {
+            ok = ((uint32_t)set->n_derived >= 1U) && (set->derived != NULL);
+        }
+    }
+    if (ok && ((uint32_t)set->n_derived > 0U))
+    {
+        const uint32_t places = fdi_gen_derived_signals(set);
+        uint32_t seen = 0U;
+        for (k = 0U; ok && (k < (uint32_t)set->n_derived); ++k)
+        {
+            const fdi_gen_derived_t *d = &set->derived[k];
+            const uint32_t bit = (uint32_t)1U << (d->signal & 31U);
+            ok = ((uint32_t)d->signal < FDI_FRAME_MAX_SIGNALS) && (d->sources != 0U) &&
+                 ((d->sources & places) == 0U) && ((seen & bit) == 0U);
+            seen |= bit;
+        }
+    }
     return ok ? FDI_OK : FDI_BAD_ARG;
 }
 
@@ -101,6 +125,48 @@ uint32_t fdi_gen_bank_signals(const fdi_gen_set_t *set)
         }
     }
     return m;
+}
+
+uint32_t fdi_gen_derived_signals(const fdi_gen_set_t *set)
+{
+    uint32_t m = 0U;
+    if ((set != NULL) && (set->derived != NULL))
+    {
+        uint32_t k;
+        for (k = 0U; k < (uint32_t)set->n_derived; ++k)
+        {
+            m |= (uint32_t)1U << (set->derived[k].signal & 31U);
+        }
+    }
+    return m;
+}
+
+uint32_t fdi_gen_derive(const fdi_gen_set_t *set, fdi_frame_t *frame, uint32_t usable)
+{
+    uint32_t out = usable;
+    if ((set != NULL) && (frame != NULL) && (set->derive != NULL) && (set->derived != NULL))
+    {
+        uint32_t k;
+        set->derive(frame);
+        for (k = 0U; k < (uint32_t)set->n_derived; ++k)
+        {
+            const fdi_gen_derived_t *d = &set->derived[k];
+            const uint32_t bit = (uint32_t)1U << (d->signal & 31U);
+            out &= ~bit; /* usable only as computed here, never from the caller's validity */
+            if ((usable & d->sources) == d->sources)
+            {
+                if (fdi_float_is_finite(frame->value[d->signal & 31U]))
+                {
+                    out |= bit;
+                }
+                else
+                {
+                    out &= ~d->sources;
+                }
+            }
+        }
+    }
+    return out;
 }
 
 uint32_t fdi_gen_bank_step(const fdi_gen_set_t *set, fdi_svf_t *bank, const fdi_svf_coef_t *coef,

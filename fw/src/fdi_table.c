@@ -115,7 +115,15 @@ static bool set_ok(const fdi_table_t *t, uint32_t signals)
     }
     if (ok && (set != NULL))
     {
-        ok = (fdi_gen_set_check(set) == FDI_OK) && ((fdi_gen_bank_signals(set) & ~signals) == 0U);
+        /* derived signals take free places of the frame and are computed from the vehicle's signals */
+        const uint32_t derived = fdi_gen_derived_signals(set);
+        uint32_t k;
+        ok = (fdi_gen_set_check(set) == FDI_OK) && ((derived & signals) == 0U) &&
+             ((fdi_gen_bank_signals(set) & ~(signals | derived)) == 0U);
+        for (k = 0U; ok && (k < (uint32_t)set->n_derived); ++k)
+        {
+            ok = (set->derived[k].sources & ~signals) == 0U;
+        }
     }
     return ok;
 }

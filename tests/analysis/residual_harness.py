@@ -83,7 +83,9 @@ int main(int argc, char **argv) {
         for (i = 0; i < ns; ++i) { if (scanf("%f", &in.value[i]) != 1) return 0; }
         if (set != NULL) {
             fdi_gen_io_t io;
-            const uint32_t failed = fdi_gen_bank_step(set, bank, &par.svf, &in, 0xFFFFFFFFU, first ? 0U : live);
+            uint32_t failed;
+            (void)fdi_gen_derive(set, &in, 0xFFFFFFFFU);
+            failed = fdi_gen_bank_step(set, bank, &par.svf, &in, 0xFFFFFFFFU, first ? 0U : live);
             live = 0xFFFFFFFFU & ~failed;
             io.par = &par; io.in = &in; io.bank = bank; io.obs = set_obs; io.r = set_r; io.at = at;
             io.sens = set_sens; io.sens_at = at; io.run = run; io.restart = first ? run : 0U;

@@ -44,11 +44,12 @@ static inline uint32_t test_set_step(test_set_t *t, const fdi_gen_param_t *par, 
                                      bool restart, float *r, float *sens)
 {
     fdi_gen_io_t io;
-    const uint32_t all = 0xFFFFFFFFU;
-    uint32_t failed = fdi_gen_bank_step(t->set, t->bank, &par->svf, in, all, restart ? 0U : t->live);
+    fdi_frame_t frame = *in;
+    const uint32_t all = fdi_gen_derive(t->set, &frame, 0xFFFFFFFFU);
+    uint32_t failed = fdi_gen_bank_step(t->set, t->bank, &par->svf, &frame, all, restart ? 0U : t->live);
     t->live = all & ~failed;
     io.par = par;
-    io.in = in;
+    io.in = &frame;
     io.bank = t->bank;
     io.obs = t->obs;
     io.r = r;

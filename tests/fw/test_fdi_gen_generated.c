@@ -73,7 +73,15 @@ static void test_slots_and_inputs(void **state)
             assert_false((g->signal == f->signal) && (g->source == f->source) && (g->order == f->order));
         }
     }
-    assert_int_equal(fdi_gen_bank_signals(&fdi_romo_gen_set) & ~ROMO_SIGM_ALL, 0U);
+    /* derived signals: free places of the frame, computed from the vehicle's signals, filtered by the bank */
+    assert_int_equal(fdi_gen_derived_signals(&fdi_romo_gen_set) & ROMO_SIGM_ALL, 0U);
+    for (k = 0U; k < (uint32_t)fdi_romo_gen_set.n_derived; ++k)
+    {
+        assert_int_equal(fdi_romo_gen_set.derived[k].sources & ~ROMO_SIGM_ALL, 0U);
+    }
+    assert_int_equal(fdi_gen_bank_signals(&fdi_romo_gen_set) &
+                         ~(ROMO_SIGM_ALL | fdi_gen_derived_signals(&fdi_romo_gen_set)), 0U);
+    assert_int_equal(fdi_gen_derived_signals(NULL), 0U);
     assert_int_equal(fdi_gen_bank_signals(NULL), 0U);
     assert_int_equal(fdi_table_check(&fdi_romo_table), FDI_OK);
 }
@@ -98,6 +106,75 @@ static void wheel_frame(double t, fdi_frame_t *in)
     in->value[ROMO_SIG_DELTA2_M] = 0.0f;
     in->value[ROMO_SIG_DELTA3_M] = 0.0f;
     in->value[ROMO_SIG_DELTA4_M] = 0.0f;
+}
+
+/* A derive function for the tests below: place 30 = s0 * s1, place 31 = s0 / s2 (not finite when s2 is 0). */
+static void derive_two(fdi_frame_t *frame)
+{
+    frame->value[30] = frame->value[0] * frame->value[1];
+    frame->value[31] = frame->value[0] / frame->value[2];
+}
+
+static void test_derived_signals(void **state)
+{
+    static const fdi_gen_derived_t two[2] = {{30U, 0x3U}, {31U, 0x5U}};
+    fdi_gen_derived_t bad[2] = {{30U, 0x3U}, {31U, 0x5U}};
+    fdi_gen_set_t set = fdi_romo_gen_set;
+    fdi_frame_t frame;
+    const uint32_t d30 = (uint32_t)1U << 30U;
+    const uint32_t d31 = (uint32_t)1U << 31U;
+    uint32_t k;
+    (void)state;
+    set.derive = derive_two;
+    set.derived = two;
+    set.n_derived = 2U;
+    assert_int_equal(fdi_gen_set_check(&set), FDI_OK);
+    assert_int_equal(fdi_gen_derived_signals(&set), d30 | d31);
+    for (k = 0U; k < FDI_FRAME_MAX_SIGNALS; ++k)
+    {
+        frame.value[k] = 2.0f;
+    }
+    /* every source usable: both written and usable; the caller's bits for the derived places do not count */
+    assert_int_equal(fdi_gen_derive(&set, &frame, 0x7U), 0x7U | d30 | d31);
+    assert_float_equal(frame.value[30], 4.0f, 0.0f);
+    assert_float_equal(frame.value[31], 1.0f, 0.0f);
+    assert_int_equal(fdi_gen_derive(&set, &frame, 0x7U | d30 | d31), 0x7U | d30 | d31);
+    assert_int_equal(fdi_gen_derive(&set, &frame, 0x3U), 0x3U | d30); /* s2 unusable: place 31 is not */
+    assert_int_equal(fdi_gen_derive(&set, &frame, d30 | d31), 0U);
+    /* a derived value that is not finite although its sources are usable takes its sources with it */
+    frame.value[2] = 0.0f;
+    assert_int_equal(fdi_gen_derive(&set, &frame, 0x7U), 0x2U | d30);
+    /* no derived signal, NULL arguments: usable unchanged */
+    {
+        fdi_gen_set_t plain = fdi_romo_gen_set;
+        plain.derive = NULL;
+        plain.derived = NULL;
+        plain.n_derived = 0U;
+        assert_int_equal(fdi_gen_derive(&plain, &frame, 0x7U), 0x7U);
+    }
+    assert_int_equal(fdi_gen_derive(NULL, &frame, 0x7U), 0x7U);
+    assert_int_equal(fdi_gen_derive(&set, NULL, 0x7U), 0x7U);
+    /* bad sets */
+    set.derived = bad;
+    bad[1].signal = 30U; /* the same place twice */
+    assert_int_equal(fdi_gen_set_check(&set), FDI_BAD_ARG);
+    bad[1].signal = 31U;
+    bad[1].sources = d30; /* computed from another derived signal */
+    assert_int_equal(fdi_gen_set_check(&set), FDI_BAD_ARG);
+    bad[1].sources = 0U; /* from nothing */
+    assert_int_equal(fdi_gen_set_check(&set), FDI_BAD_ARG);
+    bad[1].sources = 0x5U;
+    assert_int_equal(fdi_gen_set_check(&set), FDI_OK);
+    set.derived = NULL;
+    assert_int_equal(fdi_gen_set_check(&set), FDI_BAD_ARG);
+    set.derived = two;
+    set.n_derived = 0U; /* a derive function without derived signals */
+    assert_int_equal(fdi_gen_set_check(&set), FDI_BAD_ARG);
+    set.derive = NULL;
+    set.derived = NULL;
+    assert_int_equal(fdi_gen_set_check(&set), FDI_OK);
+    set.n_derived = 1U; /* derived signals without a derive function */
+    assert_int_equal(fdi_gen_set_check(&set), FDI_BAD_ARG);
 }
 
 static void test_bad_descriptors_and_sets(void **state)
@@ -570,6 +647,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_slots_and_inputs),
         cmocka_unit_test(test_bad_descriptors_and_sets),
+        cmocka_unit_test(test_derived_signals),
         cmocka_unit_test(test_bank),
         cmocka_unit_test(test_slots_run),
         cmocka_unit_test(test_operating_domain),

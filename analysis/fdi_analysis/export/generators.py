@@ -7,9 +7,12 @@ expressions of the table, so the terms several generators share (sin/cos of a st
 evaluated once per step, gated by the slots that need them; then per slot its own terms, its observer update and,
 on request, its fault sensitivities d r / d f_j (`Generator.sensitivities`) from the same shared terms. Integer
 and half-integer powers become products and square roots, Max/Min and the derivatives of Abs and Max inline
-helpers (fdi_gen_impl.h); float-only math. The descriptors (one per slot, ``fdi_<vehicle>_generators[]``, the
-table's tests point to them) and the set (``fdi_<vehicle>_gen_set``) close the file. What goes into the file is
-computed first (`generators_file`), then rendered from the named templates below. Deterministic output.
+helpers (fdi_gen_impl.h); float-only math. A generator's derivative-free nonlinear terms filtered as a whole
+(`residuals.whole_terms`) become derived signals of the set: a derive function computes them from the raw frame
+signals into free places of the frame, the bank filters them (``<vehicle>_derived``). The descriptors (one per
+slot, ``fdi_<vehicle>_generators[]``, the table's tests point to them) and the set (``fdi_<vehicle>_gen_set``)
+close the file. What goes into the file is computed first (`generators_file`), then rendered from the named
+templates below. Deterministic output.
 """
 
 from __future__ import annotations
@@ -26,11 +29,12 @@ from fdi_analysis.export.c_expr import c_float, to_c
 from fdi_analysis.export.c_names import VehicleNames
 from fdi_analysis.export.c_text import comment_text
 from fdi_analysis.residuals.generator import DOMAIN_SIGNAL, XHAT, Generator
-from fdi_analysis.residuals.signals import Node, node_of
+from fdi_analysis.residuals.signals import Node, node_of, nodes_in
 
 MAX_BANK = 255  # FDI_GEN_MAX_BANK of fw/include/fdi_gen.h
 MAX_GENERATORS = 32  # FDI_GEN_MAX_SLOTS of fw/include/fdi_gen.h (and FDI_TABLE_MAX_TESTS)
 MAX_SENS = 32  # FDI_DIAG_MAX_TEST_SENS of fw/include/fdi_diag.h
+MAX_FRAME = 32  # FDI_FRAME_MAX_SIGNALS of fw/include/fdi_frame.h
 
 
 class EmitError(ValueError):
@@ -80,7 +84,7 @@ ${banner}
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
 FDI_STATIC_ASSERT(${count_macro} <= FDI_GEN_MAX_SLOTS, fdi_sa_${vehicle}_generator_slots);
 
-${bank}
+${derived}${bank}
 ${domains}
 static void ${vehicle}_gen_step(fdi_gen_io_t *io);
 
@@ -90,7 +94,8 @@ const fdi_gen_desc_t ${base}[${count_macro}] = {
 ${descriptors}
 };
 
-const fdi_gen_set_t ${set} = {"${vehicle}", ${vehicle}_gen_step, ${bank_ref}, ${n_bank}U, ${count_macro}};
+const fdi_gen_set_t ${set} = {"${vehicle}", ${vehicle}_gen_step, ${bank_ref}, ${n_bank}U, ${count_macro},
+                              ${derive_ref}, ${derived_ref}, ${n_derived}U};
 
 /* Every slot of io->run in one pass (fdi_gen.h): the terms shared by several slots once, then each slot. */
 static void ${vehicle}_gen_step(fdi_gen_io_t *io)
@@ -100,6 +105,26 @@ ${shared}
 ${slots}
 }
 """)
+
+DERIVED_FMT = Template("""\
+/* Derived signals (fdi_gen.h): the terms of a residual without derivatives, computed from the raw signals and
+   filtered as one signal (exactly the filtered terms; products of filtered signals would differ in fast motion).
+   Their places in the frame follow the vehicle's signals. */
+${defines}
+
+static void ${vehicle}_gen_derive(fdi_frame_t *in)
+{
+${lines}
+}
+
+static const fdi_gen_derived_t ${vehicle}_derived[${n_derived}] = {
+${entries}
+};
+
+""")
+DERIVED_DEFINE_FMT = Template("#define ${macro} ${index}U /* ${generator}: ${what} */")
+DERIVED_LINE_FMT = Template("    in->value[${macro}] = ${value};")
+DERIVED_ENTRY_FMT = Template("    {${macro}, ${sources}},")
 
 BANK_FMT = Template("""\
 /* The filter bank: every filtered signal of the generators once (b[k].x1 = y, b[k].x2 = dy; fdi_gen.h). */
@@ -208,10 +233,21 @@ class SlotCode:
 
 
 @dataclass(frozen=True)
+class DerivedSignal:
+    index: int  # its place in the frame (after the vehicle's signals)
+    signal: str
+    generator: str
+    value: str  # C expression over the raw frame signals
+    sources: tuple[str, ...]
+    what: str
+
+
+@dataclass(frozen=True)
 class GeneratorsFile:
     banner: str
     names: VehicleNames
     bank: tuple[BankFilter, ...]
+    derived: tuple[DerivedSignal, ...]
     shared: str  # the shared terms, C text
     slots: tuple[SlotCode, ...]
 
@@ -496,18 +532,41 @@ def generators_file(generators: Sequence[Generator], names: VehicleNames, faults
     if not 0 < len(generators) <= MAX_GENERATORS:
         raise EmitError(f"{len(generators)} generators; the firmware holds 1..{MAX_GENERATORS}")
     order = list(signals) or list(dict.fromkeys(s for g in generators for s in g.knowns))
-    nodes = bank_nodes(generators, order)
+    composites = [(g.name, g.composite) for g in generators if g.composite is not None]
+    if len(order) + len(composites) > MAX_FRAME:
+        raise EmitError(f"{len(order)} signals and {len(composites)} derived signals; the frame holds {MAX_FRAME}")
+    nodes = bank_nodes(generators, order + [c.signal for _, c in composites])
     if len(nodes) > MAX_BANK:
         raise EmitError(f"{len(nodes)} filters in the bank, the firmware holds {MAX_BANK}")
     p = _global_pass(generators)
     name = _Names(names, {n: k for k, n in enumerate(nodes)}, frozenset(str(t.symbol) for t in p.temps))
     all_slots = (1 << len(generators)) - 1
     slots = tuple(_slot_code(k, g, p, name, names, faults) for k, g in enumerate(generators))
-    return GeneratorsFile(banner, names, bank_of(nodes), _shared_text(p, name, all_slots,
+    derived = tuple(DerivedSignal(len(order) + k, c.signal, gname, to_c(c.expr, name), c.sources,
+                                  _readable(c.expr)) for k, (gname, c) in enumerate(composites))
+    return GeneratorsFile(banner, names, bank_of(nodes), derived, _shared_text(p, name, all_slots,
                                                                       "\n".join(c.body for c in slots)), slots)
 
 
+def _readable(expr: sympy.Expr) -> str:
+    return sympy.sstr(expr.xreplace({n.symbol: sympy.Symbol(n.signal) for n in nodes_in(expr)}))
+
+
 # ------------------------------------------------------------------------------------------ rendering
+def _derived_text(f: GeneratorsFile) -> str:
+    if not f.derived:
+        return ""
+    n = f.names
+    return DERIVED_FMT.substitute(
+        vehicle=n.vehicle, n_derived=len(f.derived),
+        defines="\n".join(DERIVED_DEFINE_FMT.substitute(macro=n.sig_index(d.signal), index=d.index,
+                                                        generator=d.generator, what=comment_text(d.what))
+                          for d in f.derived),
+        lines="\n".join(DERIVED_LINE_FMT.substitute(macro=n.sig_index(d.signal), value=d.value) for d in f.derived),
+        entries="\n".join(DERIVED_ENTRY_FMT.substitute(macro=n.sig_index(d.signal), sources=n.mask_expr(d.sources))
+                           for d in f.derived))
+
+
 def _bank_text(f: GeneratorsFile) -> str:
     if not f.bank:
         return ""
@@ -555,8 +614,12 @@ def render(f: GeneratorsFile) -> tuple[str, str]:
         function=f"{n.vehicle}_gen_{c.slot + 1}", condition=cond) + "\n" for cond, c in first.items())
     body = f.shared + "\n" + "\n".join(c.body for c in f.slots)
     source = SOURCE_FMT.substitute(banner=f.banner, base=n.generators, signals=n.signals, vehicle=n.vehicle,
-                                   bank=_bank_text(f), domains=domains, count_macro=n.n_generators,
+                                   derived=_derived_text(f), bank=_bank_text(f), domains=domains,
+                                   count_macro=n.n_generators,
                                    descriptors=descriptors, set=n.gen_set,
                                    bank_ref=f"{n.vehicle}_bank" if f.bank else "NULL", n_bank=len(f.bank),
+                                   derive_ref=f"{n.vehicle}_gen_derive" if f.derived else "NULL",
+                                   derived_ref=f"{n.vehicle}_derived" if f.derived else "NULL",
+                                   n_derived=len(f.derived),
                                    prelude=_prelude(body), shared=f.shared, slots="\n".join(c.body for c in f.slots))
     return header, source

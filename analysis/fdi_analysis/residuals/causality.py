@@ -56,6 +56,7 @@ from fdi_analysis.residuals.observer import (
 from fdi_analysis.residuals.reasons import NotRealizableError, Reason, Rejection
 from fdi_analysis.residuals.signals import align, derivative, filter_bank, nodes_in, raw
 from fdi_analysis.residuals.solvability import BlockSolution, Solution, Solver
+from fdi_analysis.residuals.whole_terms import whole_terms
 
 FloatArray = NDArray[np.float64]
 Causality = Literal["auto", "derivative", "integral"]
@@ -602,13 +603,18 @@ def _assemble(model: Model, solver: Solver, ids: list[str], p: Plan, name: str, 
                                                p.residual, p.observer))
     else:
         expr, level = align(expr)
+    plain_nodes = nodes_in(expr)  # the sensitivities (computed over filtered signals) may read any of them
+    composite = None
+    if observer is None:
+        expr, composite = whole_terms(expr, level, name)
     if scaled_by:
         scaled_by = scaled_by.replace("__L0d0", f" (filtered x{level})")
     if not expr.free_symbols:
         raise NotRealizableError(Rejection(Reason.CONSTANT_RESIDUAL, f"residual of {p.residual} is identically {expr}",
                                            p.residual))
-    nodes = nodes_in(expr) | (nodes_in(observer.update) if observer is not None else set())
-    order = [k.name for k in model.knowns]
+    nodes = nodes_in(expr) | plain_nodes | (nodes_in(observer.update) if observer is not None else set())
+    measured = [k.name for k in model.knowns]
+    order = measured + ([composite.signal] if composite is not None else [])
     used_eqs = {e for s in p.steps for e in s.equations} | {p.residual}
     faults = sorted({f for e in used_eqs for f in model.equation(e).faults}, key=[f.name for f in model.faults].index)
     min_speed, why = operating_domain(model, sorted(used_eqs))
@@ -621,13 +627,14 @@ def _assemble(model: Model, solver: Solver, ids: list[str], p: Plan, name: str, 
         level=level,
         filters=tuple(filter_bank(nodes, order)),
         nodes=tuple(sorted(nodes, key=lambda n: (order.index(n.signal), n.level, n.order))),
-        knowns=tuple(k for k in order if any(n.signal == k for n in nodes)),
+        knowns=tuple(k for k in measured if any(n.signal == k for n in nodes)),
         faults=tuple(faults),
         scaled_by=scaled_by,
         min_speed=min_speed,
         domain_reason=why,
         observer=observer,
         note=note,
+        composite=composite,
     )
 
 

@@ -13,7 +13,7 @@ import sympy
 from numpy.typing import NDArray
 
 from fdi_analysis.residuals.generator import DOMAIN_SIGNAL, XHAT, Generator
-from fdi_analysis.residuals.signals import Node
+from fdi_analysis.residuals.signals import Node, nodes_in
 
 FloatArray = NDArray[np.float64]
 SMALL_JDT = 1e-6  # below |J dt| the observer step's phi = expm1(J dt) / J is taken as dt
@@ -59,6 +59,12 @@ def node_signals(g: Generator, signals: Mapping[str, FloatArray], design: Filter
     values: dict[Node, FloatArray] = {}
     for k in g.knowns:
         values[Node(k, 0, 0)] = np.asarray(signals[k], dtype=float)
+    if g.composite is not None:
+        src = sorted(nodes_in(g.composite.expr))
+        fn = sympy.lambdify([n.symbol for n in src], g.composite.expr, modules="numpy")
+        n_samples = len(values[src[0]])
+        values[Node(g.composite.signal, 0, 0)] = np.broadcast_to(
+            np.asarray(fn(*[values[n] for n in src]), dtype=float), (n_samples,)).copy()
     for f in g.filters:
         y, dy = svf(values[f], design)
         values[Node(f.signal, f.level + 1, f.order)] = y

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import sympy
 
 from fdi_analysis.residuals.signals import Node
+from fdi_analysis.residuals.whole_terms import Composite
 
 DOMAIN_SIGNAL = "vx_m"  # measured signal of the operating-domain condition (longitudinal speed)
 # The domain of a residual with a regularised slip (Max(..., v_eps) in an equation it uses) starts at
@@ -89,6 +90,9 @@ class Generator:
     # d r / d f_j of each fault of the signature with a nonzero steady-state sensitivity, over the same Node
     # symbols (and XHAT) as `expr`: what the generator also computes on line (`residuals.sensitivity`)
     sensitivities: tuple[tuple[str, sympy.Expr], ...] = ()
+    # the residual's derivative-free nonlinear terms, computed from raw samples and filtered as one derived signal
+    # (`residuals.whole_terms`); None when it has none
+    composite: Composite | None = None
 
     def domain(self) -> str:
         if self.min_speed <= 0.0:
@@ -105,6 +109,8 @@ class Generator:
                      + ", ".join(s.var for s in self.steps if s.equation == loop))
         if self.observer is not None:
             text += "; " + self.observer.text()
+        if self.composite is not None:
+            text += "; its terms without derivatives filtered as one signal"
         text += f"; {len(self.filters)} filters, level {self.level}"
         if self.scaled_by:
             text += f"; multiplied by {self.scaled_by}"

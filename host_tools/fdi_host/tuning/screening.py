@@ -215,6 +215,8 @@ def operation_count(g: Generator) -> int:
     """Arithmetic operations of one step of the residual (common subexpressions once), plus ten per filter
     and twenty for an observer's integration: the candidate's cost in the selection."""
     exprs = [g.expr] if g.observer is None else [g.expr, g.observer.update, g.observer.gain]
+    if g.composite is not None:
+        exprs.append(g.composite.expr)
     subs, red = sympy.cse(exprs, order="none")
     ops = sum(int(sympy.count_ops(e)) for _, e in subs) + sum(int(sympy.count_ops(e)) for e in red)
     return ops + 10 * len(g.filters) + (20 if g.observer is not None else 0)

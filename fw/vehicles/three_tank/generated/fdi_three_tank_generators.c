@@ -40,7 +40,8 @@ const fdi_gen_desc_t fdi_three_tank_generators[FDI_THREE_TANK_N_GENERATORS] = {
      FDI_GEN_SENS_MASK(0x000003DCU), 0U, 0U, &fdi_three_tank_gen_set, 4U}, /* sensitivities fL2 fL3 fC12 fC3 fS1 fS2 fS3 */
 };
 
-const fdi_gen_set_t fdi_three_tank_gen_set = {"three_tank", three_tank_gen_step, three_tank_bank, 4U, FDI_THREE_TANK_N_GENERATORS};
+const fdi_gen_set_t fdi_three_tank_gen_set = {"three_tank", three_tank_gen_step, three_tank_bank, 4U, FDI_THREE_TANK_N_GENERATORS,
+                              NULL, NULL, 0U};
 
 /* Every slot of io->run in one pass (fdi_gen.h): the terms shared by several slots once, then each slot. */
 static void three_tank_gen_step(fdi_gen_io_t *io)
