@@ -29,7 +29,7 @@ from fdi_analysis.export.c_expr import c_float, to_c
 from fdi_analysis.export.c_names import VehicleNames
 from fdi_analysis.export.c_text import comment_text
 from fdi_analysis.residuals.generator import DOMAIN_SIGNAL, XHAT, Generator
-from fdi_analysis.residuals.signals import Node, node_of, nodes_in
+from fdi_analysis.residuals.signals import Node, node_of, readable
 
 MAX_BANK = 255  # FDI_GEN_MAX_BANK of fw/include/fdi_gen.h
 MAX_GENERATORS = 32  # FDI_GEN_MAX_SLOTS of fw/include/fdi_gen.h (and FDI_TABLE_MAX_TESTS)
@@ -543,13 +543,9 @@ def generators_file(generators: Sequence[Generator], names: VehicleNames, faults
     all_slots = (1 << len(generators)) - 1
     slots = tuple(_slot_code(k, g, p, name, names, faults) for k, g in enumerate(generators))
     derived = tuple(DerivedSignal(len(order) + k, c.signal, gname, to_c(c.expr, name), c.sources,
-                                  _readable(c.expr)) for k, (gname, c) in enumerate(composites))
+                                  readable(c.expr)) for k, (gname, c) in enumerate(composites))
     return GeneratorsFile(banner, names, bank_of(nodes), derived, _shared_text(p, name, all_slots,
                                                                       "\n".join(c.body for c in slots)), slots)
-
-
-def _readable(expr: sympy.Expr) -> str:
-    return sympy.sstr(expr.xreplace({n.symbol: sympy.Symbol(n.signal) for n in nodes_in(expr)}))
 
 
 # ------------------------------------------------------------------------------------------ rendering

@@ -54,7 +54,7 @@ from fdi_analysis.residuals.observer import (
     initial_estimate,
 )
 from fdi_analysis.residuals.reasons import NotRealizableError, Reason, Rejection
-from fdi_analysis.residuals.signals import align, derivative, filter_bank, nodes_in, raw
+from fdi_analysis.residuals.signals import align, derivative, filter_bank, nodes_in, raw, readable
 from fdi_analysis.residuals.solvability import BlockSolution, Solution, Solver
 from fdi_analysis.residuals.whole_terms import whole_terms
 
@@ -485,16 +485,10 @@ def synthesize(model: Model, eq_ids: Iterable[str], name: str, solver: Solver | 
             return design_observer(g_alt, reference)
         twice = ", ".join(twice_differentiated(model, p))
         note = (f"an observer for {alt.observer} (residual {alt.residual}) instead of the second derivative "
-                f"of {twice}: d r / d {alt.observer} = {_readable(c)} vanishes in some manoeuvres, where the "
+                f"of {twice}: d r / d {alt.observer} = {readable(c)} vanishes in some manoeuvres, where the "
                 "estimate would integrate open loop")
     g = _assemble(model, solver, ids, p, name, note)
     return g if g.observer is None else design_observer(g, reference)
-
-
-def _readable(expr: sympy.Expr) -> str:
-    """An expression over filtered-signal nodes with the signals' names (psidot_m__L1d0 -> psidot_m)."""
-    names = {n.symbol: sympy.Symbol(n.signal if n.order == 0 else f"d{n.order}_{n.signal}") for n in nodes_in(expr)}
-    return str(sympy.sstr(expr.xreplace(names)))
 
 
 @dataclass(frozen=True)

@@ -102,3 +102,9 @@ def filter_bank(nodes: set[Node], signal_order: list[str]) -> list[Node]:
             if src.level > 0:
                 todo.append(src)
     return sorted(need, key=lambda n: (n.level, signal_order.index(n.signal), n.order))
+
+
+def readable(expr: sympy.Expr) -> str:
+    """An expression over filtered-signal nodes with the signals' names (psidot_m__L1d0 -> psidot_m)."""
+    names = {n.symbol: sympy.Symbol(n.signal if n.order == 0 else f"d{n.order}_{n.signal}") for n in nodes_in(expr)}
+    return str(sympy.sstr(expr.xreplace(names)))
