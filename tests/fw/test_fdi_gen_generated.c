@@ -14,6 +14,7 @@
  */
 #include <setjmp.h>
 #include <stdarg.h>
+#include <float.h>
 #include <math.h>
 #include <stddef.h>
 #include <string.h>
@@ -108,11 +109,11 @@ static void wheel_frame(double t, fdi_frame_t *in)
     in->value[ROMO_SIG_DELTA4_M] = 0.0f;
 }
 
-/* A derive function for the tests below: place 30 = s0 * s1, place 31 = s0 / s2 (not finite when s2 is 0). */
+/* A derive function for the tests below: place 30 = s0 * s1, place 31 = s0 * s2 (overflows for a huge s2). */
 static void derive_two(fdi_frame_t *frame)
 {
     frame->value[30] = frame->value[0] * frame->value[1];
-    frame->value[31] = frame->value[0] / frame->value[2];
+    frame->value[31] = frame->value[0] * frame->value[2];
 }
 
 static void test_derived_signals(void **state)
@@ -137,12 +138,12 @@ static void test_derived_signals(void **state)
     /* every source usable: both written and usable; the caller's bits for the derived places do not count */
     assert_int_equal(fdi_gen_derive(&set, &frame, 0x7U), 0x7U | d30 | d31);
     assert_float_equal(frame.value[30], 4.0f, 0.0f);
-    assert_float_equal(frame.value[31], 1.0f, 0.0f);
+    assert_float_equal(frame.value[31], 4.0f, 0.0f);
     assert_int_equal(fdi_gen_derive(&set, &frame, 0x7U | d30 | d31), 0x7U | d30 | d31);
     assert_int_equal(fdi_gen_derive(&set, &frame, 0x3U), 0x3U | d30); /* s2 unusable: place 31 is not */
     assert_int_equal(fdi_gen_derive(&set, &frame, d30 | d31), 0U);
     /* a derived value that is not finite although its sources are usable takes its sources with it */
-    frame.value[2] = 0.0f;
+    frame.value[2] = FLT_MAX;
     assert_int_equal(fdi_gen_derive(&set, &frame, 0x7U), 0x2U | d30);
     /* no derived signal, NULL arguments: usable unchanged */
     {
