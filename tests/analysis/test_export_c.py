@@ -132,7 +132,7 @@ def test_render_is_deterministic_and_rejects_bad_selections(repo: Path, tmp_path
     assert "&fdi_kin1_generators[0]" in a[1] and "KIN1_SIGM_VY_M" in a[1]
     g = synthesize(model, eqs, "MSO1")
     gens = emit_generators.render(emit_generators.generators_file([g], names, [f.name for f in model.faults],
-                                                                  "/* cmd */"))
+                                                                  "/* cmd */", [k.name for k in model.knowns]))
     sigs = emit_signals.render(emit_signals.signals_file(model, names, "/* cmd */"))
     write(tmp_path, names.table, *a)
     write(tmp_path, names.generators, *gens)

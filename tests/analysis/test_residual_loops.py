@@ -147,7 +147,8 @@ def test_rotation_loop_residual_on_signals_and_in_c(rotated: Model, repo: Path, 
     assert float(np.mean(rf[1300:])) == pytest.approx(0.2, rel=0.05)
     names = VehicleNames("rot")
     faults = [f.name for f in rotated.faults]
-    for base, (header, source) in ((names.generators, render(generators_file([g], names, faults, "/* test */"))),
+    for base, (header, source) in ((names.generators, render(generators_file([g], names, faults, "/* test */",
+                                                                                    [k.name for k in rotated.knowns]))),
                                    (names.signals, render_signals(signals_file(rotated, names, "/* test */")))):
         (tmp_path / f"{base}.h").write_text(header)
         (tmp_path / f"{base}.c").write_text(source)

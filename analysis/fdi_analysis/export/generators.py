@@ -525,13 +525,16 @@ def _slot_code(k: int, g: Generator, p: _Pass, name: _Names, names: VehicleNames
 
 
 def generators_file(generators: Sequence[Generator], names: VehicleNames, faults: Sequence[str],
-                    banner: str, signals: Sequence[str] = ()) -> GeneratorsFile:
+                    banner: str, signals: Sequence[str]) -> GeneratorsFile:
     """What goes into the generator files: the set of `generators` (slot = position), for the model's fault list
     `faults` (bit j of a sensitivity mask = faults[j]); `signals`: the frame's signals in index order (the bank's
-    order; default: as the generators read them)."""
+    order; the derived signals take the places after them), every signal the generators read among them."""
     if not 0 < len(generators) <= MAX_GENERATORS:
         raise EmitError(f"{len(generators)} generators; the firmware holds 1..{MAX_GENERATORS}")
-    order = list(signals) or list(dict.fromkeys(s for g in generators for s in g.knowns))
+    order = list(signals)
+    missing = sorted({k for g in generators for k in g.knowns} - set(order))
+    if missing:
+        raise EmitError(f"the generators read {', '.join(missing)}, not signals of the frame")
     composites = [(g.name, g.composite) for g in generators if g.composite is not None]
     if len(order) + len(composites) > MAX_FRAME:
         raise EmitError(f"{len(order)} signals and {len(composites)} derived signals; the frame holds {MAX_FRAME}")
