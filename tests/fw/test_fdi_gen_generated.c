@@ -10,7 +10,8 @@
  * test is "not evaluable" in fdi_diag below its minimum speed and restarts with a warm-up when the speed returns,
  * while the kinematic tests stay evaluable; the observer building blocks (fdi_gen_obs_predict/store, heaviside,
  * sign, max, min) against the exact solution of x' = J x + b; a table listing the slots in another order gives
- * each test the same residual and sensitivities.
+ * each test the same residual and sensitivities; derived signals (fdi_gen_derive: usable masks, non-finite values,
+ * bad sets).
  */
 #include <setjmp.h>
 #include <stdarg.h>

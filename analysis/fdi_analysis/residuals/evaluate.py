@@ -4,8 +4,9 @@ double precision. C and Python agree to float rounding (tests/analysis/test_resi
 
 from __future__ import annotations
 
+import functools
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,6 +15,7 @@ from numpy.typing import NDArray
 
 from fdi_analysis.residuals.generator import DOMAIN_SIGNAL, XHAT, Generator
 from fdi_analysis.residuals.signals import Node, nodes_in
+from fdi_analysis.residuals.whole_terms import Composite
 
 FloatArray = NDArray[np.float64]
 SMALL_JDT = 1e-6  # below |J dt| the observer step's phi = expm1(J dt) / J is taken as dt
@@ -55,13 +57,20 @@ def svf(u: FloatArray, design: FilterDesign) -> tuple[FloatArray, FloatArray]:
     return y, dy
 
 
+@functools.lru_cache(maxsize=1024)
+def _composite_fn(c: Composite) -> tuple[list[Node], Callable[..., object]]:
+    """The derived signal's raw-sample nodes and its numpy function (built once per composite: the screening
+    evaluates each candidate on many runs)."""
+    src = sorted(nodes_in(c.expr))
+    return src, sympy.lambdify([n.symbol for n in src], c.expr, modules="numpy")
+
+
 def node_signals(g: Generator, signals: Mapping[str, FloatArray], design: FilterDesign) -> dict[Node, FloatArray]:
     values: dict[Node, FloatArray] = {}
     for k in g.knowns:
         values[Node(k, 0, 0)] = np.asarray(signals[k], dtype=float)
     if g.composite is not None:
-        src = sorted(nodes_in(g.composite.expr))
-        fn = sympy.lambdify([n.symbol for n in src], g.composite.expr, modules="numpy")
+        src, fn = _composite_fn(g.composite)
         n_samples = len(values[src[0]])
         values[Node(g.composite.signal, 0, 0)] = np.broadcast_to(
             np.asarray(fn(*[values[n] for n in src]), dtype=float), (n_samples,)).copy()

@@ -75,12 +75,13 @@ def whole_terms(expr: sympy.Expr, level: int, generator: str) -> tuple[sympy.Exp
     no such term or no filter (level 0)."""
     if level == 0:
         return expr, None
-    terms = sympy.Add.make_args(expr)
-    whole = [t for t in terms if _filtered_whole(t)]
+    whole: list[sympy.Expr] = []
+    rest: list[sympy.Expr] = []
+    for t in sympy.Add.make_args(expr):
+        (whole if _filtered_whole(t) else rest).append(t)
     if not whole:
         return expr, None
     raw = sympy.Add(*whole)
     raw = raw.xreplace({n.symbol: Node(n.signal, 0, 0).symbol for n in nodes_in(raw)})
     signal = composite_signal(generator)
-    rest = sympy.Add(*[t for t in terms if not _filtered_whole(t)])
-    return rest + Node(signal, level, 0).symbol, Composite(signal, raw)
+    return sympy.Add(*rest) + Node(signal, level, 0).symbol, Composite(signal, raw)
