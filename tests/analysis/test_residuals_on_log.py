@@ -1,6 +1,6 @@
 """`fdi-tune residuals`: the generated residuals computed offline on a CAN log equal the C ECU's, step by
-step; the ECU view of a log holds each message's last frame at the ECU's step times; bad logs are refused with
-the reason."""
+step; the ECU view of a log takes each message's frames at the instant the ECU's steps align to (or holds the
+last one); bad logs are refused with the reason."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from fdi_host.can.dbc import RomoDatabase
-from fdi_host.can.ecu_view import ecu_view, step_times
+from fdi_host.can.ecu_view import _at_instants, bus_align, ecu_view, step_times
 from fdi_host.can.frame import Frame
 from fdi_host.can.logs import read_log, write_log
 from fdi_host.can.traffic import build_frames
@@ -25,23 +25,45 @@ MODEL = "analysis/models/romo_grouped.toml"
 THRESHOLDS = "analysis/models/romo_thresholds.toml"
 
 
-def test_step_times_and_sample_and_hold() -> None:
+def test_step_times_sample_and_hold_and_alignment() -> None:
     db = RomoDatabase()
     sim = simulate(load_scenario("cornering"), [], duration=0.2, seed=5)
     frames = build_frames(sim, db)
     t = step_times(frames, 0.01)
     assert t[0] == pytest.approx(frames[0].timestamp + 0.01) and np.allclose(np.diff(t), 0.01)
     assert t[-1] < frames[-1].timestamp  # a step runs once a later frame has arrived
+    assert bus_align(db) == pytest.approx(0.02)  # the brake message's cycle, covered by 4 wheel-robot cycles
+    brake = {round(f.timestamp * 1e3): db.decode_sim(272, f.data)["P_f_m"] for f in frames if f.frame_id == 272}
+    k = int(np.argmin(np.abs(t - 0.05)))
+    # align 0 (default), sample-and-hold: the brake message (20 ms cycle, 7 ms offset) at the step of 0.05 s: the
+    # frame of 0.047 s
     tv, view = ecu_view(frames, 0.01, db)
     assert np.array_equal(tv, t)
-    # the brake message (20 ms cycle, 7 ms offset): the step at 0.05 s holds the frame of 0.047 s
-    brake = [f for f in frames if f.frame_id == 272]
-    k = int(np.argmin(np.abs(t - 0.05)))
-    held = db.decode_sim(272, next(f.data for f in brake if abs(f.timestamp - 0.047) < 1e-9))
-    assert view["P_f_m"][k] == held["P_f_m"]
+    assert view["P_f_m"][k] == brake[47]
+    # aligned: the instant 0.03 s, 3 ms after the frame of 0.027 s and 17 ms before that of 0.047 s
+    _, aligned = ecu_view(frames, 0.01, db, align=bus_align(db))
+    assert aligned["P_f_m"][k] == pytest.approx(brake[27] + 0.15 * (brake[47] - brake[27]))
     with pytest.raises(ValueError, match="step must be positive"):
         step_times(frames, 0.0)
+    with pytest.raises(ValueError, match="align must be >= 0"):
+        ecu_view(frames, 0.01, db, align=-0.01)
     assert step_times([], 0.01).size == 0 and step_times([Frame(1.0, 128, bytes(8))], 0.01).size == 0
+
+
+def test_alignment_rules_mirror_the_ecu() -> None:
+    """The cases of tests/fw/test_fdi_ecu.c test_time_alignment on one 10 ms message (timeout 30 ms): a ramp
+    interpolated at T_k - 20 ms, the oldest kept frame before the instant is reached, across a 70 ms gap the
+    newer frame once it has arrived (the last frame before it until then)."""
+    times = np.asarray([1, 11, 21, 31, 41, 111, 121], dtype=np.int64) * 1000
+    values = times * 1e-6  # 1 m/s per s
+    steps = np.asarray([10, 30, 50, 60, 110, 120, 130], dtype=np.int64) * 1000
+    got = _at_instants(times, values, steps, steps - 20000, 30000)
+    # T=10: all after s=-10 -> oldest (1); 30: s=10 between 1 and 11; 50: s=30 between 21 and 31; 60: s=40;
+    # 110: s=90 in the gap, 111 not yet seen -> 41; 120: s=100 in the gap, 111 seen -> 111; 130: s=110, still
+    # between 41 and 111 -> 111
+    assert got == pytest.approx(np.asarray([1, 10, 30, 40, 41, 111, 111]) * 1e-3)
+    assert _at_instants(times, values, steps, steps, 30000) == pytest.approx(  # align 0: hold
+        np.asarray([1, 21, 41, 41, 41, 111, 121]) * 1e-3)
 
 
 @pytest.fixture(scope="module")

@@ -28,7 +28,7 @@ static fdi_table_t kin_copy;
 static const fdi_table_t *kin_with_response(uint16_t steps)
 {
     uint32_t i;
-    kin_copy = fdi_kin_table;
+    (void)veh_kin_table(&kin_copy);
     for (i = 0U; i < 4U; ++i)
     {
         kin_tests_copy[i] = fdi_kin_table.tests[i];

@@ -2,9 +2,9 @@
  * test_fdi_ecu.c - the ECU core on synthetic CAN traffic of the reference vehicle (fdi_test_util.h):
  * arguments, the E2E CRC against the CRC8 SAE-J1850 check value, every reject reason (counted, ignored),
  * the alive counter wrap, timeouts -> "not evaluable", step scheduling (strict boundaries, catch-up limit,
- * time wrap-around, independence of the poll pattern) and the diagnosis frame (E2E, counter, fields) for
- * a fault-free drive and a drifting vx sensor (f4), on the ROMO bus generated from dbc/romo.dbc; the bus
- * description checks (fdi_ecu_bus_check).
+ * time wrap-around, independence of the poll pattern), the time alignment of a step's signals, and the
+ * diagnosis frame (E2E, counter, fields) for a fault-free drive and a drifting vx sensor (f4), on the ROMO bus
+ * generated from dbc/romo.dbc; the bus description checks (fdi_ecu_bus_check).
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -566,6 +566,114 @@ static void test_timeout_not_evaluable(void **state)
     assert_int_equal(cnt.msg[MSG_IMU].timeouts, 0U);
 }
 
+/* One ms tick of a ramp bus: IMU (5 ms, offset 0) with a_x = 0.2 m/s^2 per s, VEL (10 ms, offset 1 ms) with
+   v_x = 1 m/s per s (both exact in the DBC's quantisation), VEL silent while `vel_silent`; polled after each frame. */
+static void ramp_tick(fdi_ecu_t *e, uint32_t t0, uint32_t k, uint8_t *c_imu, uint8_t *c_vel, bool vel_silent)
+{
+    fdi_frame_t in;
+    fdi_ecu_tx_t tx;
+    uint8_t d[8];
+    memset(&in, 0, sizeof in);
+    in.value[ROMO_SIG_AX_M] = 2.0e-4f * (float)k;
+    in.value[ROMO_SIG_VX_M] = 1.0e-3f * (float)k;
+    if ((k % 5U) == 0U)
+    {
+        imu_frame(d, &in, *c_imu, 0U);
+        *c_imu = (uint8_t)((*c_imu + 1U) % 15U);
+        assert_int_equal(fdi_ecu_rx(e, ID_IMU, 8U, d, t0 + (k * 1000U)), FDI_OK);
+        assert_int_equal(fdi_ecu_poll(e, t0 + (k * 1000U), &tx), FDI_OK);
+    }
+    if (((k % 10U) == 1U) && !vel_silent)
+    {
+        vel_frame(d, &in, *c_vel);
+        *c_vel = (uint8_t)((*c_vel + 1U) % 15U);
+        assert_int_equal(fdi_ecu_rx(e, ID_VEL, 8U, d, t0 + (k * 1000U)), FDI_OK);
+        assert_int_equal(fdi_ecu_poll(e, t0 + (k * 1000U), &tx), FDI_OK);
+    }
+}
+
+/* The ramps at the ms instant s of the bus (before its first frames: the first frame's values). */
+static float ramp_ax(double s_ms)
+{
+    return (float)(2.0e-4 * ((s_ms > 0.0) ? s_ms : 0.0));
+}
+
+static float ramp_vx(double s_ms)
+{
+    return (float)(1.0e-3 * ((s_ms > 1.0) ? s_ms : 1.0));
+}
+
+/* Time alignment: a step's signals are those of the instant T_k - align_us, linear between the two frames of
+   each message around it (fdi_ecu_align_us: the longest cycle of the ROMO bus's signal messages, 20 ms);
+   align 0, the default, holds each message's last frame; every kept frame after the instant: the oldest; frames around the
+   instant farther apart than the timeout (a silent sender): the newer one; an align beyond what a message's
+   kept frames cover is refused. The microsecond clock wraps during the run. */
+static void test_time_alignment(void **state)
+{
+    const uint32_t t0 = 0xFFFF0000U;
+    fdi_ecu_t e;
+    fdi_ecu_config_t c = kin_config();
+    fdi_ecu_result_t res;
+    uint32_t steps_seen = 0U;
+    uint32_t pass;
+    (void)state;
+    assert_int_equal(c.align_us, 0U);
+    assert_int_equal(fdi_ecu_align_us(&fdi_romo_bus), 20000U);
+    assert_int_equal(fdi_ecu_align_us(NULL), 0U);
+    for (pass = 0U; pass < 2U; ++pass)
+    {
+        uint8_t c_imu = 0U;
+        uint8_t c_vel = 0U;
+        uint32_t last_step = 0U;
+        uint32_t k;
+        c.align_us = (pass == 0U) ? fdi_ecu_align_us(&fdi_romo_bus) : 0U;
+        assert_int_equal(fdi_ecu_init(&e, &c), FDI_OK);
+        for (k = 0U; k < 1000U; ++k)
+        {
+            const bool silent = (k > 500U) && (k < 560U); /* VEL frames of 0.511 .. 0.551 s lost */
+            ramp_tick(&e, t0, k, &c_imu, &c_vel, silent);
+            assert_int_equal(fdi_ecu_result(&e, &res), FDI_OK);
+            if (res.step != last_step)
+            {
+                const double T = (double)(res.t_us - t0) / 1000.0; /* ms of the bus */
+                const double s_ms = T - ((double)c.align_us / 1000.0);
+                double vx_ms; /* the instant whose v_x ramp value the step must hold */
+                last_step = res.step;
+                steps_seen++;
+                assert_int_equal(res.t_us - t0, res.step * 10000U);
+                if (pass == 0U)
+                {
+                    assert_float_equal(e.in.value[ROMO_SIG_AX_M], ramp_ax(s_ms), 2.0e-6f);
+                    vx_ms = s_ms;
+                    if ((s_ms > 491.0) && (s_ms < 561.0))
+                    {
+                        vx_ms = 561.0; /* the frames around s are 70 ms apart (timeout 30 ms): the newer */
+                    }
+                    if (T < 561.0 + 0.5)
+                    {
+                        vx_ms = ((s_ms > 491.0) && (s_ms < 561.0)) ? 491.0 : vx_ms; /* not received yet */
+                    }
+                }
+                else
+                {
+                    const double imu_ms = floor(T / 5.0) * 5.0;
+                    const double vel_ms = floor((T - 1.0) / 10.0) * 10.0 + 1.0;
+                    assert_float_equal(e.in.value[ROMO_SIG_AX_M], ramp_ax(imu_ms), 2.0e-6f);
+                    vx_ms = ((vel_ms > 491.0) && (vel_ms < 561.0)) ? 491.0 : vel_ms;
+                }
+                assert_float_equal(e.in.value[ROMO_SIG_VX_M], ramp_vx(vx_ms), 2.0e-5f);
+            }
+        }
+    }
+    assert_true(steps_seen > 190U);
+    /* 6 kept frames of the 5 ms messages cover (6 - 2) x 5 ms behind the newest */
+    c = kin_config();
+    c.align_us = 20001U;
+    assert_int_equal(fdi_ecu_init(&e, &c), FDI_BAD_ARG);
+    c.align_us = 0xFFFFFFFFU;
+    assert_int_equal(fdi_ecu_init(&e, &c), FDI_BAD_ARG);
+}
+
 /* f4 drifting 0.05 m/s per s from 30 s: isolated as f4 by 60 s; the frame carries class 4. Polling only on a
    25 ms timer gives the same results step by step. */
 static void test_vx_drift_isolated(void **state)
@@ -634,6 +742,7 @@ int main(void)
         cmocka_unit_test(test_reject_reasons),    cmocka_unit_test(test_counter_wrap_and_delta),
         cmocka_unit_test(test_scheduling),        cmocka_unit_test(test_fault_free_drive),
         cmocka_unit_test(test_timeout_not_evaluable), cmocka_unit_test(test_vx_drift_isolated),
+        cmocka_unit_test(test_time_alignment),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

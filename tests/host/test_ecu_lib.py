@@ -17,7 +17,7 @@ from fdi_host.can import e2e
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.can.frame import Frame
 from fdi_host.can.traffic import build_frames
-from fdi_host.ecu.bindings import DIAG_ID, REASONS, Ecu, EcuError, table_info
+from fdi_host.ecu.bindings import DIAG_ID, REASONS, Ecu, EcuError, bus_info, table_info
 from fdi_host.sim.faults import FaultSpec
 from fdi_host.sim.scenario import load_scenario
 from fdi_host.sim.vehicle_sim import simulate
@@ -235,7 +235,6 @@ def test_bus_is_the_dbc() -> None:
     maps to it, and the diagnosis frame's ID (the one DIAG_ID of the host tools, also from the DBC)."""
     from fdi_host.can.dbc import DIAG_ID as DBC_DIAG_ID
     from fdi_host.can.dbc import SIGNAL_MAP
-    from fdi_host.ecu.bindings import bus_info
 
     db = RomoDatabase()
     bus = bus_info("romo")
@@ -249,6 +248,25 @@ def test_bus_is_the_dbc() -> None:
     for (name, _), mask in zip(bus.messages, bus.signals, strict=True):
         want = sum(1 << signals.index(s.sim) for s in SIGNAL_MAP if s.message == name and s.sim in signals)
         assert mask == want, name
+
+
+def test_ecu_view_mirrors_the_core() -> None:
+    """The offline view that calibrates the gates (fdi_host.can.ecu_view) uses the core's constants: the frames it
+    keeps per message, the alignment of the ROMO bus, the default timeouts; the default is sample-and-hold (align
+    0, as the view's); an alignment beyond the kept frames is refused."""
+    from fdi_host.can import ecu_view
+    from fdi_host.ecu.bindings import bus_align, kept_frames
+
+    assert kept_frames() == ecu_view.HISTORY
+    assert bus_align("romo") == pytest.approx(ecu_view.bus_align()) and round(bus_align("romo") * 1e6) == 20000
+    ecu = Ecu("romo")
+    assert ecu.config.align_us == 0
+    assert Ecu("romo", align_s=bus_align("romo")).config.align_us == 20000
+    bus = bus_info("romo")
+    assert list(ecu.config.timeout_us)[: len(bus.cycle_ms)] == [
+        ecu_view.TIMEOUT_CYCLES * c * 1000 for c in bus.cycle_ms]
+    with pytest.raises(EcuError):
+        Ecu("romo", align_s=0.0201)  # the 5 ms messages' kept frames reach back 20 ms
 
 
 def test_sensitivities_on_request_change_nothing_else(f4_frames: list[Frame]) -> None:

@@ -30,8 +30,22 @@
  * silent bus. At each step:
  *   validity = union of the signal masks of the fresh messages, where a message is fresh when it was accepted
  *   at least once, its last frame had sender status OK/DEGRADED and T_k - t_last <= its timeout (default 3x
- *   the DBC cycle time); then fdi_diag_step(frame, validity), so tests reading a silent or invalid signal
- *   become "not evaluable" (and warm up again when it returns).
+ *   the DBC cycle time); the frame's signals are those of one instant, s_k = T_k - align_us (time alignment,
+ *   below); then fdi_diag_step(frame, validity), so tests reading a silent or invalid signal become "not
+ *   evaluable" (and warm up again when it returns).
+ * Time alignment: messages come at their own cycle times and phases, so the last frames of a step are of
+ *   different instants, and in fast motion that difference alone makes a residual (a product of a yaw rate and
+ *   a velocity read 5 ms apart). Each message keeps its last FDI_ECU_HISTORY accepted frames; a signal's value
+ *   at s_k is linear between its message's two kept frames around s_k, or the newer of them when they are more
+ *   than the message's timeout apart (a silent sender), the newest frame when s_k is after it, the oldest kept
+ *   frame when every kept frame is after s_k (the first steps). fdi_ecu_align_us(bus) gives the alignment that
+ *   brings every message's signals to one instant: the longest cycle time of the messages that carry frame
+ *   signals (20 ms on ROMO: every message has a frame at or before s_k), capped so that every such message's
+ *   kept frames reach back to it ((FDI_ECU_HISTORY - 2) cycles); the diagnosis then lags the bus by align_us.
+ *   The default, align_us 0, is sample-and-hold (each message's last frame), without lag: the table's gates
+ *   must be calibrated on the view the ECU runs (fdi_host.can.ecu_view with the same alignment), and the ROMO
+ *   table is calibrated on sample-and-hold (README, "Diagnosis quality": aligned, its gates were 2-3 times
+ *   smaller, but the selection they led to isolated worse and named a wrong class more often).
  * If more than max_catchup_steps steps are due in one call (the host stalled or the clock jumped), the
  * oldest are skipped (counted) and the schedule restarts at the current time.
  * Time is uint32_t microseconds and may wrap (every ~71.6 min): all comparisons use modular differences,
@@ -48,10 +62,11 @@
  *                  255 = detected but not isolated.
  * (the encode function keeps the bits its DBC signals hold).
  *
- * Cost: rx ~ 100 operations (CRC 8 table look-ups, unpack, range checks); a step = fdi_diag_step + one
- * timeout compare per message + frame packing. Memory: sizeof(fdi_ecu_t) = sizeof(fdi_diag_t) +
- * sizeof(fdi_diag_result_t) + 128 (frame) + ~80 per message slot + ~70 (scripts/bench_fw.sh prints it);
- * caller-owned. Flash: 256 bytes of CRC table.
+ * Cost: rx ~ 100 operations (CRC 8 table look-ups, unpack, range checks, the values kept); a step =
+ * fdi_diag_step + per message one timeout compare and a search of its kept frames, per signal one
+ * interpolation + frame packing. Memory: sizeof(fdi_ecu_t) = sizeof(fdi_diag_t) + sizeof(fdi_diag_result_t) +
+ * 128 (frame) + per message slot ~80 + FDI_ECU_HISTORY x 36 (kept frames) + ~70 (scripts/bench_fw.sh prints
+ * it); caller-owned. Flash: 256 bytes of CRC table.
  */
 #ifndef FDI_ECU_H
 #define FDI_ECU_H
@@ -70,6 +85,12 @@
 #endif
 #if (FDI_ECU_MAX_MSGS < 1) || (FDI_ECU_MAX_MSGS > 255)
 #error "FDI_ECU_MAX_MSGS must be in 1..255"
+#endif
+#ifndef FDI_ECU_HISTORY
+#define FDI_ECU_HISTORY 6U /* accepted frames kept per message for the time alignment; override with -D (2..255) */
+#endif
+#if (FDI_ECU_HISTORY < 2) || (FDI_ECU_HISTORY > 255)
+#error "FDI_ECU_HISTORY must be in 2..255"
 #endif
 #define FDI_ECU_FRAME_LEN 8U      /* classic CAN: at most 8 data bytes */
 #define FDI_ECU_MAX_MSG_VALUES 8U /* frame signals one message can carry */
@@ -159,6 +180,8 @@ typedef struct
     uint32_t timeout_us[FDI_ECU_MAX_MSGS]; /* per message of the bus: silence after which its signals go invalid, > 0 */
     uint8_t max_delta_counter;            /* 1..14: largest accepted alive-counter advance (1 = no loss) */
     uint16_t max_catchup_steps;           /* >= 1: steps run at most per call before resynchronising */
+    uint32_t align_us;                    /* step k's signals are those of the instant T_k - align_us (header
+                                             comment); 0: each message's last frame (sample-and-hold) */
 } fdi_ecu_config_t;
 
 typedef struct
@@ -205,6 +228,10 @@ typedef struct
 
 typedef struct
 {
+    uint32_t t_us[FDI_ECU_HISTORY];                          /* receive times of the kept frames */
+    float value[FDI_ECU_HISTORY][FDI_ECU_MAX_MSG_VALUES];    /* their decoded values */
+    uint8_t newest;   /* index of the newest kept frame */
+    uint8_t n_kept;   /* kept frames, 0..FDI_ECU_HISTORY */
     uint32_t t_last_us;
     uint8_t last_counter;
     bool seen;      /* a frame passed the E2E check at least once (counter reference valid) */
@@ -221,6 +248,7 @@ typedef struct
     fdi_frame_t in;
     fdi_ecu_msg_state_t msg[FDI_ECU_MAX_MSGS];
     uint32_t timeout_us[FDI_ECU_MAX_MSGS];
+    uint32_t align_us;
     uint32_t gen_mask;  /* tests with a generator */
     uint32_t step_us;
     uint32_t next_us;   /* time of the next step */
@@ -237,7 +265,7 @@ typedef struct
 /* Defaults for `table` on `bus`: the diagnoser's defaults (fdi_diag_config_default: CUSUM k 1.5, h 150, set 10,
    clear 100, warm-up = settling time + 20 steps, exoneration after a 3 s settle window, episodes ending after 3 s
    without alarm, generator parameters 0, no sensitivities), timeouts 3x the DBC cycle times, max_delta_counter 1,
-   max_catchup_steps 100. BAD_ARG on NULL or a bus with more than
+   max_catchup_steps 100, align_us 0 (sample-and-hold; header comment). BAD_ARG on NULL or a bus with more than
    FDI_ECU_MAX_MSGS messages; BAD_TABLE when the table's design point has no finite settling time. */
 fdi_status_t fdi_ecu_config_default(fdi_ecu_config_t *cfg, const fdi_table_t *table, const fdi_ecu_bus_t *bus);
 
@@ -247,8 +275,9 @@ fdi_status_t fdi_ecu_config_default(fdi_ecu_config_t *cfg, const fdi_table_t *ta
 fdi_status_t fdi_ecu_bus_check(const fdi_ecu_bus_t *bus, const fdi_table_t *table);
 
 /* BAD_ARG: NULL, a bus failing fdi_ecu_bus_check, zero timeout, max_delta_counter outside 1..14,
-   max_catchup_steps 0, table dt not a whole number of microseconds in 100 us..10 s; others from
-   fdi_diag_init(). A failed init leaves an instance that every other call refuses with BAD_ARG. */
+   max_catchup_steps 0, align_us beyond 60 s or (FDI_ECU_HISTORY - 2) cycles of a message with frame signals,
+   table dt not a whole number of microseconds in 100 us..10 s; others from fdi_diag_init(). A failed init
+   leaves an instance that every other call refuses with BAD_ARG. */
 fdi_status_t fdi_ecu_init(fdi_ecu_t *self, const fdi_ecu_config_t *cfg);
 
 /* One received frame at t_us. Rejections are counted, not errors (FDI_OK). BAD_ARG: self NULL or not
@@ -262,6 +291,11 @@ fdi_status_t fdi_ecu_poll(fdi_ecu_t *self, uint32_t t_us, fdi_ecu_tx_t *tx);
 /* Copies of the counters and of the last step's result. BAD_ARG on NULL / uninitialised. */
 fdi_status_t fdi_ecu_counters(const fdi_ecu_t *self, fdi_ecu_counters_t *out);
 fdi_status_t fdi_ecu_result(const fdi_ecu_t *self, fdi_ecu_result_t *out);
+
+/* The alignment (us) that takes every message's signals at one instant (header comment, time alignment): the
+   longest cycle time of the bus's messages that carry frame signals, capped at (FDI_ECU_HISTORY - 2) cycles of
+   each of them; 0 for a NULL or oversized bus or one without signals. Cannot fail. */
+uint32_t fdi_ecu_align_us(const fdi_ecu_bus_t *bus);
 
 /* Index in bus->msgs of an input CAN ID, or -1 (also for a NULL bus). Cannot fail. */
 int32_t fdi_ecu_msg_index(const fdi_ecu_bus_t *bus, uint32_t can_id);

@@ -11,6 +11,7 @@
 #define STATUS_DEGRADED 1U
 #define TIMEOUT_CYCLES 3U
 #define US_PER_MS 1000U
+#define MAX_ALIGN_US 60000000U /* 60 s: far below half the clock's wrap */
 
 uint8_t fdi_ecu_e2e_crc(uint16_t data_id, const uint8_t *data, uint8_t len)
 {
@@ -147,7 +148,65 @@ static fdi_ecu_status_t diag_status(const fdi_ecu_t *self, uint32_t validity)
     return st;
 }
 
-/* One diagnosis step at time t: timeouts, fdi_diag_step, result. */
+/* Slot of the k-th newest kept frame of m (k < n_kept). */
+static uint32_t kept_slot(const fdi_ecu_msg_state_t *m, uint32_t k)
+{
+    return (((uint32_t)m->newest + FDI_ECU_HISTORY) - k) % FDI_ECU_HISTORY;
+}
+
+/* The values of message i at the instant s into the frame: linear between the two kept frames around s (when
+   they are at most the message's timeout apart), else the kept frame nearest to s (the newest when s is after
+   it or the frames around s are too far apart, the oldest when every kept frame is after s). */
+static void aligned_values(fdi_ecu_t *self, uint32_t i, uint32_t s)
+{
+    const fdi_ecu_msg_state_t *m = &self->msg[i];
+    const fdi_ecu_msg_desc_t *desc = &self->bus->msgs[i];
+    uint32_t after = (uint32_t)m->newest; /* slot of the frame just after s (or the one taken) */
+    uint32_t before = after;             /* slot of the newest frame at or before s */
+    bool found = false;
+    float w = 0.0f;                      /* weight of `after` */
+    uint32_t k;
+    for (k = 0U; (!found) && (k < (uint32_t)m->n_kept); ++k)
+    {
+        const uint32_t slot = kept_slot(m, k);
+        if (time_diff(s, m->t_us[slot]) >= 0)
+        {
+            found = true;
+            before = slot;
+        }
+        else
+        {
+            after = slot; /* also the oldest kept frame when none is at or before s */
+        }
+    }
+    if (found && (before != after))
+    {
+        const int32_t span = time_diff(m->t_us[after], m->t_us[before]);
+        if ((span > 0) && ((uint32_t)span <= self->timeout_us[i]))
+        {
+            w = (float)time_diff(s, m->t_us[before]) / (float)span;
+        }
+        else
+        {
+            w = 1.0f; /* a gap: the newer frame */
+        }
+    }
+    else if (!found)
+    {
+        before = after; /* every kept frame is after s: the oldest */
+    }
+    else
+    {
+        /* s at or after the newest frame: it */
+    }
+    for (k = 0U; k < (uint32_t)desc->n_values; ++k)
+    {
+        const float a = m->value[before][k];
+        self->in.value[desc->signal_index[k]] = a + (w * (m->value[after][k] - a));
+    }
+}
+
+/* One diagnosis step at time t: timeouts, the signals of the step's instant, fdi_diag_step, result. */
 static void run_step(fdi_ecu_t *self, uint32_t t)
 {
     uint32_t validity = 0U;
@@ -156,6 +215,10 @@ static void run_step(fdi_ecu_t *self, uint32_t t)
     {
         fdi_ecu_msg_state_t *m = &self->msg[i];
         bool fresh = false;
+        if (m->n_kept > 0U)
+        {
+            aligned_values(self, i, t - self->align_us);
+        }
         if (m->have && m->status_ok)
         {
             const int32_t age = time_diff(t, m->t_last_us);
@@ -223,6 +286,35 @@ static void run_due(fdi_ecu_t *self, uint32_t t)
 
 /* ------------------------------------------------------------------------------------------ API */
 
+/* How far behind its newest frame the kept frames of message m reach, one cycle of jitter spared (<= 60 s). */
+static uint32_t covered_us(const fdi_ecu_msg_desc_t *m)
+{
+    const uint64_t cycles = (uint64_t)FDI_ECU_HISTORY - 2U;
+    const uint64_t us = cycles * (uint64_t)m->cycle_ms * (uint64_t)US_PER_MS;
+    return (us < (uint64_t)MAX_ALIGN_US) ? (uint32_t)us : MAX_ALIGN_US;
+}
+
+uint32_t fdi_ecu_align_us(const fdi_ecu_bus_t *bus)
+{
+    uint32_t longest = 0U;
+    uint32_t cover = 0xFFFFFFFFU;
+    uint32_t i;
+    const uint32_t n = ((bus != NULL) && (bus->msgs != NULL) && ((uint32_t)bus->n_msgs <= FDI_ECU_MAX_MSGS))
+                           ? (uint32_t)bus->n_msgs
+                           : 0U;
+    for (i = 0U; i < n; ++i)
+    {
+        const fdi_ecu_msg_desc_t *m = &bus->msgs[i];
+        if (m->n_values > 0U)
+        {
+            const uint32_t cycle = (uint32_t)m->cycle_ms * US_PER_MS;
+            longest = (cycle > longest) ? cycle : longest;
+            cover = (covered_us(m) < cover) ? covered_us(m) : cover;
+        }
+    }
+    return (longest < cover) ? longest : cover;
+}
+
 fdi_status_t fdi_ecu_config_default(fdi_ecu_config_t *cfg, const fdi_table_t *table, const fdi_ecu_bus_t *bus)
 {
     fdi_status_t st = FDI_BAD_ARG;
@@ -242,6 +334,7 @@ fdi_status_t fdi_ecu_config_default(fdi_ecu_config_t *cfg, const fdi_table_t *ta
             }
             cfg->max_delta_counter = 1U;
             cfg->max_catchup_steps = 100U;
+            cfg->align_us = 0U; /* sample-and-hold; fdi_ecu_align_us(bus) aligns in time */
         }
     }
     return st;
@@ -323,9 +416,11 @@ fdi_status_t fdi_ecu_init(fdi_ecu_t *self, const fdi_ecu_config_t *cfg)
             uint32_t i;
             for (i = 0U; i < (uint32_t)cfg->bus->n_msgs; ++i)
             {
-                if (cfg->timeout_us[i] == 0U)
+                const fdi_ecu_msg_desc_t *m = &cfg->bus->msgs[i];
+                if ((cfg->timeout_us[i] == 0U) || (cfg->align_us > MAX_ALIGN_US) ||
+                    ((m->n_values > 0U) && (cfg->align_us > covered_us(m))))
                 {
-                    st = FDI_BAD_ARG;
+                    st = FDI_BAD_ARG; /* no timeout, or the alignment reaches behind the message's history */
                 }
             }
         }
@@ -364,6 +459,8 @@ fdi_status_t fdi_ecu_init(fdi_ecu_t *self, const fdi_ecu_config_t *cfg)
             const bool used = i < (uint32_t)cfg->bus->n_msgs;
             self->timeout_us[i] = used ? cfg->timeout_us[i] : 0U;
             self->msg[i].t_last_us = 0U;
+            self->msg[i].newest = 0U;
+            self->msg[i].n_kept = 0U;
             self->msg[i].last_counter = 0U;
             self->msg[i].seen = false;
             self->msg[i].have = false;
@@ -385,6 +482,7 @@ fdi_status_t fdi_ecu_init(fdi_ecu_t *self, const fdi_ecu_config_t *cfg)
         self->res.status = (uint8_t)FDI_ECU_STATUS_INIT;
         self->res.iso_class = 0U;
         self->step_us = step_us;
+        self->align_us = cfg->align_us;
         self->next_us = 0U;
         self->last_us = 0U;
         self->max_catchup = cfg->max_catchup_steps;
@@ -454,10 +552,17 @@ static void accept_frame(fdi_ecu_t *self, uint32_t idx, const uint8_t *data, uin
             }
             else
             {
+                const uint32_t slot = (m->n_kept == 0U) ? 0U : (((uint32_t)m->newest + 1U) % FDI_ECU_HISTORY);
                 uint32_t k;
                 for (k = 0U; k < (uint32_t)desc->n_values; ++k)
                 {
-                    self->in.value[desc->signal_index[k]] = fi.value[k];
+                    m->value[slot][k] = fi.value[k];
+                }
+                m->t_us[slot] = t_us;
+                m->newest = (uint8_t)slot;
+                if ((uint32_t)m->n_kept < FDI_ECU_HISTORY)
+                {
+                    m->n_kept++;
                 }
                 m->status_ok = true;
                 m->have = true;

@@ -23,7 +23,7 @@
 /* sizeof / offsetof / capacities the bindings check: 0 fdi_ecu_t, 1 config, 2 counters, 3 result, 4 tx,
    5 offsetof(result, diag), 6 offsetof(diag result, iso), 7 FDI_DIAG_MAX_TESTS, 8 fdi_diag_t, 9 FDI_ECU_MAX_MSGS,
    10 FDI_DIAG_MAX_SENS, 11 offsetof(diag result, sens_offset), 12 fdi_diag_result_t, 13 fdi_diag_config_t,
-   14 FDI_GEN_N_PARAMS, 15 FDI_FRAME_MAX_SIGNALS; else 0. */
+   14 FDI_GEN_N_PARAMS, 15 FDI_FRAME_MAX_SIGNALS, 16 FDI_ECU_HISTORY; else 0. */
 size_t fdi_py_sizeof(int what)
 {
     size_t n = 0U;
@@ -45,6 +45,7 @@ size_t fdi_py_sizeof(int what)
     case 13: n = sizeof(fdi_diag_config_t); break;
     case 14: n = FDI_GEN_N_PARAMS; break;
     case 15: n = FDI_FRAME_MAX_SIGNALS; break;
+    case 16: n = FDI_ECU_HISTORY; break;
     default: break;
     }
     return n;

@@ -74,6 +74,7 @@ class _Caps:
     max_sens: int
     n_params: int
     max_signals: int
+    kept_frames: int  # FDI_ECU_HISTORY: frames the ECU keeps per message for the time alignment
 
 
 def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
@@ -90,6 +91,7 @@ def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
         _fields_ = [
             ("bus", ctypes.c_void_p), ("diag", DiagConfig), ("timeout_us", ctypes.c_uint32 * c.max_msgs),
             ("max_delta_counter", ctypes.c_uint8), ("max_catchup_steps", ctypes.c_uint16),
+            ("align_us", ctypes.c_uint32),
         ]
 
     class MsgCounters(ctypes.Structure):
@@ -161,7 +163,8 @@ def _lib() -> _Lib:
     def size(what: int) -> int:
         return int(dll.fdi_py_sizeof(what))
 
-    caps = _Caps(max_tests=size(7), max_msgs=size(9), max_sens=size(10), n_params=size(14), max_signals=size(15))
+    caps = _Caps(max_tests=size(7), max_msgs=size(9), max_sens=size(10), n_params=size(14), max_signals=size(15),
+                 kept_frames=size(16))
     types = _struct_types(caps)
     for what, name in ((1, "Config"), (2, "Counters"), (3, "Result"), (4, "Tx"), (12, "DiagResult"),
                        (13, "DiagConfig")):
@@ -187,6 +190,7 @@ def _lib() -> _Lib:
         "fdi_ecu_poll": (st, [vp, ctypes.c_uint32, vp]),
         "fdi_ecu_counters": (st, [vp, vp]),
         "fdi_ecu_result": (st, [vp, vp]),
+        "fdi_ecu_align_us": (ctypes.c_uint32, [vp]),
         "fdi_py_process": (ctypes.c_long, [vp, ctypes.c_long, vp, vp, vp, vp, vp, vp, ctypes.c_long]),
         "fdi_diag_config_default": (st, [vp, vp]),
         "fdi_diag_init": (st, [vp, vp]),
@@ -289,6 +293,17 @@ def _bus_ptr(name: str) -> int:
     if not ptr:
         raise EcuError(f"bus {name!r} is not in the library")
     return int(ptr)
+
+
+def kept_frames() -> int:
+    """Frames the ECU core keeps per message for the time alignment (FDI_ECU_HISTORY of the built library)."""
+    return _lib().caps.kept_frames
+
+
+def bus_align(name: str = "romo") -> float:
+    """Seconds of the alignment that takes every message's signals of bus `name` at one instant
+    (fdi_ecu_align_us; use as ``Ecu(..., align_s=...)``)."""
+    return int(_lib().dll.fdi_ecu_align_us(_bus_ptr(name))) * 1e-6
 
 
 @cache
@@ -402,7 +417,8 @@ class Ecu:
     Overrides: ``d_x``, ``d_y`` (the ROMO kinematic generators' parameters), ``cusum_k``, ``cusum_h``,
     ``set_count``, ``clear_count``, ``warmup_steps``, ``mode`` ("exoneration" | "no_exoneration"),
     ``episode_clear_steps``, ``noise_allowance``, ``sensitivities`` (fdi_diag.h), ``timeout_s`` (one value for all
-    messages or a mapping message name -> seconds), ``max_delta_counter``, ``max_catchup_steps``.
+    messages or a mapping message name -> seconds), ``max_delta_counter``, ``max_catchup_steps``, ``align_s``
+    (a step's signals are those of the instant ``align_s`` before it, fdi_ecu.h; 0: sample-and-hold).
     """
 
     def __init__(self, table: str = "romo", **overrides: Any) -> None:
@@ -438,6 +454,12 @@ class Ecu:
                 if not 0 < us <= 0xFFFFFFFF:
                     raise ValueError(f"timeout_s[{name}] = {sec} s is not a positive time")
                 cfg.timeout_us[names.index(name)] = us
+        if "align_s" in ov:
+            sec = float(ov.pop("align_s"))
+            us = round(sec * 1e6)
+            if not 0 <= us <= 0xFFFFFFFF:
+                raise ValueError(f"align_s = {sec} s is not a time >= 0")
+            cfg.align_us = us
         for key, hi in (("max_delta_counter", 0xFF), ("max_catchup_steps", 0xFFFF)):
             if key in ov:
                 v = int(ov.pop(key))
