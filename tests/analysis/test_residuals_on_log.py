@@ -94,6 +94,19 @@ def test_offline_residuals_equal_the_ecu(repo: Path, faulty_log: Path, tmp_path:
     assert (tmp_path / "r.png").stat().st_size > 10_000
 
 
+def test_aligned_offline_residuals_equal_the_aligned_ecu(repo: Path, faulty_log: Path,
+                                                         capsys: pytest.CaptureFixture[str]) -> None:
+    """With the signals of one instant (--align, the ECU's align_us) the offline view and the C core agree too."""
+    code = main(["residuals", str(repo / MODEL), "--thresholds", str(repo / THRESHOLDS), "--log", str(faulty_log),
+                 "--align", str(bus_align()), "--compare-ecu"])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    assert "agree: largest deviation" in out
+    assert main(["residuals", str(repo / MODEL), "--thresholds", str(repo / THRESHOLDS), "--log",
+                 str(faulty_log), "--align", "-0.01"]) == 1
+    assert "--align -0.01 is not a time >= 0" in capsys.readouterr().err
+
+
 def test_bad_logs_are_refused_with_the_reason(repo: Path, faulty_log: Path, tmp_path: Path,
                                               capsys: pytest.CaptureFixture[str]) -> None:
     frames = read_log(faulty_log)

@@ -3,14 +3,15 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 from fdi_host.can.frame import Frame
 from fdi_host.ecu.bindings import DIAG_ID, Ecu, EcuResult
 
 
-def replay(table: str, frames: Sequence[Frame], t_start: float = 0.0) -> list[EcuResult]:
-    """The ECU's result at every diagnosis step for the frames from t_start on."""
-    ecu = Ecu(table)
+def replay(table: str, frames: Sequence[Frame], t_start: float = 0.0, **overrides: Any) -> list[EcuResult]:
+    """The ECU's result at every diagnosis step for the frames from t_start on (`overrides`: Ecu's)."""
+    ecu = Ecu(table, **overrides)
     out: list[EcuResult] = []
     for f in frames:
         if f.timestamp < t_start:

@@ -40,6 +40,10 @@ def register(sub: Any) -> None:
     p.add_argument("--plot", type=Path, help="write a PNG of |r|/sigma per test here")
     p.add_argument("--compare-ecu", action="store_true",
                    help="replay the log through the C ECU core (generated table) and compare per step")
+    p.add_argument("--align", type=float, default=0.0,
+                   help="seconds behind each step at which the signals are taken, each linear between its "
+                   "message's frames (the ECU's align_us; 0.02 brings every ROMO message to one instant); default "
+                   "0: each message's last frame, as the committed table is calibrated")
     p.add_argument("--warmup", type=float, default=3.0, help="seconds not evaluated after each (re)start "
                    "of a test (default 3, the diagnoser's)")
     p.add_argument("--workers", type=int, default=2, help="worker processes of the MSO search (default 2)")
@@ -57,6 +61,9 @@ def run(args: argparse.Namespace) -> int:
     from fdi_host.can.logs import read_log
     from fdi_host.tuning.on_log import LogError, log_residuals, plot, write_csv
 
+    if not args.align >= 0.0:
+        print(f"fdi-tune: error: --align {args.align} is not a time >= 0", file=sys.stderr)
+        return EXIT_ERROR
     th = Thresholds.load(args.thresholds)
     design = FilterDesign(th.design[0], th.design[1], th.design[2])
     try:
@@ -76,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
               "fdi-tune calibrate", file=sys.stderr)
         return EXIT_ERROR
     sigmas = [float(np.sqrt(th.generated[" ".join(g.equations)])) for g in gens]
-    t, sig = ecu_view(frames, design.dt)
+    t, sig = ecu_view(frames, design.dt, align=args.align)
     warmup = round(args.warmup / design.dt)
     try:
         res = log_residuals(gens, sigmas, th.gate, t, sig, design, warmup)
@@ -94,10 +101,10 @@ def run(args: argparse.Namespace) -> int:
     if args.plot is not None:
         plot(res, args.plot, args.log.name)
         print(f"wrote {args.plot}")
-    return _compare(res, frames, warmup) if args.compare_ecu else 0
+    return _compare(res, frames, warmup, args.align) if args.compare_ecu else 0
 
 
-def _compare(res: LogResiduals, frames: Sequence[Frame], warmup: int) -> int:
+def _compare(res: LogResiduals, frames: Sequence[Frame], warmup: int, align: float) -> int:
     """Replay the frames through the C ECU core (generated table) and compare per step; 1 beyond tolerance."""
     import numpy as np
 
@@ -111,7 +118,7 @@ def _compare(res: LogResiduals, frames: Sequence[Frame], warmup: int) -> int:
         print(f"fdi-tune: error: the ECU's generated table holds {labels}, the model's selection "
               f"{[tr.name for tr in res.tests]}: regenerate (scripts/generate.sh) and rebuild", file=sys.stderr)
         return EXIT_ERROR
-    ecu = replay("romo", frames)
+    ecu = replay("romo", frames, align_s=align)
     steps = np.asarray([r.step for r in ecu])
     if steps.size and not np.array_equal(steps, np.arange(1, steps.size + 1)):
         print("fdi-tune: error: the ECU skipped steps (a gap in the log); compare on a gap-free log",
