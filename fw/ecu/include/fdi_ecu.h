@@ -40,12 +40,11 @@
  *   than the message's timeout apart (a silent sender), the newest frame when s_k is after it, the oldest kept
  *   frame when every kept frame is after s_k (the first steps). fdi_ecu_align_us(bus) gives the alignment that
  *   brings every message's signals to one instant: the longest cycle time of the messages that carry frame
- *   signals (20 ms on ROMO: every message has a frame at or before s_k), capped so that every such message's
- *   kept frames reach back to it ((FDI_ECU_HISTORY - 2) cycles); the diagnosis then lags the bus by align_us.
- *   The default, align_us 0, is sample-and-hold (each message's last frame), without lag: the table's gates
- *   must be calibrated on the view the ECU runs (fdi_host.can.ecu_view with the same alignment), and the ROMO
- *   table is calibrated on sample-and-hold (README, "Diagnosis quality": aligned, its gates were 2-3 times
- *   smaller, but the selection they led to isolated worse and named a wrong class more often).
+ *   signals (every message then has a frame at or before s_k), capped so that every such message's kept
+ *   frames reach back to it ((FDI_ECU_HISTORY - 2) cycles); the diagnosis then lags the bus by align_us.
+ *   The default, align_us 0, is sample-and-hold (each message's last frame), without lag. A table's gates hold
+ *   only for the view they were calibrated on (the host tools' offline view of the ECU, with the same
+ *   alignment): run a table with the alignment of its calibration (fw/ecu/README.md names it per vehicle).
  * If more than max_catchup_steps steps are due in one call (the host stalled or the clock jumped), the
  * oldest are skipped (counted) and the schedule restarts at the current time.
  * Time is uint32_t microseconds and may wrap (every ~71.6 min): all comparisons use modular differences,
