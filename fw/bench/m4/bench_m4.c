@@ -14,6 +14,7 @@
 
 #include "bench_drive.h"
 #include "fdi_diag.h"
+#include "fdi_ecu.h"
 
 #define CAL_LOOPS 100000U
 #define INSN_PER_TICK 40U /* 1 ns per instruction (shift 0) / 25 MHz */
@@ -189,6 +190,8 @@ int main(void)
     put_u((uint32_t)sizeof diag);
     put(" bytes, sizeof(fdi_diag_result_t) ");
     put_u((uint32_t)sizeof(fdi_diag_result_t));
+    put(" bytes, sizeof(fdi_ecu_t) ");
+    put_u((uint32_t)sizeof(fdi_ecu_t));
     put(" bytes\n");
     return rc;
 }
