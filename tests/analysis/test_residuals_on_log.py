@@ -105,6 +105,10 @@ def test_aligned_offline_residuals_equal_the_aligned_ecu(repo: Path, faulty_log:
     assert main(["residuals", str(repo / MODEL), "--thresholds", str(repo / THRESHOLDS), "--log",
                  str(faulty_log), "--align", "-0.01"]) == 1
     assert "--align -0.01 is not a time >= 0" in capsys.readouterr().err
+    assert main(["residuals", str(repo / MODEL), "--thresholds", str(repo / THRESHOLDS), "--log",
+                 str(faulty_log), "--align", "0.05", "--compare-ecu"]) == 1
+    assert "the ECU core refuses --align 0.05: a message's kept frames do not reach back that far (0.02 s" in (
+        capsys.readouterr().err)
 
 
 def test_bad_logs_are_refused_with_the_reason(repo: Path, faulty_log: Path, tmp_path: Path,

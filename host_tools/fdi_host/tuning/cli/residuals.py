@@ -64,6 +64,16 @@ def run(args: argparse.Namespace) -> int:
     if not args.align >= 0.0:
         print(f"fdi-tune: error: --align {args.align} is not a time >= 0", file=sys.stderr)
         return EXIT_ERROR
+    if args.compare_ecu:
+        from fdi_host.ecu.bindings import Ecu, EcuError, bus_align
+
+        try:
+            Ecu("romo", align_s=args.align)
+        except EcuError:
+            print(f"fdi-tune: error: the ECU core refuses --align {args.align}: a message's kept frames do not "
+                  f"reach back that far ({bus_align('romo'):g} s takes every message at one instant)",
+                  file=sys.stderr)
+            return EXIT_ERROR
     th = Thresholds.load(args.thresholds)
     design = FilterDesign(th.design[0], th.design[1], th.design[2])
     try:
