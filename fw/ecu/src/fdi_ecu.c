@@ -308,8 +308,9 @@ uint32_t fdi_ecu_align_us(const fdi_ecu_bus_t *bus)
         if (m->n_values > 0U)
         {
             const uint32_t cycle = (uint32_t)m->cycle_ms * US_PER_MS;
+            const uint32_t reach = covered_us(m);
             longest = (cycle > longest) ? cycle : longest;
-            cover = (covered_us(m) < cover) ? covered_us(m) : cover;
+            cover = (reach < cover) ? reach : cover;
         }
     }
     return (longest < cover) ? longest : cover;

@@ -92,8 +92,7 @@ def ecu_view(frames: Sequence[Frame], step: float = 0.01, db: RomoDatabase | Non
     t = step_times(frames, step)
     if not frames:
         return t, {name: np.zeros(0) for name in dec.values}
-    t0 = _us(np.asarray([frames[0].timestamp]))[0]
-    steps = t0 + np.rint(np.arange(1, t.size + 1) * step * 1e6).astype(np.int64)
+    steps = round(frames[0].timestamp * 1e6) + np.rint(np.arange(1, t.size + 1) * step * 1e6).astype(np.int64)
     s = steps - round(align * 1e6)
     out: dict[str, FloatArray] = {}
     for name, values in dec.values.items():
