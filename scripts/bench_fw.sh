@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Benchmarks of the fdi library (prints numbers; not a test), for the table that ships (the generated ROMO table)
 # and the kinematic table, both through one simulated drive as the ECU sees it (host_tools/bench/fw_bench_drive.py: cornering,
-# fault-free, then a vx sensor offset that starts an isolation episode; fw/bench/bench_drive.h classifies the steps):
-#   host:   instructions per fdi_diag_step with valgrind callgrind (build/bench, gcc -O3), fault-free steps and steps
-#           inside an isolation episode, sensitivities off and on
+# fault-free, then a vx sensor offset that the ROMO table isolates at once, then a steering offset it cannot separate
+# from the other front wheel's; fw/bench/bench_drive.h classifies the steps):
+#   host:   instructions per fdi_diag_step with valgrind callgrind (build/bench, gcc -O3), fault-free steps, steps
+#           inside an isolation episode with one class (or none) left and with several ("undecided": the exoneration
+#           asks for sensitivities), sensitivities off and on
 #   target: Cortex-M4F under qemu-system-arm -M mps2-an386 -icount shift=0 (SysTick counted, calibrated by a known
 #           loop): the same per phase and the largest single step of the drive; arm-none-eabi-size of the libraries,
 #           the ROMO target with and without its sensitivity code (-DFDI_GEN_SENSITIVITIES=0), sizeof(fdi_diag_t)
@@ -35,13 +37,15 @@ for table in 0 1; do
     rm -f "$out"
     ir_of() { echo "$ann" | awk -v f="$1" '$0 ~ (":" f " ") {gsub(",", "", $1); print $1; exit}'; }
     n_free="$(echo "$line" | sed -E 's/.*fault-free ([0-9]+),.*/\1/')"
-    n_epi="$(echo "$line" | sed -E 's/.*episode ([0-9]+) steps.*/\1/')"
+    n_epi="$(echo "$line" | sed -E 's/.*episode ([0-9]+),.*/\1/')"
+    n_und="$(echo "$line" | sed -E 's/.*undecided ([0-9]+) steps.*/\1/')"
     ir_free="$(ir_of bench_step_fault_free)"
     ir_epi="$(ir_of bench_step_episode)"
+    ir_und="$(ir_of bench_step_undecided)"
     name="$(echo "$line" | sed -E 's/^steps [0-9]+ ([^,]*),.*/\1/')"
     echo "x86-64: $name, sensitivities $([ "$sens" = 1 ] && echo on || echo off): fault-free" \
-      "$(( ${ir_free:-0} / (n_free > 0 ? n_free : 1) )), episode $(( ${ir_epi:-0} / (n_epi > 0 ? n_epi : 1) ))" \
-      "instructions/step ($n_free and $n_epi steps)"
+      "$(( ${ir_free:-0} / (n_free > 0 ? n_free : 1) )), episode $(( ${ir_epi:-0} / (n_epi > 0 ? n_epi : 1) )), undecided" \
+      "$(( ${ir_und:-0} / (n_und > 0 ? n_und : 1) )) instructions/step ($n_free, $n_epi and $n_und steps)"
   done
 done
 

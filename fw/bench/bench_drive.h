@@ -2,13 +2,16 @@
  * bench_drive.h - what the benchmarks step through and how they classify the steps (header-only, shared by
  * bench_host.c and m4/bench_m4.c).
  *
- * The drive: a simulated ROMO drive as the ECU's steps see it, fault-free and then with a step fault
- * (host_tools/bench/fw_bench_drive.py writes it; scripts/bench_fw.sh makes it). In memory: a buffer of 32-bit words,
+ * The drive: a simulated ROMO drive as the ECU's steps see it, fault-free and then two isolation episodes, one that
+ * the ROMO table isolates at once and one it cannot decide (host_tools/bench/fw_bench_drive.py writes it;
+ * scripts/bench_fw.sh makes it). In memory: a buffer of 32-bit words,
  * [magic, n_steps, n_signals, fault_step] then per step the validity mask and n_signals float values.
  * The tables: the kinematic table (4 hand-written tests) and the generated ROMO table that ships, each with the
  * diagnoser's defaults (fdi_diag_config_default) and the ROMO model's velocity-sensor position.
- * The phase of a step, from the result before it: "episode" while an isolation episode is active, "fault-free"
- * once every test with a generator has been evaluable and before the fault starts, "warm-up" otherwise.
+ * The phase of a step, from the result before it: "episode" while an isolation episode is active and its candidates
+ * are one class or none, "undecided" while they span several classes (the exoneration asks the generators for their
+ * sensitivities), "fault-free" once every test with a generator has been evaluable and before the first fault
+ * starts, "warm-up" otherwise.
  */
 #ifndef BENCH_DRIVE_H
 #define BENCH_DRIVE_H
@@ -24,7 +27,7 @@
 #include "fdi_romo_table.h"
 
 #define BENCH_MAGIC 0x42494446U
-#define BENCH_MAX_STEPS 2000U
+#define BENCH_MAX_STEPS 2500U
 #define BENCH_WORDS (4U + (BENCH_MAX_STEPS * (1U + ROMO_SIG_COUNT)))
 
 typedef struct
@@ -88,8 +91,10 @@ typedef enum
 {
     BENCH_WARMUP = 0,
     BENCH_FAULT_FREE = 1,
-    BENCH_EPISODE = 2
+    BENCH_EPISODE = 2,
+    BENCH_UNDECIDED = 3
 } bench_phase_t;
+#define BENCH_N_PHASES 4U
 
 /* Phase of step k from the result of step k - 1; *settled latches "every test has been evaluable". */
 static inline bench_phase_t bench_phase(const fdi_table_t *t, const fdi_diag_result_t *last, uint32_t k,
@@ -108,7 +113,7 @@ static inline bench_phase_t bench_phase(const fdi_table_t *t, const fdi_diag_res
     }
     if (last->iso.detected)
     {
-        ph = BENCH_EPISODE;
+        ph = (last->iso.n_classes > 1U) ? BENCH_UNDECIDED : BENCH_EPISODE;
     }
     else if (*settled && (k < fault_step))
     {

@@ -1,6 +1,6 @@
 /*
  * bench_host.c - host benchmark: one table through the drive of bench_drive.h, every fdi_diag_step called through
- * the wrapper of its phase (bench_step_warmup, bench_step_fault_free, bench_step_episode). Run under
+ * the wrapper of its phase (bench_step_warmup, bench_step_fault_free, bench_step_episode, bench_step_undecided). Run under
  * `valgrind --tool=callgrind --collect-atstart=no --toggle-collect='bench_step_*'` (scripts/bench_fw.sh): the
  * inclusive instruction count of a wrapper divided by its step count (printed) is the cost per step of that phase.
  * Usage: bench_host DRIVE.bin TABLE(0 kinematic, 1 ROMO) SENSITIVITIES(0, 1)
@@ -18,6 +18,7 @@ static uint32_t words[BENCH_WORDS];
 __attribute__((noinline)) fdi_status_t bench_step_warmup(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
 __attribute__((noinline)) fdi_status_t bench_step_fault_free(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
 __attribute__((noinline)) fdi_status_t bench_step_episode(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
+__attribute__((noinline)) fdi_status_t bench_step_undecided(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
 
 fdi_status_t bench_step_warmup(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v)
 {
@@ -34,6 +35,11 @@ fdi_status_t bench_step_episode(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v
     return fdi_diag_step(d, in, v);
 }
 
+fdi_status_t bench_step_undecided(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v)
+{
+    return fdi_diag_step(d, in, v);
+}
+
 int main(int argc, char **argv)
 {
     static fdi_diag_t d;
@@ -44,7 +50,7 @@ int main(int argc, char **argv)
     const bool sens = (argc > 3) && (strtol(argv[3], NULL, 10) != 0L);
     const fdi_table_t *table = bench_table((which == 0L) ? 0U : 1U, &name);
     const fdi_diag_config_t cfg = bench_config(table, sens);
-    uint32_t count[3] = {0U, 0U, 0U};
+    uint32_t count[BENCH_N_PHASES] = {0U, 0U, 0U, 0U};
     bool settled = false;
     uint32_t k;
     size_t n_words = 0U;
@@ -70,7 +76,11 @@ int main(int argc, char **argv)
         const uint32_t validity = bench_drive_frame(&drive, k, &in);
         const bench_phase_t ph = bench_phase(table, &res, k, drive.fault_step, &settled);
         fdi_status_t st;
-        if (ph == BENCH_EPISODE)
+        if (ph == BENCH_UNDECIDED)
+        {
+            st = bench_step_undecided(&d, &in, validity);
+        }
+        else if (ph == BENCH_EPISODE)
         {
             st = bench_step_episode(&d, &in, validity);
         }
@@ -88,8 +98,10 @@ int main(int argc, char **argv)
             rc = 3;
         }
     }
-    printf("steps %u %s, sensitivities %s: warm-up %u, fault-free %u, episode %u steps; sizeof(fdi_diag_t) %zu\n",
+    printf("steps %u %s, sensitivities %s: warm-up %u, fault-free %u, episode %u, undecided %u steps; "
+           "sizeof(fdi_diag_t) %zu\n",
            (unsigned)drive.n_steps, name, sens ? "on" : "off", (unsigned)count[BENCH_WARMUP],
-           (unsigned)count[BENCH_FAULT_FREE], (unsigned)count[BENCH_EPISODE], sizeof d);
+           (unsigned)count[BENCH_FAULT_FREE], (unsigned)count[BENCH_EPISODE], (unsigned)count[BENCH_UNDECIDED],
+           sizeof d);
     return rc;
 }

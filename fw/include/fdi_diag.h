@@ -30,7 +30,9 @@
  *   - on line, where its generator gives j's sensitivity (gen->sens_mask): during an episode the diagnoser
  *     asks the generators for their sensitivities s_ij = d r_i / d f_j at the current operating point (those
  *     the rule reads at the step: of the tests in alarm for their response time or settled and quiet, and
- *     only while one of their faults is undecided: it explains every accused test and is not latched). Each
+ *     only while one of their faults is undecided: it explains every accused test and is not latched; each test's
+ *     every sens_every steps, the tests in turn, so that a step computes about 1 / sens_every of them; a rule
+ *     keeps a test's last values, or its last decision, in between). Each
  *     test i in alarm for at least its response_steps, whose residual has settled (within a fifth plus 2
  *     sigma of both its 0.1 s and 0.3 s averages: a step through a filtered derivative first kicks a residual
  *     far above its steady value), bounds the size of every fault j of its sensitivities from below,
@@ -64,17 +66,18 @@
  * Fault sensitivities: at every step with cfg->sensitivities the diagnoser asks every generator for d r / d f_j
  * of the faults of its sens_mask (fdi_gen.h) and keeps the last ones: the result lists them per test (sens_offset,
  * sens; all offsets 0 without cfg->sensitivities). Without cfg->sensitivities they are computed only during an
- * isolation episode (from its second step, with exoneration), and only those the on-line rule reads at the step
- * (above); outside episodes none (no cost). They are 0 while a test lacks its inputs or its domain; a non-finite
+ * isolation episode (from its second step, with exoneration), and only those the on-line rule reads, each test's at
+ * its turn (sens_every, above); outside episodes, and once no fault is left to decide, none (no cost). They are 0 while a test lacks its inputs or its domain; a non-finite
  * sensitivity makes the step fail like a non-finite residual (the test is "not evaluable" and restarts).
  *
  * Cost per step: the bank (~20 flops per filter) + the set's step (the shared terms once, each evaluated test's own
- * terms, the sensitivities the on-line rule reads during an episode, all of them with cfg->sensitivities) + the
- * hand-written generators + ~25 operations per test for evaluation + n_faults iterations of isolation (during an
- * episode, ~5 more per sensitivity of a settled quiet test for the joint rule) + the finiteness of the signals
- * (fdi_frame_finite_mask). Measured by
+ * terms, the sensitivities the on-line rule reads during an episode at their turn, all of them with
+ * cfg->sensitivities) + the hand-written generators + ~25 operations per test for evaluation + n_faults iterations
+ * of isolation (while a fault is undecided, ~5 more per sensitivity of a settled quiet test for the joint rule and
+ * the reaction-size rule) + the finiteness of the signals (fdi_frame_finite_mask). Measured by
  * scripts/bench_fw.sh (instructions per step of the vehicle tables it benchmarks over a simulated drive on x86-64
- * with callgrind and on Cortex-M4F under qemu -icount: fault-free, in an episode, largest step).
+ * with callgrind and on Cortex-M4F under qemu -icount: fault-free, in an episode with one class left, in one with
+ * several (undecided), largest step).
  * Memory: sizeof(fdi_diag_t) ~ 152 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28) +
  * 12 * FDI_DIAG_MAX_FILTERS + 5 * FDI_DIAG_MAX_SENS + 6 * FDI_TABLE_MAX_FAULTS + FDI_GEN_MAX_SLOTS bytes (bound
  * asserted below; scripts/bench_fw.sh prints the value), caller-owned (static or stack); the library itself has no
@@ -120,6 +123,7 @@
 #endif
 
 #define FDI_DIAG_SETTLE_TAUS 6.0f
+#define FDI_DIAG_MAX_SENS_EVERY 32U /* fdi_diag_config_t.sens_every */
 #define FDI_DIAG_CONTRADICTED 0xFFFFFFFFU /* latched: the isolated class was contradicted in this episode */
 
 typedef struct
@@ -135,6 +139,9 @@ typedef struct
     uint16_t episode_clear_steps; /* steps without any alarm that end an episode, >= 1 */
     float noise_allowance;        /* sigmas of an alarmed residual not counted as fault response, >= 0 */
     bool sensitivities;           /* compute and report the generators' fault sensitivities at every step */
+    uint16_t sens_every;          /* without `sensitivities`: during an episode, steps between two computations of
+                                     a test's sensitivities, the tests in turn (<= FDI_DIAG_MAX_SENS_EVERY; 0 and 1:
+                                     at every step) */
 } fdi_diag_config_t;
 
 typedef struct
@@ -156,6 +163,7 @@ typedef struct
     uint16_t calm;        /* consecutive steps without an alarm during the episode */
     uint8_t n_tests;
     bool sensitivities;
+    uint8_t sens_every; /* fdi_diag_config_t.sens_every */
     uint32_t signals;   /* signals read by some test (finiteness checked once per step) */
     uint32_t accused;   /* tests in alarm at some step of the current episode (0: no episode) */
     uint32_t rearm;     /* tests whose generator must be reset at the next usable step */
@@ -184,6 +192,7 @@ typedef struct
     float r_fast[FDI_DIAG_MAX_TESTS];       /* each residual's average over 0.1 s ... */
     float r_slow[FDI_DIAG_MAX_TESTS];       /* ... and over 0.3 s (whether it has settled) */
     uint32_t fresh;                         /* tests whose sensitivities were computed at the last step */
+    uint32_t sens_known; /* tests whose sensitivities were computed in this episode (and kept since) */
     uint32_t latched; /* faults isolated first in the episode (exonerated no more), or FDI_DIAG_CONTRADICTED */
     uint32_t undecided; /* faults that explain every accused test and are not latched (on-line exoneration) */
     uint8_t sens_offset[FDI_DIAG_MAX_TESTS + 1U]; /* test i: sens[sens_offset[i] .. sens_offset[i + 1] - 1] */
@@ -218,7 +227,8 @@ typedef struct
 
 /* Defaults for `table`: CUSUM k 1.5, h 150 (as validated in tests/fw/test_fdi_diag.c), set 3, clear 100,
    warm-up = the design point's settling time + 20 steps, exoneration, episodes ending after 3 s without alarm,
-   noise allowance 3 sigma, generator parameters 0, no reported sensitivities. BAD_ARG on NULL; BAD_TABLE when
+   noise allowance 3 sigma, generator parameters 0, no reported sensitivities, each test's sensitivities every 4th
+   step of an episode. BAD_ARG on NULL; BAD_TABLE when
    the design point has no finite settling time (the table itself is checked by fdi_diag_init). */
 fdi_status_t fdi_diag_config_default(fdi_diag_config_t *cfg, const fdi_table_t *table);
 

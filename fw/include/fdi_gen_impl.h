@@ -10,15 +10,19 @@
  *   is not finite.
  * Observer generators (integral causality for one state, fdi_analysis/residuals/observer.py): the estimate
  *   lives in an fdi_obs_t (xh = estimate, g_prev = observer input G of the previous step).
- *   fdi_gen_obs_predict: xh[k] = xh[k-1] + phi * (g_prev + g1) / 2 with phi = expm1(jac dt) / jac (dt when
- *   |jac dt| < 1e-6), the exponential of the error pole jac = a + L c; stable for every jac < 0. obs NULL or
+ *   fdi_gen_obs_predict: xh[k] = xh[k-1] + phi * (g_prev + g1) / 2 with phi = expm1(jac dt) / jac (dt at
+ *   jac = 0), the exponential of the error pole jac = a + L c; stable for every jac < 0. obs NULL or
  *   par NULL give 0 (callers pass their checked state).
  *   fdi_gen_obs_store: keep xh and g_prev for the next step; NOT_FINITE (nothing stored) on NaN/Inf, BAD_ARG
  *   on NULL.
  * Inline helpers of generated expressions (no call, no library): fdi_gen_heaviside(x): 1 for x > 0, else 0;
  *   fdi_gen_sign(x): -1, 0, 1 (derivatives of Max and Abs); fdi_gen_max / fdi_gen_min: the larger / smaller of two
  *   values (a NaN operand may propagate, where fmaxf would drop it: the caller's finiteness check then sees it).
- * Cost: a few flops each (fdi_gen_obs_predict: one expm1f). Memory: none.
+ * fdi_gen_tanh: tanh of the generated expressions (the brake torque's sign law of the wheel speeds).
+ * The exponentials of fdi_gen_obs_predict and fdi_gen_tanh are float-only series (fdi_gen.c, a few ulp): the C
+ * library's expm1f and tanhf, general-purpose, cost several times as much on the target (scripts/bench_fw.sh).
+ * Cost: a few flops each (fdi_gen_obs_predict, fdi_gen_tanh ~25; fdi_gen_tanh ~8 where it saturates).
+ * Memory: none (a 28-entry const table).
  */
 #ifndef FDI_GEN_IMPL_H
 #define FDI_GEN_IMPL_H
@@ -33,6 +37,9 @@ fdi_status_t fdi_gen_filter_step(fdi_gen_t *g, const fdi_gen_param_t *par, uint3
 fdi_status_t fdi_gen_status_worst(fdi_status_t a, fdi_status_t b);
 fdi_status_t fdi_gen_finish(fdi_status_t st, float value, bool reset, float *r);
 fdi_status_t fdi_gen_sens_finish(fdi_status_t st, const float *sens, uint32_t n);
+
+/* tanh(x) in float, a few ulp (fdi_gen.c: +-1 from |x| >= 9.1, else from e^-2|x|); NaN for NaN. */
+float fdi_gen_tanh(float x);
 
 float fdi_gen_obs_predict(const fdi_obs_t *obs, const fdi_gen_param_t *par, float g1, float jac);
 fdi_status_t fdi_gen_obs_store(fdi_obs_t *obs, float xh, float g_next);

@@ -39,6 +39,9 @@
 #define UNBOUNDED_SIZE 1.0e30f
 /* largest missing response (in gates) one quiet test adds to the joint rule: finite squares for unbounded sizes */
 #define JOINT_LACK_CAP 1.0e3f
+/* During an episode a test's sensitivities are computed every SENS_EVERY steps, the tests in turn (40 ms at 10 ms:
+   a quarter of the tests' sensitivity code per step; the rule's decisions are confirmed over CLEAR_CONFIRM_S). */
+#define SENS_EVERY 4U
 
 /* Settling time of the design point in steps (see fdi_diag.h); 0 if it is not representable. */
 static uint32_t settle_steps(const fdi_table_design_t *d)
@@ -130,6 +133,7 @@ fdi_status_t fdi_diag_config_default(fdi_diag_config_t *cfg, const fdi_table_t *
             cfg->episode_clear_steps = steps_of(EPISODE_CLEAR_S, table->design.dt);
             cfg->noise_allowance = NOISE_ALLOWANCE_SIGMA;
             cfg->sensitivities = false;
+            cfg->sens_every = SENS_EVERY;
             st = FDI_OK;
         }
     }
@@ -257,6 +261,7 @@ static fdi_status_t check_config(const fdi_diag_config_t *cfg)
         st = FDI_NOT_FINITE;
     }
     else if ((cfg->table->n_tests > FDI_DIAG_MAX_TESTS) || (cfg->episode_clear_steps == 0U) ||
+             (cfg->sens_every > FDI_DIAG_MAX_SENS_EVERY) ||
              (cfg->noise_allowance < 0.0f) ||
              ((cfg->mode != FDI_ISO_NO_EXONERATION) && (cfg->mode != FDI_ISO_EXONERATION)))
     {
@@ -346,6 +351,8 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             self->accused = 0U;
             self->n_tests = t->n_tests;
             self->sensitivities = cfg->sensitivities;
+            self->sens_every = (cfg->sens_every > 1U) ? (uint8_t)cfg->sens_every : 1U;
+            self->sens_known = 0U;
             self->rearm = 0xFFFFFFFFU;
             self->alarm = 0U;
             self->evaluable = 0U;
@@ -366,10 +373,11 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
     return st;
 }
 
-/* The sensitivities of test i back to 0. */
+/* The sensitivities of test i back to 0 (and unknown in the episode). */
 static void clear_sens(fdi_diag_t *self, uint32_t i)
 {
     uint32_t k;
+    self->sens_known &= ~((uint32_t)1U << i);
     for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
     {
         self->sens[k] = 0.0f;
@@ -396,16 +404,17 @@ static fdi_status_t run_hand_written(fdi_diag_t *self, uint32_t i, const fdi_fra
     return st;
 }
 
-/* Whether test i's sensitivities in self->sens are all finite. */
+/* Whether test i's sensitivities in self->sens are all finite: s * 0 is +-0 for a finite s and NaN for NaN and +-Inf,
+   so the sum of these is finite iff every sensitivity is (one check per test). */
 static bool sens_finite(const fdi_diag_t *self, uint32_t i)
 {
-    bool finite = true;
+    float zero = 0.0f;
     uint32_t k;
     for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
     {
-        finite = finite && fdi_float_is_finite(self->sens[k]);
+        zero += self->sens[k] * 0.0f;
     }
-    return finite;
+    return fdi_float_is_finite(zero);
 }
 
 /* The slots of the set of the tests of `tests` (the identity when every test of the set is its slot, as in the
@@ -468,6 +477,7 @@ static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t
                 {
                     ok |= bit;
                     self->fresh |= (sens != NULL) ? bit : 0U;
+                    self->sens_known |= (sens != NULL) ? bit : 0U;
                 }
             }
         }
@@ -501,6 +511,7 @@ static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t
             {
                 ok |= bit;
                 self->fresh |= bit;
+                self->sens_known |= bit;
             }
             check &= ~bit;
         }
@@ -535,6 +546,21 @@ static uint32_t sens_wanted(const fdi_diag_t *self, uint32_t undecided)
         }
     }
     return want;
+}
+
+/* The tests whose turn it is to compute their sensitivities at this step of an episode: test i at the steps where
+   (age + i) is a multiple of sens_every (every test at every step for sens_every 1). */
+static uint32_t sens_turn(const fdi_diag_t *self)
+{
+    const uint32_t every = (uint32_t)self->sens_every;
+    const uint32_t age = (uint32_t)sat_inc(self->episode_age);
+    uint32_t turn = 0U;
+    uint32_t i;
+    for (i = (every - (age % every)) % every; i < (uint32_t)self->n_tests; i += every)
+    {
+        turn |= (uint32_t)1U << i;
+    }
+    return turn;
 }
 
 /* Evaluation of test i after its generator ran (ok: a finite residual r); true if it is evaluable this step (then
@@ -588,6 +614,18 @@ static float test_sigma(const fdi_diag_t *self, uint32_t i)
     return sqrtf(self->table->tests[i].variance);
 }
 
+/* The smaller / larger of two finite values (residuals, averages and sizes are checked finite before they are kept;
+   newlib's fminf/fmaxf classify both operands through library calls). */
+static float smaller(float a, float b)
+{
+    return (a < b) ? a : b;
+}
+
+static float larger(float a, float b)
+{
+    return (a > b) ? a : b;
+}
+
 /* Test i is in alarm and has been for its response time: once its residual has settled, its average and its fresh
    sensitivities (when `fresh`) bound the size of each undecided fault of its sens_mask from below; the episode keeps
    the largest bound (see fdi_diag.h). A fault of its signature without a sensitivity (while the generator lists
@@ -601,7 +639,7 @@ static void raise_implied(fdi_diag_t *self, uint32_t i, uint32_t undecided, bool
     const float slow = self->r_slow[i];
     const bool settled = (fabsf(r - fast) <= ((SETTLE_REL * fabsf(fast)) + (SETTLE_NOISE_SIGMA * sigma))) &&
                          (fabsf(r - slow) <= ((SETTLE_REL * fabsf(slow)) + (SETTLE_NOISE_SIGMA * sigma)));
-    const float least = fminf(fabsf(r), fabsf(fast));
+    const float least = smaller(fabsf(r), fabsf(fast));
     const float excess = least - (self->noise_allowance * sigma);
     if ((g != NULL) && (g->sens_mask != 0U) && settled && (excess > 0.0f))
     {
@@ -649,12 +687,11 @@ static uint32_t quiet_clears(const fdi_diag_t *self, uint32_t i, uint32_t undeci
         for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
         {
             const uint32_t j = (uint32_t)self->sens_fault[k];
-            if ((fabsf(self->sens[k]) * self->implied[j]) >= need)
+            if (((undecided & ((uint32_t)1U << j)) != 0U) && ((fabsf(self->sens[k]) * self->implied[j]) >= need))
             {
                 out |= (uint32_t)1U << j;
             }
         }
-        out &= undecided;
     }
     return out;
 }
@@ -681,7 +718,7 @@ static uint32_t joint_clears(const fdi_diag_t *self, uint32_t settled, uint32_t 
             if (((settled & ((uint32_t)1U << i)) != 0U) && (d->gen != NULL) && ((d->gen->sens_mask & faults) != 0U))
             {
                 const float per_gate = 1.0f / (d->gate * test_sigma(self, i));
-                const float seen = fmaxf(fabsf(self->residual[i]), fabsf(self->r_fast[i]));
+                const float seen = larger(fabsf(self->residual[i]), fabsf(self->r_fast[i]));
                 uint32_t k;
                 for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
                 {
@@ -690,7 +727,7 @@ static uint32_t joint_clears(const fdi_diag_t *self, uint32_t settled, uint32_t 
                     {
                         /* capped: an unbounded implied size stays finite here */
                         const float expect = fabsf(self->sens[k]) * self->implied[j] * per_margin;
-                        const float lack = fminf(JOINT_LACK_CAP, (expect - seen) * per_gate);
+                        const float lack = smaller(JOINT_LACK_CAP, (expect - seen) * per_gate);
                         if (lack > 0.0f)
                         {
                             missing[j] += lack * lack;
@@ -738,6 +775,7 @@ static void track_episode(fdi_diag_t *self, uint32_t alarm)
             uint32_t i;
             self->episode_age = 0U;
             self->latched = 0U;
+            self->sens_known = 0U;
             for (i = 0U; i < FDI_TABLE_MAX_FAULTS; ++i)
             {
                 self->implied[i] = 0.0f;
@@ -776,56 +814,62 @@ static void track_episode(fdi_diag_t *self, uint32_t alarm)
 static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
 {
     const uint32_t undecided = self->undecided;
-    uint32_t settled = 0U;
-    uint32_t online = 0U;
     uint32_t cleared = 0U;
-    uint32_t i;
-    for (i = 0U; i < (uint32_t)self->n_faults; ++i)
+    /* no fault left to decide: nothing below can change the candidates, and none is left until the episode ends
+       (undecided_faults) */
+    if (undecided != 0U)
     {
-        self->implied[i] *= self->implied_keep;
-    }
-    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
-    {
-        const uint32_t bit = (uint32_t)1U << i;
-        const uint32_t resp = (uint32_t)self->table->tests[i].response_steps + (uint32_t)self->set_count;
-        if (((alarm & bit) != 0U) && ((uint32_t)self->alarm_run[i] >= resp))
+        uint32_t settled = 0U;
+        uint32_t online = 0U;
+        uint32_t i;
+        for (i = 0U; i < (uint32_t)self->n_faults; ++i)
         {
-            raise_implied(self, i, undecided, (self->fresh & bit) != 0U);
+            self->implied[i] *= self->implied_keep;
         }
-        if (((self->accused & bit) == 0U) && ((uint32_t)self->quiet_run[i] >= resp) &&
-            ((uint32_t)self->episode_age >= resp))
+        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
         {
-            settled |= bit;
+            const uint32_t bit = (uint32_t)1U << i;
+            const uint32_t resp = (uint32_t)self->table->tests[i].response_steps + (uint32_t)self->set_count;
+            if (((alarm & bit) != 0U) && ((uint32_t)self->alarm_run[i] >= resp))
+            {
+                raise_implied(self, i, undecided, (self->fresh & bit) != 0U);
+            }
+            if (((self->accused & bit) == 0U) && ((uint32_t)self->quiet_run[i] >= resp) &&
+                ((uint32_t)self->episode_age >= resp))
+            {
+                settled |= bit;
+            }
         }
-    }
-    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
-    {
-        const uint32_t bit = (uint32_t)1U << i;
-        if ((settled & bit) == 0U)
+        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
         {
-            self->clears[i] = 0U;
+            const uint32_t bit = (uint32_t)1U << i;
+            if ((settled & bit) == 0U)
+            {
+                self->clears[i] = 0U;
+            }
+            else if ((self->fresh & bit) != 0U)
+            {
+                self->clears[i] = quiet_clears(self, i, undecided);
+            }
+            else
+            {
+                /* keep the last decision until its sensitivities are computed again (sens_every) */
+            }
+            online |= self->clears[i];
         }
-        else if ((self->fresh & bit) != 0U)
+        /* the joint rule reads the tests' latest sensitivities: only those computed in this episode */
+        online |= joint_clears(self, settled & self->sens_known, undecided & ~online);
+        for (i = 0U; i < (uint32_t)self->n_faults; ++i)
         {
-            self->clears[i] = quiet_clears(self, i, undecided);
+            const uint32_t fbit = (uint32_t)1U << i;
+            self->cleared_run[i] = ((online & fbit) != 0U) ? sat_inc(self->cleared_run[i]) : 0U;
+            cleared |= (self->cleared_run[i] >= self->clear_confirm) ? fbit : 0U;
         }
-        else
+        /* only the tests of size_tests can clear by reaction sizes (fdi_iso_size_cleared gives 0 for the others) */
+        if ((settled & self->size_tests) != 0U)
         {
-            /* keep the last decision until its sensitivities are computed again */
+            cleared |= fdi_iso_size_cleared(self->table, self->accused, settled & self->size_tests);
         }
-        online |= self->clears[i];
-    }
-    online |= joint_clears(self, settled, undecided & ~online);
-    for (i = 0U; i < (uint32_t)self->n_faults; ++i)
-    {
-        const uint32_t fbit = (uint32_t)1U << i;
-        self->cleared_run[i] = ((online & fbit) != 0U) ? sat_inc(self->cleared_run[i]) : 0U;
-        cleared |= (self->cleared_run[i] >= self->clear_confirm) ? fbit : 0U;
-    }
-    /* only the tests of size_tests can clear by reaction sizes (fdi_iso_size_cleared gives 0 for the others) */
-    if ((settled & self->size_tests) != 0U)
-    {
-        cleared |= fdi_iso_size_cleared(self->table, self->accused, settled & self->size_tests);
     }
     return cleared;
 }
@@ -969,7 +1013,7 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
         }
         else if (undecided != 0U)
         {
-            want = sens_wanted(self, undecided);
+            want = sens_wanted(self, undecided) & sens_turn(self);
         }
         else
         {

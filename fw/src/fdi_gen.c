@@ -178,14 +178,15 @@ uint32_t fdi_gen_bank_step(const fdi_gen_set_t *set, fdi_svf_t *bank, const fdi_
         const float h = coef->h;
         const float c1 = coef->c1;
         const float c2 = coef->c2;
+        uint32_t running = usable; /* signals whose filters run: usable, less those whose filter failed in this step */
         uint32_t k;
         for (k = 0U; k < (uint32_t)set->n_bank; ++k)
         {
             const fdi_gen_bank_filter_t *f = &set->bank[k];
             const uint32_t bit = (uint32_t)1U << (f->signal & 31U);
-            fdi_svf_t *x = &bank[k];
-            if ((usable & bit & ~failed) != 0U)
+            if ((running & bit) != 0U)
             {
+                fdi_svf_t *x = &bank[k];
                 float u;
                 if (f->source == FDI_GEN_BANK_RAW)
                 {
@@ -193,8 +194,7 @@ uint32_t fdi_gen_bank_step(const fdi_gen_set_t *set, fdi_svf_t *bank, const fdi_
                 }
                 else
                 {
-                    const fdi_svf_t *src = &bank[f->source];
-                    u = (f->order == 0U) ? src->x1 : src->x2;
+                    u = (f->order == 0U) ? bank[f->source].x1 : bank[f->source].x2;
                 }
                 if ((live & bit) == 0U)
                 {
@@ -205,10 +205,12 @@ uint32_t fdi_gen_bank_step(const fdi_gen_set_t *set, fdi_svf_t *bank, const fdi_
                 else
                 {
                     /* fdi_svf_step() inline: one bank, one set of coefficients (fdi_svf.h) */
-                    const float e_sum = (x->u_prev - x->x1) + (u - x->x1);
-                    const float x2 = (c1 * x->x2) + (c2 * (e_sum - (h * x->x2)));
-                    const float x1 = x->x1 + (h * (x->x2 + x2));
-                    if (fdi_float_is_finite(x1) && fdi_float_is_finite(x2))
+                    const float x1p = x->x1;
+                    const float x2p = x->x2;
+                    const float x2 = (c1 * x2p) + (c2 * (((x->u_prev - x1p) + (u - x1p)) - (h * x2p)));
+                    const float x1 = x1p + (h * (x2p + x2));
+                    /* x * 0 is +-0 for a finite x and NaN for NaN and +-Inf: one check covers both */
+                    if (fdi_float_is_finite((x1 * 0.0f) + (x2 * 0.0f)))
                     {
                         x->x1 = x1;
                         x->x2 = x2;
@@ -217,6 +219,7 @@ uint32_t fdi_gen_bank_step(const fdi_gen_set_t *set, fdi_svf_t *bank, const fdi_
                     else
                     {
                         failed |= bit; /* holds; the signal's later filters hold too, all restart when usable */
+                        running &= ~bit;
                     }
                 }
             }
@@ -390,6 +393,94 @@ fdi_status_t fdi_gen_sens_finish(fdi_status_t st, const float *sens, uint32_t n)
     return res;
 }
 
+/* Elementary functions of the per-step code, float-only: the C library's are general-purpose (any argument,
+   errno) and cost several times what the arguments met here need (fdi_gen_impl.h). */
+#define SERIES_MAX 0.5f  /* |x| up to which expm1(x) / x is its Taylor series */
+#define EXP_MIN (-18.5f) /* below: expm1f() (e^x under half an ulp of 1) */
+#define INV_LN2 1.44269504f
+#define LN2_HI 0.693145751953125f /* ln 2 with 12 trailing zero bits: n * LN2_HI is exact for n <= 27 */
+#define LN2_LO 1.42860677e-06f    /* ln 2 - LN2_HI */
+#define TANH_ONE 9.1f             /* tanh(x) rounds to 1 from here on */
+
+/* (e^x - 1) / x for |x| <= SERIES_MAX: sum of x^n / (n + 1)!, n = 0 .. 7 (truncation < 1.2e-8 relative) */
+static float expm1_series(float x)
+{
+    float p = 2.48015873e-5f; /* 1/8! */
+    p = (p * x) + 1.98412698e-4f;
+    p = (p * x) + 0.00138888889f;
+    p = (p * x) + 0.00833333333f;
+    p = (p * x) + 0.0416666667f;
+    p = (p * x) + 0.166666667f;
+    p = (p * x) + 0.5f;
+    return (p * x) + 1.0f;
+}
+
+/* e^x - 1 for EXP_MIN <= x < -SERIES_MAX: e^x = 2^-n e^r, r = x + n ln2 (ln 2 in two parts), |r| <= ln2 / 2,
+   e^r to r^7 (truncation < 6e-9 relative), 2^-n from the table; e^x <= 0.61, so e^x - 1 does not cancel */
+static float expm1_negative(float x)
+{
+    /* 2^-n for n = 0 .. 27 (EXP_MIN / ln 2 rounds to -27) */
+    static const float pow2_neg[28] = {
+        1.0f, 0.5f, 0.25f, 0.125f, 0.0625f, 0.03125f, 0.015625f, 0.0078125f, 0.00390625f, 0.001953125f,
+        9.765625e-4f, 4.8828125e-4f, 2.44140625e-4f, 1.220703125e-4f, 6.103515625e-5f, 3.0517578125e-5f,
+        1.52587890625e-5f, 7.62939453125e-6f, 3.814697265625e-6f, 1.9073486328125e-6f, 9.5367431640625e-7f,
+        4.76837158203125e-7f, 2.384185791015625e-7f, 1.1920928955078125e-7f, 5.9604644775390625e-8f,
+        2.98023223876953125e-8f, 1.490116119384765625e-8f, 7.450580596923828125e-9f};
+    const float scaled = (-x * INV_LN2) + 0.5f;
+    const uint32_t n = (uint32_t)scaled; /* 1 .. 27 */
+    const float nf = (float)n;
+    const float r = (x + (nf * LN2_HI)) + (nf * LN2_LO);
+    float p = 1.98412698e-4f; /* 1/7! */
+    p = (p * r) + 0.00138888889f;
+    p = (p * r) + 0.00833333333f;
+    p = (p * r) + 0.0416666667f;
+    p = (p * r) + 0.166666667f;
+    p = (p * r) + 0.5f;
+    p = (p * r) + 1.0f;
+    p = (p * r) + 1.0f;
+    return (p * pow2_neg[n]) - 1.0f;
+}
+
+/* expm1(x) / x (1 at x = 0), a few ulp; expm1f() outside [EXP_MIN, SERIES_MAX] and for NaN */
+static float expm1_over(float x)
+{
+    float y;
+    if ((x >= -SERIES_MAX) && (x <= SERIES_MAX))
+    {
+        y = expm1_series(x);
+    }
+    else if ((x >= EXP_MIN) && (x < -SERIES_MAX))
+    {
+        y = expm1_negative(x) / x;
+    }
+    else
+    {
+        y = expm1f(x) / x;
+    }
+    return y;
+}
+
+float fdi_gen_tanh(float x)
+{
+    const float a = fabsf(x);
+    float t;
+    if (a >= TANH_ONE)
+    {
+        t = 1.0f;
+    }
+    else if (a > (0.5f * SERIES_MAX))
+    {
+        const float m = expm1_negative(-2.0f * a); /* tanh(a) = -m / (2 + m), m = e^-2a - 1 in (-1, -0.63] */
+        t = -m / (2.0f + m);
+    }
+    else
+    {
+        const float m = -2.0f * a * expm1_series(-2.0f * a);
+        t = -m / (2.0f + m);
+    }
+    return (x < 0.0f) ? -t : t; /* NaN: a NaN t */
+}
+
 float fdi_gen_obs_predict(const fdi_obs_t *obs, const fdi_gen_param_t *par, float g1, float jac)
 {
     float xh = 0.0f;
@@ -397,7 +488,7 @@ float fdi_gen_obs_predict(const fdi_obs_t *obs, const fdi_gen_param_t *par, floa
     {
         const float dt = 2.0f * par->svf.h;
         const float jdt = jac * dt;
-        const float phi = (fabsf(jdt) > 1.0e-6f) ? (expm1f(jdt) / jac) : dt;
+        const float phi = dt * expm1_over(jdt); /* expm1(jac dt) / jac, dt at jac = 0 */
         xh = obs->xh + (phi * (0.5f * (obs->g_prev + g1)));
     }
     return xh;

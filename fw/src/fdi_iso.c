@@ -26,34 +26,41 @@ static bool iso_exonerated(const fdi_table_t *table, uint32_t j, uint32_t alarm_
     const uint32_t nt = (uint32_t)table->n_tests;
     const uint32_t fbit = (uint32_t)1U << j;
     const float *row = &table->test_size[(size_t)j * (size_t)nt];
-    float implied = 0.0f;
-    bool beyond = false;
+    float least = 0.0f; /* the smallest reaction size of a quiet test that may clear j (0: none) */
     bool cleared = false;
     uint32_t i;
     for (i = 0U; i < nt; ++i)
     {
-        if ((alarm_mask & ((uint32_t)1U << i)) != 0U)
+        if (((quiet & ((uint32_t)1U << i)) != 0U) && (row[i] > 0.0f) && ((iso_sens_mask(table, i) & fbit) == 0U) &&
+            ((least <= 0.0f) || (row[i] < least)))
         {
-            if (row[i] <= 0.0f)
-            {
-                beyond = true;
-            }
-            else if (row[i] > implied)
-            {
-                implied = row[i];
-            }
-            else
-            {
-                /* a smaller size implies less */
-            }
+            least = row[i];
         }
     }
-    for (i = 0U; (i < nt) && !cleared; ++i)
+    if (least > 0.0f) /* else no quiet test can clear j: the alarms need not be looked at */
     {
-        if (((quiet & ((uint32_t)1U << i)) != 0U) && (row[i] > 0.0f) && ((iso_sens_mask(table, i) & fbit) == 0U))
+        const float need = table->exoneration_margin * least; /* the quiet test that reacts at the smallest size */
+        float implied = 0.0f;
+        bool beyond = false;
+        for (i = 0U; (i < nt) && !beyond; ++i)
         {
-            cleared = beyond || ((table->exoneration_margin * row[i]) <= implied);
+            if ((alarm_mask & ((uint32_t)1U << i)) != 0U)
+            {
+                if (row[i] <= 0.0f)
+                {
+                    beyond = true;
+                }
+                else if (row[i] > implied)
+                {
+                    implied = row[i];
+                }
+                else
+                {
+                    /* a smaller size implies less */
+                }
+            }
         }
+        cleared = beyond || (need <= implied);
     }
     return cleared;
 }

@@ -98,6 +98,9 @@ static void test_bad_args(void **state)
     c.episode_clear_steps = 0U;
     assert_int_equal(fdi_diag_init(&d, &c), FDI_BAD_ARG);
     c = config(FDI_ISO_EXONERATION);
+    c.sens_every = (uint16_t)(FDI_DIAG_MAX_SENS_EVERY + 1U);
+    assert_int_equal(fdi_diag_init(&d, &c), FDI_BAD_ARG);
+    c = config(FDI_ISO_EXONERATION);
     bad_table.format_version = 0U;
     c.table = &bad_table;
     assert_int_equal(fdi_diag_init(&d, &c), FDI_BAD_TABLE);

@@ -40,15 +40,27 @@ static fdi_status_t gen0_step(fdi_gen_t *g, const fdi_gen_param_t *par, const fd
     return FDI_OK;
 }
 
+static uint32_t gen1_sens_calls = 0U; /* steps at which the diagnoser asked test 1 for its sensitivities */
+static uint32_t gen1_calls = 0U;      /* steps test 1 ran (not resetting) */
+static uint32_t gen1_last_sens = 0U;  /* gen1_calls at the last sensitivity request */
+static uint32_t gen1_max_gap = 0U;    /* the longest run of steps between two requests */
+
 static fdi_status_t gen1_step(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
                               float *sens)
 {
     (void)g;
     (void)par;
     *r = reset ? 0.0f : in->value[3];
+    gen1_calls += reset ? 0U : 1U;
     if (sens != NULL)
     {
         sens[0] = in->value[4];
+        if ((gen1_sens_calls > 0U) && ((gen1_calls - gen1_last_sens) > gen1_max_gap))
+        {
+            gen1_max_gap = gen1_calls - gen1_last_sens;
+        }
+        gen1_last_sens = gen1_calls;
+        ++gen1_sens_calls;
     }
     return FDI_OK;
 }
@@ -140,6 +152,8 @@ static float s2a = 0.1f; /* test 2's sensitivity to a (weak unless a case raises
 static float r1_now = 0.0f; /* test 1's residual (quiet unless a case raises it) */
 static float r2_now = 0.0f; /* test 2's residual */
 
+static uint16_t sens_every = 1U; /* the rule at every step unless a case sets the default's turns */
+
 static void init(fdi_diag_t *d, fdi_iso_mode_t mode)
 {
     fdi_diag_config_t c;
@@ -148,6 +162,14 @@ static void init(fdi_diag_t *d, fdi_iso_mode_t mode)
     c.clear_count = 1U;
     c.mode = mode;
     c.episode_clear_steps = 5U;
+    if (sens_every == 0U)
+    {
+        assert_int_equal(c.sens_every, 4U); /* the default: a test's sensitivities every 4th step of an episode */
+    }
+    else
+    {
+        c.sens_every = sens_every;
+    }
     assert_int_equal(c.noise_allowance, 3.0f);
     assert_int_equal(fdi_diag_init(d, &c), FDI_OK);
 }
@@ -345,6 +367,38 @@ static void test_quiet_tests_clear_together_what_each_misses(void **state)
     active = &table;
 }
 
+static void test_sensitivities_in_turn(void **state)
+{
+    /* the default (sens_every 4): during an episode test 1's sensitivities are asked for every 4th step only,
+       never outside an episode; its decision holds in between, so the case of test_weak_quiet_test_does_not_clear
+       clears b no earlier (10 steps of confirmation) and at most 3 steps later than with the rule at every step */
+    fdi_diag_t d;
+    uint32_t k;
+    uint32_t first = 0U;
+    (void)state;
+    sens_every = 0U;
+    gen1_sens_calls = 0U;
+    gen1_max_gap = 0U;
+    warm(&d, FDI_ISO_EXONERATION);
+    assert_int_equal(gen1_sens_calls, 0U); /* no episode, no sensitivities */
+    assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 0.4f), 0x3U);
+    assert_true(gen1_sens_calls >= 70U);
+    assert_true(gen1_sens_calls <= 75U);
+    assert_int_equal(gen1_max_gap, 4U);
+    for (k = 1U; (k <= 20U) && (first == 0U); ++k)
+    {
+        first = (run(&d, 1U, 20.0f, 1.0f, 1.0f, 0.0f, 0.5f) == 0x1U) ? k : 0U;
+    }
+    assert_true(first >= 11U);
+    assert_true(first <= 14U);
+    sens_every = 1U;
+    gen1_sens_calls = 0U;
+    gen1_max_gap = 0U;
+    warm(&d, FDI_ISO_EXONERATION);
+    assert_int_equal(run(&d, 40U, 20.0f, 1.0f, 1.0f, 0.0f, 0.4f), 0x3U);
+    assert_int_equal(gen1_max_gap, 1U); /* every step once asked for */
+}
+
 int main(void)
 {
     const struct CMUnitTest list[] = {
@@ -357,6 +411,7 @@ int main(void)
         cmocka_unit_test(test_the_first_isolation_is_latched),
         cmocka_unit_test(test_a_fault_without_steady_state_sensitivity_cannot_explain_a_settled_alarm),
         cmocka_unit_test(test_quiet_tests_clear_together_what_each_misses),
+        cmocka_unit_test(test_sensitivities_in_turn),
     };
     return cmocka_run_group_tests(list, NULL, NULL);
 }

@@ -644,6 +644,46 @@ static void test_observer_building_blocks(void **state)
     assert_true(fabs((double)fdi_gen_min(-1.0f, 2.0f) + 1.0) <= 0.0);
 }
 
+static void test_tanh(void **state)
+{
+    /* fdi_gen_tanh against the double tanh within 4 float ulp (relative 2.4e-7) over its three branches (the series
+       near 0, e^-2|x| below 9.1, saturation), odd, and NaN / Inf */
+    double x;
+    (void)state;
+    for (x = -12.0; x <= 12.0; x += 0.000731)
+    {
+        const float xf = (float)x;
+        const double ref = tanh((double)xf);
+        assert_true(fabs((double)fdi_gen_tanh(xf) - ref) <= (2.4e-7 * fabs(ref)));
+        assert_true(fabs((double)fdi_gen_tanh(-xf) + (double)fdi_gen_tanh(xf)) <= 0.0);
+    }
+    assert_true(fabs((double)fdi_gen_tanh(1.0e-30f) - 1.0e-30) <= 1.0e-37);
+    assert_true(fabs((double)fdi_gen_tanh(INFINITY) - 1.0) <= 0.0);
+    assert_true(fabs((double)fdi_gen_tanh(-INFINITY) + 1.0) <= 0.0);
+    assert_true(isnan(fdi_gen_tanh(NAN)));
+}
+
+static void test_observer_phi_accuracy(void **state)
+{
+    /* one predict step from xh = 0 with g_prev = g1 = 1 is phi = expm1(J dt) / J: within 4 float ulp of the double
+       value for poles from -3000 1/s (J dt = -30, past the series and the table) to +100 1/s (unstable: expm1f) */
+    fdi_gen_param_t p;
+    fdi_obs_t o;
+    double jac;
+    (void)state;
+    params(&p);
+    for (jac = -3000.0; jac <= 100.0; jac += 0.0371)
+    {
+        const float jf = (float)jac;
+        const double jd = (double)jf;
+        const double jdt = jd * (double)(2.0f * p.svf.h);
+        const double ref = (fabs(jdt) > 0.0) ? (expm1(jdt) / jd) : (double)(2.0f * p.svf.h);
+        o.xh = 0.0f;
+        o.g_prev = 1.0f;
+        assert_true(fabs((double)fdi_gen_obs_predict(&o, &p, 1.0f, jf) - ref) <= (4.8e-7 * fabs(ref)));
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -657,6 +697,8 @@ int main(void)
         cmocka_unit_test(test_diag_sensitivities),
         cmocka_unit_test(test_diag_slots_out_of_order),
         cmocka_unit_test(test_observer_building_blocks),
+        cmocka_unit_test(test_tanh),
+        cmocka_unit_test(test_observer_phi_accuracy),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,6 +1,6 @@
 """sympy expression -> MISRA-style C99 float expression (every binary operation parenthesised, float
 literals with an f suffix, integer powers as products and half-integer powers as products with one square root,
-single-precision math functions; Max/Min and the derivatives of Max and Abs through the inline helpers of
+single-precision math functions; Max/Min, the derivatives of Max and Abs and tanh through the helpers of
 fw/include/fdi_gen_impl.h, no library call)."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import numpy as np
 import sympy
 
 MAX_PRODUCT = 8  # integer powers up to this exponent become products (beyond: powf)
-_FUNCS = {sympy.sin: "sinf", sympy.cos: "cosf", sympy.tanh: "tanhf", sympy.Abs: "fabsf", sympy.exp: "expf",
+_FUNCS = {sympy.sin: "sinf", sympy.cos: "cosf", sympy.tanh: "fdi_gen_tanh", sympy.Abs: "fabsf", sympy.exp: "expf",
           sympy.tan: "tanf", sympy.atan: "atanf"}
 
 

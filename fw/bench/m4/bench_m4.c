@@ -111,8 +111,8 @@ static bool bench_table_drive(const bench_drive_t *drive, uint32_t k, bool sens,
     const char *name = "";
     const fdi_table_t *table = bench_table(k, &name);
     const fdi_diag_config_t cfg = bench_config(table, sens);
-    uint32_t ticks[3] = {0U, 0U, 0U};
-    uint32_t count[3] = {0U, 0U, 0U};
+    uint32_t ticks[BENCH_N_PHASES] = {0U, 0U, 0U, 0U};
+    uint32_t count[BENCH_N_PHASES] = {0U, 0U, 0U, 0U};
     uint32_t worst = 0U;
     uint32_t worst_step = 0U;
     bool settled = false;
@@ -142,6 +142,7 @@ static bool bench_table_drive(const bench_drive_t *drive, uint32_t k, bool sens,
         put(sens ? ", sensitivities on: " : ", sensitivities off: ");
         put_phase("fault-free ", ticks[BENCH_FAULT_FREE], count[BENCH_FAULT_FREE]);
         put_phase(", episode ", ticks[BENCH_EPISODE], count[BENCH_EPISODE]);
+        put_phase(", undecided ", ticks[BENCH_UNDECIDED], count[BENCH_UNDECIDED]);
         put_phase(", warm-up ", ticks[BENCH_WARMUP], count[BENCH_WARMUP]);
         put(", worst ");
         put_u(worst * INSN_PER_TICK);
@@ -151,6 +152,8 @@ static bool bench_table_drive(const bench_drive_t *drive, uint32_t k, bool sens,
         put_u(count[BENCH_FAULT_FREE]);
         put(", episode ");
         put_u(count[BENCH_EPISODE]);
+        put(", undecided ");
+        put_u(count[BENCH_UNDECIDED]);
         put("\n");
     }
     return ok;

@@ -84,7 +84,7 @@ def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
             ("cusum_k", ctypes.c_float), ("cusum_h", ctypes.c_float), ("set_count", ctypes.c_uint16),
             ("clear_count", ctypes.c_uint16), ("warmup_steps", ctypes.c_uint16), ("mode", ctypes.c_int),
             ("episode_clear_steps", ctypes.c_uint16), ("noise_allowance", ctypes.c_float),
-            ("sensitivities", ctypes.c_bool),
+            ("sensitivities", ctypes.c_bool), ("sens_every", ctypes.c_uint16),
         ]
 
     class Config(ctypes.Structure):
@@ -331,7 +331,7 @@ def _apply_diag(d: Any, ov: dict[str, Any]) -> None:
     for key in ("cusum_k", "cusum_h", "noise_allowance"):
         if key in ov:
             setattr(d, key, float(ov.pop(key)))
-    for key in ("set_count", "clear_count", "warmup_steps", "episode_clear_steps"):
+    for key in ("set_count", "clear_count", "warmup_steps", "episode_clear_steps", "sens_every"):
         if key in ov:
             v = int(ov.pop(key))
             if not 0 <= v <= 0xFFFF:
@@ -416,9 +416,10 @@ class Ecu:
 
     Overrides: ``d_x``, ``d_y`` (the ROMO kinematic generators' parameters), ``cusum_k``, ``cusum_h``,
     ``set_count``, ``clear_count``, ``warmup_steps``, ``mode`` ("exoneration" | "no_exoneration"),
-    ``episode_clear_steps``, ``noise_allowance``, ``sensitivities`` (fdi_diag.h), ``timeout_s`` (one value for all
-    messages or a mapping message name -> seconds), ``max_delta_counter``, ``max_catchup_steps``, ``align_s``
-    (a step's signals are those of the instant ``align_s`` before it, fdi_ecu.h; 0: sample-and-hold).
+    ``episode_clear_steps``, ``noise_allowance``, ``sensitivities``, ``sens_every`` (fdi_diag.h), ``timeout_s``
+    (one value for all messages or a mapping message name -> seconds), ``max_delta_counter``,
+    ``max_catchup_steps``, ``align_s`` (a step's signals are those of the instant ``align_s`` before it, fdi_ecu.h;
+    0: sample-and-hold).
     """
 
     def __init__(self, table: str = "romo", **overrides: Any) -> None:

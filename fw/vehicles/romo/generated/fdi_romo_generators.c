@@ -26,8 +26,8 @@ static void romo_gen_derive(fdi_frame_t *in)
 {
     in->value[ROMO_SIG_MSO1_TERMS] = (in->value[ROMO_SIG_PSIDOT_M] * ((-1.0f * in->value[ROMO_SIG_PSIDOT_M]) + in->value[ROMO_SIG_VY_M]));
     in->value[ROMO_SIG_MSO2_TERMS] = (-(in->value[ROMO_SIG_PSIDOT_M] * ((0.3f * in->value[ROMO_SIG_PSIDOT_M]) + in->value[ROMO_SIG_VX_M])));
-    in->value[ROMO_SIG_MSO39_TERMS] = (-0.00035555556f * in->value[ROMO_SIG_P_F_M] * tanhf((2.0f * in->value[ROMO_SIG_OMEGA1_M])));
-    in->value[ROMO_SIG_MSO49_TERMS] = (-0.00035555556f * in->value[ROMO_SIG_P_F_M] * tanhf((2.0f * in->value[ROMO_SIG_OMEGA2_M])));
+    in->value[ROMO_SIG_MSO39_TERMS] = (-0.00035555556f * in->value[ROMO_SIG_P_F_M] * fdi_gen_tanh((2.0f * in->value[ROMO_SIG_OMEGA1_M])));
+    in->value[ROMO_SIG_MSO49_TERMS] = (-0.00035555556f * in->value[ROMO_SIG_P_F_M] * fdi_gen_tanh((2.0f * in->value[ROMO_SIG_OMEGA2_M])));
 }
 
 static const fdi_gen_derived_t romo_derived[4] = {
@@ -300,7 +300,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
     }
     if ((run & 0x00000C24U) != 0U)
     {
-        t44 = ((-5.9259257f * b[9].x1) + t42 + (t43 * tanhf((2.0f * b[15].x1))));
+        t44 = ((-5.9259257f * b[9].x1) + t42 + (t43 * fdi_gen_tanh((2.0f * b[15].x1))));
     }
     if ((run & 0x00000BF8U) != 0U)
     {
@@ -501,7 +501,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
     }
     if ((run & 0x00000220U) != 0U)
     {
-        t174 = ((5.9259257f * b[10].x1) + (-t99) + (-(t43 * tanhf((2.0f * b[16].x1)))));
+        t174 = ((5.9259257f * b[10].x1) + (-t99) + (-(t43 * fdi_gen_tanh((2.0f * b[16].x1)))));
         t175 = (t100 * t174);
     }
     if ((run & 0x000000A0U) != 0U)
@@ -625,7 +625,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
     }
     if ((run & 0x00000C00U) != 0U)
     {
-        t594 = ((2.0f * t173) + t342 + (2.0f * t133 * ((5.9259257f * b[11].x1) + (-3.3333333f * b[17].x2) + (-0.00035555556f * b[14].x1 * tanhf((2.0f * b[17].x1))))) + (-3.3075862f * t172 * t4));
+        t594 = ((2.0f * t173) + t342 + (2.0f * t133 * ((5.9259257f * b[11].x1) + (-3.3333333f * b[17].x2) + (-0.00035555556f * b[14].x1 * fdi_gen_tanh((2.0f * b[17].x1))))) + (-3.3075862f * t172 * t4));
     }
     if ((run & 0x00000001U) != 0U) /* MSO1: K1 D1 S1 S3 S4 S5 */
     {
@@ -808,7 +808,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
                 sv[5] = s47; /* f10 */
                 sv[6] = s47; /* f14 */
                 sv[7] = s38; /* f18 */
-                sv[8] = (-(s38 * ((5.265f * s22) + (0.00035555556f * b[13].x1 * (2.0f + (-2.0f * (tanhf((2.0f * b[15].x1)) * tanhf((2.0f * b[15].x1)))))) + (-(s33 * ((-(s29 * ((-0.1458f * b[15].x1) + (0.54f * s1) + (0.54f * s3)))) + (-(s41 * s49)) + (-(s44 * s49))))) + (-5.265f * s25 * s28 * s48)))); /* f22 */
+                sv[8] = (-(s38 * ((5.265f * s22) + (0.00035555556f * b[13].x1 * (2.0f + (-2.0f * (fdi_gen_tanh((2.0f * b[15].x1)) * fdi_gen_tanh((2.0f * b[15].x1)))))) + (-(s33 * ((-(s29 * ((-0.1458f * b[15].x1) + (0.54f * s1) + (0.54f * s3)))) + (-(s41 * s49)) + (-(s44 * s49))))) + (-5.265f * s25 * s28 * s48)))); /* f22 */
             }
 #endif
         }
@@ -873,7 +873,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
             sv[4] = -3.7037036f; /* f10 */
             sv[5] = -3.7037036f; /* f14 */
             sv[6] = 1.0f; /* f18 */
-            sv[7] = ((-5.265f * s16) + (-0.00035555556f * b[13].x1 * (2.0f + (-2.0f * (tanhf((2.0f * b[15].x1)) * tanhf((2.0f * b[15].x1)))))) + (19.5f * s11 * s15 * s27 * s3 * ((-(s23 * ((-0.1458f * b[15].x1) + (0.54f * s0) + (0.54f * s2)))) + (-(s32 * s40)) + (-(s34 * s40)))) + (5.265f * s10 * s15 * s3 * s38 * s39 * s6)); /* f22 */
+            sv[7] = ((-5.265f * s16) + (-0.00035555556f * b[13].x1 * (2.0f + (-2.0f * (fdi_gen_tanh((2.0f * b[15].x1)) * fdi_gen_tanh((2.0f * b[15].x1)))))) + (19.5f * s11 * s15 * s27 * s3 * ((-(s23 * ((-0.1458f * b[15].x1) + (0.54f * s0) + (0.54f * s2)))) + (-(s32 * s40)) + (-(s34 * s40)))) + (5.265f * s10 * s15 * s3 * s38 * s39 * s6)); /* f22 */
         }
 #endif
     }
@@ -938,7 +938,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
             sv[4] = -3.7037036f; /* f11 */
             sv[5] = -3.7037036f; /* f15 */
             sv[6] = 1.0f; /* f19 */
-            sv[7] = ((-5.265f * s17) + (-0.00035555556f * b[13].x1 * (2.0f + (-2.0f * (tanhf((2.0f * b[16].x1)) * tanhf((2.0f * b[16].x1)))))) + (19.5f * s16 * s2 * s30 * t117 * ((-(s26 * ((-0.1458f * b[16].x1) + (0.54f * s0) + (0.54f * s1)))) + (-(s35 * s41)) + (-(s37 * s41)))) + (5.265f * s12 * s16 * s2 * s39 * s4 * s40)); /* f23 */
+            sv[7] = ((-5.265f * s17) + (-0.00035555556f * b[13].x1 * (2.0f + (-2.0f * (fdi_gen_tanh((2.0f * b[16].x1)) * fdi_gen_tanh((2.0f * b[16].x1)))))) + (19.5f * s16 * s2 * s30 * t117 * ((-(s26 * ((-0.1458f * b[16].x1) + (0.54f * s0) + (0.54f * s1)))) + (-(s35 * s41)) + (-(s37 * s41)))) + (5.265f * s12 * s16 * s2 * s39 * s4 * s40)); /* f23 */
         }
 #endif
     }
@@ -958,7 +958,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
         else
         {
             const float xp = o->xh;
-            const float t125 = tanhf((2.0f * xp));
+            const float t125 = fdi_gen_tanh((2.0f * xp));
             const float t140 = (0.27f * fabsf(xp));
             const float t143 = fdi_gen_max(0.5f, fdi_gen_max(t140, t142));
             const float t144 = (1.0f / (t143 * t143));
@@ -988,7 +988,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
             xh = fdi_gen_obs_predict(o, io->par, f + (l * e), a + (l * c));
         }
         {
-            const float t204 = tanhf((2.0f * xh));
+            const float t204 = fdi_gen_tanh((2.0f * xh));
             const float t205 = (0.27f * fabsf(xh));
             const float t206 = fdi_gen_max(0.5f, fdi_gen_max(t142, t205));
             const float t207 = (1.0f / (t206 * t206));
@@ -1222,12 +1222,12 @@ static void romo_gen_step(fdi_gen_io_t *io)
                 const float s198 = (s154 * t71);
                 const float s199 = (380.25f * s196 * t4);
                 const float s200 = (s154 * s65);
-                const float s201 = tanhf((2.0f * b[15].x1));
+                const float s201 = fdi_gen_tanh((2.0f * b[15].x1));
                 const float s202 = (0.00035555556f * b[13].x1);
                 const float s203 = (t5 * t67);
                 const float s204 = ((-s203) + (-(t4 * t68)));
                 const float s205 = (s41 * s86);
-                const float s206 = tanhf((2.0f * b[16].x1));
+                const float s206 = fdi_gen_tanh((2.0f * b[16].x1));
                 const float s207 = ((-s45) + (s110 * t100));
                 const float s208 = (s7 + (-(s11 * t136)));
                 const float s209 = (-s208);
@@ -1294,7 +1294,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
         else
         {
             const float xp = o->xh;
-            const float t226 = tanhf((2.0f * xp));
+            const float t226 = fdi_gen_tanh((2.0f * xp));
             const float t228 = (0.27f * fabsf(xp));
             const float t229 = fdi_gen_max(0.5f, fdi_gen_max(t190, t228));
             const float t230 = (1.0f / (t229 * t229));
@@ -1326,7 +1326,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
             xh = fdi_gen_obs_predict(o, io->par, f + (l * e), a + (l * c));
         }
         {
-            const float t279 = tanhf((2.0f * xh));
+            const float t279 = fdi_gen_tanh((2.0f * xh));
             const float t280 = (0.27f * fabsf(xh));
             const float t281 = fdi_gen_max(0.5f, fdi_gen_max(t190, t280));
             const float t282 = (1.0f / (t281 * t281));
@@ -1623,7 +1623,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
         else
         {
             const float xp = o->xh;
-            const float t303 = tanhf((2.0f * xp));
+            const float t303 = fdi_gen_tanh((2.0f * xp));
             const float t305 = (0.27f * fabsf(xp));
             const float t306 = fdi_gen_max(0.5f, fdi_gen_max(t305, t74));
             const float t307 = (1.0f / (t306 * t306));
@@ -1655,7 +1655,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
             xh = fdi_gen_obs_predict(o, io->par, f + (l * e), a + (l * c));
         }
         {
-            const float t348 = tanhf((2.0f * xh));
+            const float t348 = fdi_gen_tanh((2.0f * xh));
             const float t349 = (0.27f * fabsf(xh));
             const float t350 = fdi_gen_max(0.5f, fdi_gen_max(t349, t74));
             const float t351 = (1.0f / (t350 * t350));
@@ -1952,7 +1952,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
         else
         {
             const float xp = o->xh;
-            const float t371 = tanhf((2.0f * xp));
+            const float t371 = fdi_gen_tanh((2.0f * xp));
             const float t373 = (0.27f * fabsf(xp));
             const float t374 = fdi_gen_max(0.5f, fdi_gen_max(t142, t373));
             const float t375 = (1.0f / (t374 * t374));
@@ -1986,7 +1986,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
             xh = fdi_gen_obs_predict(o, io->par, f + (l * e), a + (l * c));
         }
         {
-            const float t407 = tanhf((2.0f * xh));
+            const float t407 = fdi_gen_tanh((2.0f * xh));
             const float t408 = (0.27f * fabsf(xh));
             const float t409 = fdi_gen_max(0.5f, fdi_gen_max(t142, t408));
             const float t410 = (1.0f / (t409 * t409));
@@ -2260,7 +2260,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
         else
         {
             const float xp = o->xh;
-            const float t432 = tanhf((2.0f * xp));
+            const float t432 = fdi_gen_tanh((2.0f * xp));
             const float t433 = (0.27f * fabsf(xp));
             const float t434 = fdi_gen_max(0.5f, fdi_gen_max(t190, t433));
             const float t435 = (1.0f / (t434 * t434));
@@ -2288,7 +2288,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
             xh = fdi_gen_obs_predict(o, io->par, f + (l * e), a + (l * c));
         }
         {
-            const float t453 = tanhf((2.0f * xh));
+            const float t453 = fdi_gen_tanh((2.0f * xh));
             const float t454 = (0.27f * fabsf(xh));
             const float t455 = fdi_gen_max(0.5f, fdi_gen_max(t190, t454));
             const float t456 = (1.0f / (t455 * t455));
@@ -2497,7 +2497,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
                 const float s175 = (s101 * t4);
                 const float s176 = (s122 * ((-(s118 * ((-2.0f * s100) + (2.0f * t5 * t68)))) + (-(s119 * ((-2.0f * s173) + (2.0f * s175)))) + (380.25f * s104 * s115 * s116 * s120 * s174) + (380.25f * s115 * s116 * s120 * s174 * t71)));
                 const float s177 = (s41 * s54);
-                const float s178 = tanhf((2.0f * b[16].x1));
+                const float s178 = fdi_gen_tanh((2.0f * b[16].x1));
                 const float s179 = ((5.9259257f * b[10].x1) + (-3.3333333f * b[16].x2) + (-0.00035555556f * b[13].x1 * s178));
                 const float s180 = (s141 * s70);
                 const float s181 = ((-s56) + (s74 * t100));
@@ -2924,7 +2924,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
         else
         {
             const float xp = o->xh;
-            const float t692 = tanhf((2.0f * xp));
+            const float t692 = fdi_gen_tanh((2.0f * xp));
             const float t694 = (0.27f * fabsf(xp));
             const float t695 = fdi_gen_max(0.5f, fdi_gen_max(t111, t694));
             const float t696 = (1.0f / (t695 * t695));
@@ -2954,7 +2954,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
             xh = fdi_gen_obs_predict(o, io->par, f + (l * e), a + (l * c));
         }
         {
-            const float t723 = tanhf((2.0f * xh));
+            const float t723 = fdi_gen_tanh((2.0f * xh));
             const float t724 = (0.27f * fabsf(xh));
             const float t725 = fdi_gen_max(0.5f, fdi_gen_max(t111, t724));
             const float t726 = (1.0f / (t725 * t725));
@@ -3137,7 +3137,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
                 const float s147 = (380.25f * s144 * t4);
                 const float s148 = (s115 * s63);
                 const float s149 = ((s107 * t5) + (-(s117 * ((s136 * t5) + (-(s137 * t4)) + (s146 * s147) + (s147 * s148)))) + (s116 * s144 * s145 * t4));
-                const float s150 = tanhf((2.0f * b[15].x1));
+                const float s150 = fdi_gen_tanh((2.0f * b[15].x1));
                 const float s151 = ((5.9259257f * b[9].x1) + (-3.3333333f * b[15].x2) + (-0.00035555556f * b[13].x1 * s150));
                 const float s152 = (t5 * t67);
                 const float s153 = ((-s152) + (-(t4 * t68)));
@@ -3147,7 +3147,7 @@ static void romo_gen_step(fdi_gen_io_t *io)
                 const float s157 = ((-s9) + (s78 * t100));
                 const float s158 = (s32 * ((-(s81 * ((-2.0f * s7) + (2.0f * t101 * t102)))) + (-(s82 * ((-2.0f * s3) + (2.0f * s79)))) + (380.25f * s11 * s157 * s27 * s77 * s80) + (380.25f * s157 * s27 * s5 * s77 * s80)));
                 const float s159 = (19.5f * s158);
-                const float s160 = tanhf((2.0f * b[17].x1));
+                const float s160 = fdi_gen_tanh((2.0f * b[17].x1));
                 const float s161 = (s44 * s92);
                 const float s162 = (s43 + (-(s48 * t136)));
                 const float s163 = (-(s155 * ((12.2503195f * t4) + (-7.4074073f * t5))));
