@@ -31,8 +31,8 @@
  *     asks the generators for their sensitivities s_ij = d r_i / d f_j at the current operating point (those
  *     the rule reads at the step: of the tests in alarm for their response time or settled and quiet, and
  *     only while one of their faults is undecided: it explains every accused test and is not latched; each test's
- *     every sens_every steps, the tests in turn, so that a step computes about 1 / sens_every of them; a rule
- *     keeps a test's last values, or its last decision, in between). Each
+ *     every sens_every steps, the tests in turn, grouped by their number of sensitivities so that a step computes
+ *     about 1 / sens_every of them; a rule keeps a test's last values, or its last decision, in between). Each
  *     test i in alarm for at least its response_steps, whose residual has settled (within a fifth plus 2
  *     sigma of both its 0.1 s and 0.3 s averages: a step through a filtered derivative first kicks a residual
  *     far above its steady value), bounds the size of every fault j of its sensitivities from below,
@@ -79,7 +79,8 @@
  * with callgrind and on Cortex-M4F under qemu -icount: fault-free, in an episode with one class left, in one with
  * several (undecided), largest step).
  * Memory: sizeof(fdi_diag_t) ~ 152 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28) +
- * 12 * FDI_DIAG_MAX_FILTERS + 5 * FDI_DIAG_MAX_SENS + 6 * FDI_TABLE_MAX_FAULTS + FDI_GEN_MAX_SLOTS bytes (bound
+ * 12 * FDI_DIAG_MAX_FILTERS + 5 * FDI_DIAG_MAX_SENS + 6 * FDI_TABLE_MAX_FAULTS + 2 * FDI_GEN_MAX_SLOTS +
+ * 4 * FDI_DIAG_MAX_SENS_EVERY bytes (bound
  * asserted below; scripts/bench_fw.sh prints the value), caller-owned (static or stack); the library itself has no
  * .data/.bss.
  */
@@ -123,7 +124,7 @@
 #endif
 
 #define FDI_DIAG_SETTLE_TAUS 6.0f
-#define FDI_DIAG_MAX_SENS_EVERY 32U /* fdi_diag_config_t.sens_every */
+#define FDI_DIAG_MAX_SENS_EVERY 16U /* fdi_diag_config_t.sens_every */
 #define FDI_DIAG_CONTRADICTED 0xFFFFFFFFU /* latched: the isolated class was contradicted in this episode */
 
 typedef struct
@@ -193,6 +194,7 @@ typedef struct
     float r_slow[FDI_DIAG_MAX_TESTS];       /* ... and over 0.3 s (whether it has settled) */
     uint32_t fresh;                         /* tests whose sensitivities were computed at the last step */
     uint32_t sens_known; /* tests whose sensitivities were computed in this episode (and kept since) */
+    uint32_t turns[FDI_DIAG_MAX_SENS_EVERY]; /* the tests whose sensitivities are computed at each step of sens_every */
     uint32_t latched; /* faults isolated first in the episode (exonerated no more), or FDI_DIAG_CONTRADICTED */
     uint32_t undecided; /* faults that explain every accused test and are not latched (on-line exoneration) */
     uint8_t sens_offset[FDI_DIAG_MAX_TESTS + 1U]; /* test i: sens[sens_offset[i] .. sens_offset[i + 1] - 1] */
@@ -206,7 +208,8 @@ FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (152U + (sizeof(void *) * 2U) +
                                          (sizeof(fdi_svf_t) * FDI_DIAG_MAX_FILTERS) +
                                          ((sizeof(float) + 1U) * FDI_DIAG_MAX_SENS) +
                                          ((sizeof(float) + sizeof(uint16_t)) * FDI_TABLE_MAX_FAULTS) +
-                                         (sizeof(uint16_t) * FDI_GEN_MAX_SLOTS)),
+                                         (sizeof(uint16_t) * FDI_GEN_MAX_SLOTS) +
+                                         (sizeof(uint32_t) * FDI_DIAG_MAX_SENS_EVERY)),
                   fdi_sa_diag_size);
 
 typedef struct

@@ -206,6 +206,47 @@ static bool gen_layout(fdi_diag_t *self, const fdi_table_t *t)
     return used <= FDI_DIAG_MAX_FILTERS;
 }
 
+/* The tests whose sensitivities are computed together at one step of an episode, every-th step each: the tests by
+   their number of sensitivities (largest first, the lower index on a tie), each into the turn with the fewest so far
+   (the first on a tie), so that the steps share the sensitivity code about evenly. */
+static void sens_turns(fdi_diag_t *self, uint32_t every)
+{
+    uint32_t load[FDI_DIAG_MAX_SENS_EVERY];
+    uint32_t placed = 0U;
+    uint32_t g;
+    uint32_t n;
+    for (g = 0U; g < FDI_DIAG_MAX_SENS_EVERY; ++g)
+    {
+        load[g] = 0U;
+        self->turns[g] = 0U;
+    }
+    for (n = 0U; n < (uint32_t)self->n_tests; ++n)
+    {
+        uint32_t best = 0U;
+        uint32_t most = 0U;
+        uint32_t least = 0U;
+        uint32_t i;
+        bool first = true;
+        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+        {
+            const uint32_t count = (uint32_t)self->sens_offset[i + 1U] - (uint32_t)self->sens_offset[i];
+            if (((placed & ((uint32_t)1U << i)) == 0U) && (first || (count > most)))
+            {
+                best = i;
+                most = count;
+                first = false;
+            }
+        }
+        for (g = 1U; g < every; ++g)
+        {
+            least = (load[g] < load[least]) ? g : least;
+        }
+        self->turns[least] |= (uint32_t)1U << best;
+        load[least] += most;
+        placed |= (uint32_t)1U << best;
+    }
+}
+
 /* The tests a quiet test may clear a fault by its reaction size for: test_size > 0 for a fault of no on-line
    sensitivity (the pairs fdi_iso_size_cleared() looks at). */
 static uint32_t size_rule_tests(const fdi_table_t *t)
@@ -352,6 +393,7 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             self->n_tests = t->n_tests;
             self->sensitivities = cfg->sensitivities;
             self->sens_every = (cfg->sens_every > 1U) ? (uint8_t)cfg->sens_every : 1U;
+            sens_turns(self, (uint32_t)self->sens_every);
             self->sens_known = 0U;
             self->rearm = 0xFFFFFFFFU;
             self->alarm = 0U;
@@ -548,19 +590,10 @@ static uint32_t sens_wanted(const fdi_diag_t *self, uint32_t undecided)
     return want;
 }
 
-/* The tests whose turn it is to compute their sensitivities at this step of an episode: test i at the steps where
-   (age + i) is a multiple of sens_every (every test at every step for sens_every 1). */
+/* The tests whose turn it is to compute their sensitivities at this step of an episode (sens_turns). */
 static uint32_t sens_turn(const fdi_diag_t *self)
 {
-    const uint32_t every = (uint32_t)self->sens_every;
-    const uint32_t age = (uint32_t)sat_inc(self->episode_age);
-    uint32_t turn = 0U;
-    uint32_t i;
-    for (i = (every - (age % every)) % every; i < (uint32_t)self->n_tests; i += every)
-    {
-        turn |= (uint32_t)1U << i;
-    }
-    return turn;
+    return self->turns[(uint32_t)sat_inc(self->episode_age) % (uint32_t)self->sens_every];
 }
 
 /* Evaluation of test i after its generator ran (ok: a finite residual r); true if it is evaluable this step (then

@@ -382,8 +382,9 @@ static void test_sensitivities_in_turn(void **state)
     warm(&d, FDI_ISO_EXONERATION);
     assert_int_equal(gen1_sens_calls, 0U); /* no episode, no sensitivities */
     assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 0.4f), 0x3U);
-    assert_true(gen1_sens_calls >= 70U);
-    assert_true(gen1_sens_calls <= 75U);
+    /* test 1 is wanted from its response time on (RESP + SET of the 300 steps, ~278): a quarter of those */
+    assert_true(gen1_sens_calls >= 66U);
+    assert_true(gen1_sens_calls <= 72U);
     assert_int_equal(gen1_max_gap, 4U);
     for (k = 1U; (k <= 20U) && (first == 0U); ++k)
     {
