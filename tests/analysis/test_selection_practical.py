@@ -124,3 +124,19 @@ def test_unmet_kinds_name_why() -> None:
         kinds[("b", "f1", "")].reason
     w = kinds[("a", "f1", "")]
     assert w.kind is UnmetKind.WEAK and (w.best_test, w.best_share) == ("W", 0.4) and "40%" in w.reason
+
+
+def test_unmet_pair_names_the_strongest_ratio_against_the_needed_one() -> None:
+    """A pair no test separates: the report names the closest test by share and the one whose median fault-to-noise
+    ratio comes nearest to what it needs (ratio to its own need: a test with a larger margin needs more)."""
+    a = PracticalCandidate("A", frozenset({"f1"}), 1, frozenset(), {("f1", "s"): 0.1}, {"s": 1.0},
+                           {("f1", "s"): 3.0}, 15.0)  # 0.2 of its need
+    b = PracticalCandidate("B", frozenset({"f2"}), 1, frozenset(), {("f2", "s"): 0.0}, {"s": 1.0},
+                           {("f2", "s"): 2.0}, 5.0)  # 0.4 of its need: the strongest
+    both = PracticalCandidate("C", frozenset({"f1", "f2"}), 1, frozenset({("f1", "s"), ("f2", "s")}))
+    sel = select_practical([a, b, both], ["f1", "f2"], ["s"], "highs")
+    (u,) = [u for u in sel.unmet if u.fault_b]
+    assert (u.fault_a, u.fault_b, u.kind) == ("f1", "f2", UnmetKind.WEAK)
+    assert (u.best_test, u.best_share) == ("A", 0.1)
+    assert (u.strongest_test, u.strongest_fnr, u.needed_fnr) == ("B", 2.0, 5.0)
+    assert "B's, is 2 of the 5 it needs" in u.reason

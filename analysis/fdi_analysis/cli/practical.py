@@ -86,7 +86,8 @@ def _num(f: str) -> int:
 
 def unmet_lines(sel: PracticalSelection) -> list[str]:
     """The requirements no realizable test meets, grouped by manoeuvre and kind (detections first, then pairs,
-    each with the closest test)."""
+    each with the closest test by detecting share and, for the weak ones, the strongest median fault-to-noise ratio
+    against the one that test needs)."""
     if not sel.unmet:
         return ["every requirement is met in every manoeuvre"]
     out = [f"{len(sel.unmet)} requirements no realizable test meets:"]
@@ -108,6 +109,9 @@ def unmet_lines(sel: PracticalSelection) -> list[str]:
 
 def _unmet_item(u: Unmet) -> str:
     what = f"{u.fault_a}/{u.fault_b}" if u.fault_b else u.fault_a
+    if u.kind is UnmetKind.WEAK and u.needed_fnr > 0.0:
+        ratio = f"FNR {u.strongest_fnr:.2g}/{u.needed_fnr:.2g} {u.strongest_test}"
+        return f"{what} ({u.best_test} {u.best_share:.0%}; {ratio})"
     if u.kind is UnmetKind.WEAK:
         return f"{what} ({u.best_test} {u.best_share:.0%})"
     return what
@@ -127,7 +131,8 @@ def write_report(out: Path, name: str, faults: Sequence[str], sel: PracticalSele
                    "detects": sorted(f"{f}@{s}" for f, s in t.detects)} for t in sel.tests],
         "unmet": [{"scenario": u.scenario, "faults": [u.fault_a, *([u.fault_b] if u.fault_b else [])],
                    "kind": u.kind.name, "tests": u.tests, "closest_test": u.best_test, "closest_share": u.best_share,
-                   "reason": u.reason} for u in sel.unmet],
+                   "strongest_test": u.strongest_test, "strongest_median_fnr": u.strongest_fnr,
+                   "needed_fnr": u.needed_fnr, "reason": u.reason} for u in sel.unmet],
         "structurally_isolable_pairs": len(sel.pairs),
         "pairs": {f"{a}/{b}": {"structural": struct[(a, b)], "practical_scenarios": prac[(a, b)]}
                   for a, b in sel.pairs},

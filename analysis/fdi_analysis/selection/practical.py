@@ -123,7 +123,10 @@ class Screening:
                                              if c.detects(f, s, self.share)),
                                    {(f, s): fs.share.get(s, 0.0) for f, fs in c.per_fault.items()
                                     for s in self.scenarios},
-                                   c.evaluable)
+                                   c.evaluable,
+                                   {(f, s): fs.median_fnr.get(s, 0.0) for f, fs in c.per_fault.items()
+                                    for s in self.scenarios},
+                                   self.gate * c.margin)
                 for c in self.candidates if not c.rejected]
 
 
@@ -135,6 +138,8 @@ class PracticalCandidate:
     detects: frozenset[tuple[str, str]]  # (fault, scenario) practically detected
     share: Mapping[tuple[str, str], float] = field(default_factory=dict)  # (fault, scenario) -> detecting share
     evaluable: Mapping[str, float] = field(default_factory=dict)  # scenario -> share in the operating domain
+    median_fnr: Mapping[tuple[str, str], float] = field(default_factory=dict)  # (fault, scenario) -> median FNR
+    needed_fnr: float = 0.0  # the FNR it must reach to detect (gate x its margin); 0: unknown
 
 
 class UnmetKind(Enum):
@@ -150,7 +155,9 @@ class Unmet:
     """A requirement no realizable candidate meets: a pair to separate (fault_b set) or a fault to detect.
     `tests`: the realizable tests that could meet it structurally (see the fault, and for a pair not the other
     one); `best_test`, `best_share`: the one of them that comes closest (share of the manoeuvre's operating
-    points where it detects)."""
+    points where it detects); `strongest_test`, `strongest_fnr`, `needed_fnr`: the one whose median fault-to-noise
+    ratio at the required size comes nearest to what it needs (its gate x margin; the size it would take, were the
+    response linear in the size, is needed / median times the required one)."""
 
     scenario: str
     fault_a: str
@@ -159,6 +166,9 @@ class Unmet:
     tests: int
     best_test: str = ""
     best_share: float = 0.0
+    strongest_test: str = ""
+    strongest_fnr: float = 0.0
+    needed_fnr: float = 0.0
 
     @property
     def reason(self) -> str:
@@ -168,8 +178,10 @@ class Unmet:
         if self.kind is UnmetKind.OUT_OF_DOMAIN:
             return (f"all {self.tests} realizable tests for {what} are outside their operating domain at every "
                     f"operating point of {self.scenario}")
+        strongest = (f"; the strongest median fault-to-noise ratio, {self.strongest_test}'s, is "
+                     f"{self.strongest_fnr:.2g} of the {self.needed_fnr:.2g} it needs" if self.needed_fnr > 0.0 else "")
         return (f"{self.tests} realizable tests for {what}; the closest, {self.best_test}, detects at "
-                f"{self.best_share:.0%} of the operating points of {self.scenario}")
+                f"{self.best_share:.0%} of the operating points of {self.scenario}{strongest}")
 
 
 @dataclass(frozen=True)
@@ -204,7 +216,13 @@ def _unmet(cands: Sequence[PracticalCandidate], a: str, b: str, s: str) -> Unmet
     best, share = max(options, key=lambda o: (o[1], -o[0].cost))
     if all(t.evaluable.get(s, 1.0) == 0.0 for t, _ in options):
         return Unmet(s, a, b, UnmetKind.OUT_OF_DOMAIN, len(options), best.label, share)
-    return Unmet(s, a, b, UnmetKind.WEAK, len(options), best.label, share)
+    # the fault each option would have to detect: a unless the test sees a (then b)
+    ratios = [(t, t.median_fnr.get((a if a in t.faults else b, s), 0.0), t.needed_fnr) for t, _ in options
+              if t.needed_fnr > 0.0]
+    if not ratios:
+        return Unmet(s, a, b, UnmetKind.WEAK, len(options), best.label, share)
+    strong, fnr, need = max(ratios, key=lambda o: (o[1] / o[2], -o[0].cost))
+    return Unmet(s, a, b, UnmetKind.WEAK, len(options), best.label, share, strong.label, fnr, need)
 
 
 def select_practical(candidates: Sequence[PracticalCandidate], faults: Sequence[str],
