@@ -59,6 +59,12 @@
  * Before any quiet test has settled, the candidates are all the faults that explain the alarms, which
  * contains the true fault but may span several classes. episode_clear_steps = 1 and response_steps of 1
  * give the memoryless rule (isolation on this step's masks only).
+ * Operating envelope: where the table has one (fdi_table.h) and at least `votes` of its signals usable at the step
+ * exceed their limits, no alarm accuses and no quiet test exonerates: the test statuses are reported as usual, the
+ * tests' alarm and quiet runs restart, an open episode keeps its accused tests and result (and ends as usual after
+ * episode_clear_steps without an alarm), and without an episode an alarm is reported as detected with no candidate.
+ * (A fault that spins the vehicle makes tests blind to it alarm at their gates, whose model error was never
+ * calibrated there; isolating on those alarms names a wrong class.)
  * Warm-up: fdi_diag_init() rejects warmup_steps shorter than the settling time of the table's design
  * point, FDI_DIAG_SETTLE_TAUS time constants of every filter stage (2 stages: 2 * 6 / (zeta * W)) and
  * of the observer (6 / L), rounded up to whole steps.
@@ -78,7 +84,7 @@
  * scripts/bench_fw.sh (instructions per step of the vehicle tables it benchmarks over a simulated drive on x86-64
  * with callgrind and on Cortex-M4F under qemu -icount: fault-free, in an episode with one class left, in one with
  * several (undecided), largest step).
- * Memory: sizeof(fdi_diag_t) ~ 152 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28) +
+ * Memory: sizeof(fdi_diag_t) ~ 160 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28) +
  * 12 * FDI_DIAG_MAX_FILTERS + 5 * FDI_DIAG_MAX_SENS + 6 * FDI_TABLE_MAX_FAULTS + 2 * FDI_GEN_MAX_SLOTS +
  * 4 * FDI_DIAG_MAX_SENS_EVERY bytes (bound
  * asserted below; scripts/bench_fw.sh prints the value), caller-owned (static or stack); the library itself has no
@@ -175,6 +181,7 @@ typedef struct
     bool slots_in_order; /* every test of the set is its slot (masks of tests are masks of slots) */
     uint32_t size_tests; /* tests with a reaction size for a fault they give no sensitivity of (fdi_iso) */
     uint32_t bank_live; /* signals whose bank filters ran at the last step */
+    bool in_envelope;   /* the last frame was inside the table's calibrated envelope (or it has none) */
     fdi_iso_result_t iso;
     fdi_eval_t eval[FDI_DIAG_MAX_TESTS];
     fdi_obs_t obs[FDI_DIAG_MAX_TESTS];     /* observer state of test i's generator */
@@ -203,7 +210,7 @@ typedef struct
 } fdi_diag_t; /* opaque by convention */
 
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
-FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (152U + (sizeof(void *) * 2U) +
+FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (160U + (sizeof(void *) * 2U) +
                                          (FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28U)) +
                                          (sizeof(fdi_svf_t) * FDI_DIAG_MAX_FILTERS) +
                                          ((sizeof(float) + 1U) * FDI_DIAG_MAX_SENS) +
@@ -222,6 +229,8 @@ typedef struct
     float ratio[FDI_DIAG_MAX_TESTS];    /* last test ratio (0 while not evaluable) */
     uint32_t accused_mask;              /* tests accused in the current isolation episode */
     fdi_iso_result_t iso;               /* candidates and isolability class (detected: episode active) */
+    bool in_envelope;                   /* the frame was inside the table's calibrated envelope (or it has none):
+                                           outside, the isolation holds (fdi_table.h, "Operating envelope" above) */
     uint8_t sens_offset[FDI_DIAG_MAX_TESTS + 1U]; /* test i's sensitivities: sens[sens_offset[i] ..
                                                      sens_offset[i + 1] - 1], ascending faults of its sens_mask;
                                                      all 0 (none listed) without cfg->sensitivities */

@@ -48,8 +48,15 @@
  *    evaluable".
  *  - gen == NULL marks a selected test without an on-board generator yet: it is always reported "not
  *    evaluable" and therefore neither accuses nor exonerates any fault.
+ *  - envelope (optional, NULL: none): the operating envelope the gates were calibrated in, as limits on a few
+ *    frame signals (e.g. the vehicle's side-slip velocity, yaw rate and lateral acceleration: the largest values of
+ *    the fault-free calibration drives times a margin). The frame is outside the envelope when at least `votes` of
+ *    those signals, usable at the step, exceed their limits in magnitude (votes > 1: one faulty sensor alone does
+ *    not take the diagnosis out of its envelope). Outside it no gate is validated (a test's model error there is
+ *    unknown, e.g. in a spin), so alarms there neither accuse nor exonerate: the diagnoser holds its isolation
+ *    (fdi_diag.h).
  *
- * Memory (flash, 32-bit target): fdi_table_t 56 bytes + 32 bytes per test (fdi_test_desc_t) + 12 bytes per
+ * Memory (flash, 32-bit target): fdi_table_t 60 bytes + 32 bytes per test (fdi_test_desc_t) + 12 bytes per
  * fault (name pointer, signature, class) + 4 bytes per (fault, test) + 4 bytes per signal + the strings; the
  * two struct sizes are asserted below for 32-bit targets. Cost: none at run time.
  */
@@ -62,7 +69,8 @@
 #include "fdi_static_assert.h"
 #include "fdi_status.h"
 
-#define FDI_TABLE_FORMAT_VERSION 5U /* bump on any change of these types; checked by fdi_table_check() */
+#define FDI_TABLE_FORMAT_VERSION 6U /* bump on any change of these types; checked by fdi_table_check() */
+#define FDI_TABLE_MAX_ENVELOPE 8U   /* signals of an operating envelope */
 #define FDI_TABLE_MAX_FAULTS 32U    /* fault bitmasks are uint32_t */
 #define FDI_TABLE_MAX_TESTS 32U     /* test bitmasks are uint32_t */
 
@@ -91,6 +99,15 @@ typedef struct
     float obs_gain;  /* gain of the constant-gain observers [1/s], > 0 */
 } fdi_table_design_t;
 
+/* The operating envelope of the calibration (see the header comment). */
+typedef struct
+{
+    uint8_t n_signals;     /* 1..FDI_TABLE_MAX_ENVELOPE */
+    uint8_t votes;         /* 1..n_signals: outside when this many usable signals exceed their limits */
+    const uint8_t *signal; /* n_signals frame signal indices (< the table's n_signals), distinct */
+    const float *limit;    /* n_signals limits on |value|, finite, > 0 */
+} fdi_table_envelope_t;
+
 /* The whole diagnosis table. */
 typedef struct
 {
@@ -107,12 +124,13 @@ typedef struct
     const float *test_size;          /* n_faults * n_tests, row-major: size of fault j test i reacts to; 0: never */
     float exoneration_margin;        /* >= 1: reaction-size rule: implied size / reaction size to exonerate */
     float sensitivity_margin;        /* >= 1: on-line rule: |s| * implied size / (gate * sigma) to exonerate */
+    const fdi_table_envelope_t *envelope; /* the calibrated operating envelope; NULL: none */
 } fdi_table_t;
 
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
 FDI_STATIC_ASSERT((sizeof(void *) != 4U) || (sizeof(fdi_test_desc_t) == 32U), fdi_sa_test_desc_size);
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
-FDI_STATIC_ASSERT((sizeof(void *) != 4U) || (sizeof(fdi_table_t) == 56U), fdi_sa_table_size);
+FDI_STATIC_ASSERT((sizeof(void *) != 4U) || (sizeof(fdi_table_t) == 60U), fdi_sa_table_size);
 
 /*
  * Validate a table: version, counts, non-NULL arrays and strings, no bits beyond n_signals / n_faults /
@@ -120,7 +138,9 @@ FDI_STATIC_ASSERT((sizeof(void *) != 4U) || (sizeof(fdi_table_t) == 56U), fdi_sa
  * and whose sensitivities within its fault mask, generated generators from one set with each slot at most once
  * and the set's bank within the vehicle's signals, finite positive gate and variance, response_steps >= 1,
  * signature matrix equal to the transposed fault masks, classes equal to the sets of faults with identical
- * signatures, finite non-negative test sizes that are 0 outside the signatures, margins finite and >= 1.
+ * signatures, finite non-negative test sizes that are 0 outside the signatures, margins finite and >= 1, an
+ * envelope (if any) of 1..FDI_TABLE_MAX_ENVELOPE distinct signals of the frame with finite positive limits and
+ * 1..n_signals votes.
  * FDI_OK or FDI_BAD_ARG (NULL) or FDI_BAD_TABLE.
  * Cost: O(n_faults^2 + n_tests * n_faults) bit operations, once at init.
  */

@@ -206,6 +206,18 @@ static bool gen_layout(fdi_diag_t *self, const fdi_table_t *t)
     return used <= FDI_DIAG_MAX_FILTERS;
 }
 
+/* The frame signals of an envelope (0 for none). */
+static uint32_t envelope_signals(const fdi_table_envelope_t *e)
+{
+    uint32_t m = 0U;
+    uint32_t k;
+    for (k = 0U; (e != NULL) && (k < (uint32_t)e->n_signals); ++k)
+    {
+        m |= (uint32_t)1U << ((uint32_t)e->signal[k] & 31U);
+    }
+    return m;
+}
+
 /* The tests whose sensitivities are computed together at one step of an episode, every-th step each: the tests by
    their number of sensitivities (largest first, the lower index on a tie), each into the turn with the fewest so far
    (the first on a tie), so that the steps share the sensitivity code about evenly. */
@@ -350,7 +362,7 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
         {
             self->sens[i] = 0.0f;
         }
-        self->signals = 0U;
+        self->signals = envelope_signals(t->envelope); /* checked finite at every step, with the tests' */
         for (i = 0U; (st == FDI_OK) && (i < (uint32_t)t->n_tests); ++i)
         {
             const fdi_test_desc_t *d = &t->tests[i];
@@ -398,6 +410,7 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             self->rearm = 0xFFFFFFFFU;
             self->alarm = 0U;
             self->evaluable = 0U;
+            self->in_envelope = true;
             self->bank_live = 0U;
             self->size_tests = size_rule_tests(t);
             self->undecided = undecided_faults(self);
@@ -933,6 +946,61 @@ static void latch(fdi_diag_t *self)
 }
 
 /* Episode bookkeeping and the isolation of this step (see "Isolation episodes" in fdi_diag.h). */
+/* Whether the frame is inside the table's calibrated envelope (fdi_table.h): fewer than `votes` of its signals that
+   are usable at the step beyond their limits; always without an envelope. */
+static bool inside_envelope(const fdi_table_envelope_t *e, const fdi_frame_t *frame, uint32_t usable)
+{
+    uint32_t over = 0U;
+    if (e != NULL)
+    {
+        uint32_t k;
+        for (k = 0U; k < (uint32_t)e->n_signals; ++k)
+        {
+            const uint32_t sig = (uint32_t)e->signal[k] & 31U;
+            if (((usable & ((uint32_t)1U << sig)) != 0U) && (fabsf(frame->value[sig]) > e->limit[k]))
+            {
+                ++over;
+            }
+        }
+    }
+    return (e == NULL) || (over < (uint32_t)e->votes);
+}
+
+/* Outside the calibrated envelope (fdi_table.h): no test accuses or exonerates. The tests' alarm and quiet runs start
+   again (a test takes part only after its response time back inside), the episode's accusations and result hold, and
+   it ends as usual after episode_clear_steps without an alarm; without an episode an alarm is reported as a detection
+   without candidates. */
+static void hold(fdi_diag_t *self, uint32_t alarm)
+{
+    uint32_t i;
+    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+    {
+        self->quiet_run[i] = 0U;
+        self->alarm_run[i] = 0U;
+    }
+    if (self->accused != 0U)
+    {
+        self->calm = (alarm != 0U) ? 0U : sat_inc(self->calm);
+        if (self->calm >= self->episode_clear_steps)
+        {
+            self->accused = 0U;
+            self->undecided = undecided_faults(self);
+        }
+        else
+        {
+            self->episode_age = sat_inc(self->episode_age);
+        }
+    }
+    if (self->accused == 0U)
+    {
+        self->iso.candidates = 0U;
+        self->iso.class_mask = 0U;
+        self->iso.n_classes = 0U;
+        self->iso.detected = (alarm != 0U);
+        self->iso.isolated = false;
+    }
+}
+
 static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable)
 {
     const uint32_t accused = self->accused;
@@ -1066,7 +1134,15 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
         self->alarm = alarm;
         track_residuals(self, evaluable, self->evaluable);
         self->evaluable = evaluable;
-        st = isolate(self, alarm, evaluable);
+        self->in_envelope = inside_envelope(self->table->envelope, frame, usable);
+        if (self->in_envelope)
+        {
+            st = isolate(self, alarm, evaluable);
+        }
+        else
+        {
+            hold(self, alarm);
+        }
     }
     return st;
 }
@@ -1097,6 +1173,7 @@ fdi_status_t fdi_diag_result(const fdi_diag_t *self, fdi_diag_result_t *out)
         }
         out->accused_mask = self->accused;
         out->iso = self->iso;
+        out->in_envelope = self->in_envelope;
         for (i = 0U; i <= FDI_DIAG_MAX_TESTS; ++i)
         {
             out->sens_offset[i] = self->sensitivities ? self->sens_offset[i] : 0U;

@@ -128,6 +128,26 @@ static bool set_ok(const fdi_table_t *t, uint32_t signals)
     return ok;
 }
 
+/* The envelope, if any: 1..FDI_TABLE_MAX_ENVELOPE distinct frame signals, finite positive limits, 1..n votes. */
+static bool envelope_ok(const fdi_table_envelope_t *e, uint32_t n_signals)
+{
+    bool ok = true;
+    if (e != NULL)
+    {
+        uint32_t seen = 0U;
+        uint32_t k;
+        ok = (e->n_signals >= 1U) && (e->n_signals <= FDI_TABLE_MAX_ENVELOPE) && (e->votes >= 1U) &&
+             (e->votes <= e->n_signals) && (e->signal != NULL) && (e->limit != NULL);
+        for (k = 0U; ok && (k < (uint32_t)e->n_signals); ++k)
+        {
+            const uint32_t sig = (uint32_t)e->signal[k];
+            ok = (sig < n_signals) && ((seen & ((uint32_t)1U << sig)) == 0U) && table_positive_finite(e->limit[k]);
+            seen |= (sig < n_signals) ? ((uint32_t)1U << sig) : 0U;
+        }
+    }
+    return ok;
+}
+
 fdi_status_t fdi_table_check(const fdi_table_t *table)
 {
     fdi_status_t st = FDI_OK;
@@ -160,6 +180,10 @@ fdi_status_t fdi_table_check(const fdi_table_t *table)
             st = FDI_BAD_TABLE;
         }
         if ((st == FDI_OK) && !faults_ok(table))
+        {
+            st = FDI_BAD_TABLE;
+        }
+        if ((st == FDI_OK) && !envelope_ok(table->envelope, (uint32_t)table->n_signals))
         {
             st = FDI_BAD_TABLE;
         }

@@ -38,3 +38,12 @@ def test_stale_sigmas_are_reported_and_kept(repo: Path, tmp_path: Path, capsys: 
     assert code == 1
     assert "is stale: run scripts/generate.sh" in capsys.readouterr().err
     assert copy.read_text(encoding="utf-8") == before
+
+
+def test_envelope_limits_are_rounded_up() -> None:
+    """The written limit never lies below what it covers (margin x the largest magnitude), to 3 digits."""
+    from fdi_host.tuning.cli.calibrate import round_up
+
+    for x, up in ((0.9925, 0.993), (0.993, 0.993), (6.7625, 6.77), (0.0641001, 0.0642), (1234.5, 1240.0)):
+        assert round_up(x) == pytest.approx(up, rel=1e-12) and round_up(x) >= x * (1 - 1e-12)
+    assert round_up(0.0) == 0.0

@@ -167,3 +167,40 @@ def test_c_text_comes_from_named_templates() -> None:
             if isinstance(node, ast.FunctionDef):
                 assert node.end_lineno is not None and node.end_lineno - node.lineno < 60, \
                     f"{mod.__name__}.{node.name} has {node.end_lineno - node.lineno} lines"
+
+
+def test_the_calibrated_envelope_goes_into_the_table(repo: Path, generated: tuple[str, str], tmp_path: Path) -> None:
+    """[envelope] of the thresholds file with the limits `fdi-tune calibrate` wrote: the table carries them (its
+    signals, votes, limits) and points to them; an envelope without calibrated limits, or on a signal the model
+    does not measure, is refused; a malformed [envelope] names what is wrong."""
+    import dataclasses
+
+    from fdi_analysis.export.c_expr import c_float
+    from fdi_analysis.export.thresholds import Envelope
+
+    th = Thresholds.load(repo / THRESHOLDS)
+    env = th.envelope
+    assert env is not None and env.votes >= 2 and set(env.limits) == set(env.signals)
+    source = generated[1]
+    assert "    &romo_envelope,\n};" in source
+    assert f"{len(env.signals)}U, {env.votes}U, romo_envelope_signals, romo_envelope_limits" in source
+    assert "{" + ", ".join(c_float(env.limits[s]) for s in env.signals) + "}" in source
+    assert "{" + ", ".join(f"ROMO_SIG_{s.upper()}" for s in env.signals) + "}" in source
+    model = load_model(repo / MODEL)
+    st = model.structure()
+    tests = [Candidate(sum(1 << st.equations.index(e) for e in ["K1", "D1", "S1", "S3", "S4", "S5"]),
+                       sum(1 << st.faults.index(f) for f in ("f1", "f3", "f4", "f5")), 5, "MSO1")]
+    uncalibrated = dataclasses.replace(th, envelope=dataclasses.replace(env, limits={}))
+    with pytest.raises(emit_table.ExportError, match="fdi-tune calibrate"):
+        render(model, tests, uncalibrated, NAME, "cmd")
+    alien = dataclasses.replace(th, envelope=Envelope(("nonsense_m",), 1, 1.25, {"nonsense_m": 1.0}))
+    with pytest.raises(emit_table.ExportError, match="nonsense_m not measured signals"):
+        render(model, tests, alien, NAME, "cmd")
+    none = dataclasses.replace(th, envelope=None)
+    assert "    NULL,\n};" in render(model, tests, none, NAME, "cmd")[1]
+    for bad, what in (({"signals": [], "votes": 1, "margin": 1.25}, "signals"),
+                      ({"signals": ["a", "a"], "votes": 1, "margin": 1.25}, "signals"),
+                      ({"signals": ["a", "b"], "votes": 3, "margin": 1.25}, "votes"),
+                      ({"signals": ["a"], "votes": 1, "margin": 0.5}, "margin")):
+        with pytest.raises(ValueError, match=rf"\[envelope\] {what}"):
+            Envelope.of(bad, {})

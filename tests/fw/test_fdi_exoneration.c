@@ -12,6 +12,7 @@
  * case says otherwise. In table_zero_b, test 0's generator lists d r0 / d a only: b is in its signature with a
  * steady-state sensitivity of exactly zero (as a fault that enters through a filtered derivative). In
  * table_two_quiet, test 2 sees b instead of a (d r2 / d b = frame[6]): two quiet tests that may clear b together.
+ * table_envelope is `table` with an operating envelope on frame[7] (|v| <= 1) and frame[8] (|w| <= 1), 2 votes.
  */
 #include <math.h>
 #include <setjmp.h>
@@ -92,7 +93,7 @@ static const uint32_t signature[2] = {0x5U, 0x3U};
 static const uint32_t iso_class[2] = {0x1U, 0x2U};
 static const float test_size[2 * 3] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f}; /* no reaction sizes: on-line rule */
 static const fdi_table_t table = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f, 0.7071f, 2.0f}, 7U, 2U, 3U, signal_names,
-                                  fault_names, tests, signature, iso_class, test_size, 2.0f, 1.5f};
+                                  fault_names, tests, signature, iso_class, test_size, 2.0f, 1.5f, NULL};
 /* test 0 of table_zero_b: the same residual, a sensitivity to a only */
 static fdi_status_t gen0z_step(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_frame_t *in, bool reset, float *r,
                                float *sens)
@@ -132,10 +133,10 @@ static const fdi_test_desc_t tests_no_sens[3] = {
 };
 static const fdi_table_t table_zero_b = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f, 0.7071f, 2.0f}, 7U, 2U, 3U,
                                          signal_names, fault_names, tests_zero_b, signature, iso_class, test_size,
-                                         2.0f, 1.5f};
+                                         2.0f, 1.5f, NULL};
 static const fdi_table_t table_no_sens = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f, 0.7071f, 2.0f}, 7U, 2U, 3U,
                                           signal_names, fault_names, tests_no_sens, signature, iso_class, test_size,
-                                          2.0f, 1.5f};
+                                          2.0f, 1.5f, NULL};
 /* table_two_quiet: test 2 sees b instead of a (r2 = frame[5], d r2 / d b = frame[6]): two quiet tests of b */
 static const fdi_gen_desc_t gen2b = {"t2b", gen2_step, NULL, 0x60U, 0x2U, 0U, 0U, NULL, 0U};
 static const fdi_test_desc_t tests_two_quiet[3] = {
@@ -146,8 +147,18 @@ static const fdi_test_desc_t tests_two_quiet[3] = {
 static const uint32_t signature_two_quiet[2] = {0x1U, 0x7U};
 static const fdi_table_t table_two_quiet = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f, 0.7071f, 2.0f}, 7U, 2U, 3U,
                                             signal_names, fault_names, tests_two_quiet, signature_two_quiet,
-                                            iso_class, test_size, 2.0f, 1.5f};
+                                            iso_class, test_size, 2.0f, 1.5f, NULL};
+/* table_envelope: the frame has two more signals, v = frame[7] and w = frame[8], the envelope's */
+static const char *const signal_names_env[9] = {"r0", "s0a", "s0b", "r1", "s1b", "r2", "s2a", "v", "w"};
+static const uint8_t env_signals[2] = {7U, 8U};
+static const float env_limits[2] = {1.0f, 1.0f};
+static const fdi_table_envelope_t envelope = {2U, 2U, env_signals, env_limits};
+static const fdi_table_t table_envelope = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f, 0.7071f, 2.0f}, 9U, 2U, 3U,
+                                           signal_names_env, fault_names, tests, signature, iso_class, test_size,
+                                           2.0f, 1.5f, &envelope};
 static const fdi_table_t *active = &table; /* the table init() uses */
+static float v_now = 0.0f; /* the envelope signals of table_envelope */
+static float w_now = 0.0f;
 static float s2a = 0.1f; /* test 2's sensitivity to a (weak unless a case raises it) */
 static float r1_now = 0.0f; /* test 1's residual (quiet unless a case raises it) */
 static float r2_now = 0.0f; /* test 2's residual */
@@ -192,9 +203,11 @@ static uint32_t run(fdi_diag_t *d, uint32_t steps, float r0, float s0a, float s0
     in.value[4] = s1b;
     in.value[5] = r2_now;
     in.value[6] = s2a;
+    in.value[7] = v_now;
+    in.value[8] = w_now;
     for (k = 0U; k < steps; ++k)
     {
-        assert_int_equal(fdi_diag_step(d, &in, 0x7FU), FDI_OK);
+        assert_int_equal(fdi_diag_step(d, &in, 0x1FFU), FDI_OK);
     }
     assert_int_equal(fdi_diag_result(d, &res), FDI_OK);
     return res.iso.candidates;
@@ -400,6 +413,93 @@ static void test_sensitivities_in_turn(void **state)
     assert_int_equal(gen1_max_gap, 1U); /* every step once asked for */
 }
 
+static bool last_in_envelope(const fdi_diag_t *d, uint32_t *accused, bool *detected)
+{
+    fdi_diag_result_t res;
+    assert_int_equal(fdi_diag_result(d, &res), FDI_OK);
+    *accused = res.accused_mask;
+    *detected = res.iso.detected;
+    return res.in_envelope;
+}
+
+static void test_outside_the_envelope_the_isolation_holds(void **state)
+{
+    /* Test 0 in alarm accuses a and b; test 1 (blind to a) alarming too would leave b alone. Outside the envelope
+       (both v and w beyond their limits) its alarm accuses nothing: a and b stay; back inside it accuses. One
+       signal beyond its limit is not enough (2 votes). */
+    fdi_diag_t d;
+    uint32_t accused = 0U;
+    bool detected = false;
+    (void)state;
+    active = &table_envelope;
+    v_now = 0.0f;
+    w_now = 0.0f;
+    warm(&d, FDI_ISO_EXONERATION);
+    assert_true(last_in_envelope(&d, &accused, &detected));
+    assert_int_equal(run(&d, 10U, 20.0f, 1.0f, 1.0f, 0.0f, 0.1f), 0x3U); /* test 1 weak (0.1): clears nothing */
+    v_now = 5.0f; /* one vote: still inside */
+    r1_now = 20.0f;
+    assert_int_equal(run(&d, 5U, 20.0f, 1.0f, 1.0f, 0.0f, 0.1f), 0x2U);
+    assert_true(last_in_envelope(&d, &accused, &detected));
+    /* the same with both signals beyond their limits, from a fresh episode */
+    r1_now = 0.0f;
+    v_now = 0.0f;
+    warm(&d, FDI_ISO_EXONERATION);
+    assert_int_equal(run(&d, 10U, 20.0f, 1.0f, 1.0f, 0.0f, 0.1f), 0x3U);
+    v_now = 5.0f;
+    w_now = -5.0f;
+    r1_now = 20.0f;
+    assert_int_equal(run(&d, 50U, 20.0f, 1.0f, 1.0f, 0.0f, 0.1f), 0x3U); /* held */
+    assert_false(last_in_envelope(&d, &accused, &detected));
+    assert_int_equal(accused, 0x1U);
+    assert_true(detected);
+    v_now = 0.0f; /* back inside: the alarm accuses */
+    w_now = 0.0f;
+    assert_int_equal(run(&d, 1U, 20.0f, 1.0f, 1.0f, 0.0f, 0.1f), 0x2U);
+    assert_true(last_in_envelope(&d, &accused, &detected));
+    assert_int_equal(accused, 0x3U);
+    r1_now = 0.0f;
+    v_now = 0.0f;
+    w_now = 0.0f;
+    active = &table;
+}
+
+static void test_outside_the_envelope_an_alarm_is_a_detection_without_candidates(void **state)
+{
+    /* no episode open: an alarm outside is reported as detected, nothing accused, no candidate; the episode opens
+       once inside; an episode held outside ends after episode_clear_steps (5) without an alarm */
+    fdi_diag_t d;
+    uint32_t accused = 0U;
+    bool detected = false;
+    (void)state;
+    active = &table_envelope;
+    v_now = 0.0f;
+    w_now = 0.0f;
+    warm(&d, FDI_ISO_EXONERATION);
+    v_now = 2.0f;
+    w_now = 2.0f;
+    assert_int_equal(run(&d, 30U, 20.0f, 1.0f, 1.0f, 0.0f, 0.1f), 0U);
+    assert_false(last_in_envelope(&d, &accused, &detected));
+    assert_true(detected);
+    assert_int_equal(accused, 0U);
+    v_now = 0.0f;
+    assert_int_equal(run(&d, 1U, 20.0f, 1.0f, 1.0f, 0.0f, 0.1f), 0x3U); /* inside: the episode opens */
+    assert_true(last_in_envelope(&d, &accused, &detected));
+    assert_int_equal(accused, 0x1U);
+    v_now = 2.0f; /* outside again, the residual back to 0: the held episode ends once the alarm has been gone for 5
+                     steps (the CUSUM, saturated at 2 h, takes ~130 steps to fall below h) */
+    assert_int_equal(run(&d, 100U, 0.0f, 1.0f, 1.0f, 0.0f, 0.1f), 0x3U);
+    assert_false(last_in_envelope(&d, &accused, &detected));
+    assert_int_equal(accused, 0x1U);
+    assert_int_equal(run(&d, 200U, 0.0f, 1.0f, 1.0f, 0.0f, 0.1f), 0U);
+    (void)last_in_envelope(&d, &accused, &detected);
+    assert_int_equal(accused, 0U);
+    assert_false(detected);
+    v_now = 0.0f;
+    w_now = 0.0f;
+    active = &table;
+}
+
 int main(void)
 {
     const struct CMUnitTest list[] = {
@@ -413,6 +513,8 @@ int main(void)
         cmocka_unit_test(test_a_fault_without_steady_state_sensitivity_cannot_explain_a_settled_alarm),
         cmocka_unit_test(test_quiet_tests_clear_together_what_each_misses),
         cmocka_unit_test(test_sensitivities_in_turn),
+        cmocka_unit_test(test_outside_the_envelope_the_isolation_holds),
+        cmocka_unit_test(test_outside_the_envelope_an_alarm_is_a_detection_without_candidates),
     };
     return cmocka_run_group_tests(list, NULL, NULL);
 }

@@ -78,7 +78,7 @@ static const uint32_t class4[4] = {0x3U, 0x3U, 0x4U, 0x8U};
 static const float size4[4 * 2] = {1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 0.0f, 0.0f, 1.0f}; /* classic */
 static const char *const signal_names[1] = {"s"};
 static const fdi_table_t table4 = {FDI_TABLE_FORMAT_VERSION, {0.01f, 0.5f, 0.7071f, 2.0f}, 1U, 4U, 2U, signal_names,
-                                   names4, tests2, sig4, class4, size4, 1.0f, 1.0f};
+                                   names4, tests2, sig4, class4, size4, 1.0f, 1.0f, NULL};
 
 /*
  * Reaction sizes: 3 faults, 3 tests, all faults in every test (one class), but
@@ -97,7 +97,7 @@ static const uint32_t sig3[3] = {0x7U, 0x7U, 0x7U};
 static const uint32_t class3[3] = {0x7U, 0x7U, 0x7U};
 static const float size3[3 * 3] = {1.0f, 10.0f, 0.0f, 5.0f, 1.0f, 1.0f, 2.0f, 2.0f, 2.0f};
 static const fdi_table_t table3 = {FDI_TABLE_FORMAT_VERSION, {0.01f, 0.5f, 0.7071f, 2.0f}, 1U, 3U, 3U, signal_names,
-                                   names3, tests3, sig3, class3, size3, 2.0f, 1.0f};
+                                   names3, tests3, sig3, class3, size3, 2.0f, 1.0f, NULL};
 
 static void test_reaction_sizes(void **state)
 {

@@ -19,6 +19,9 @@ static const char *names_copy[5];
 static float size_copy[5 * 4];
 static const char *signal_names_copy[ROMO_SIG_COUNT];
 static fdi_gen_desc_t bad_gen;
+static uint8_t env_signal[2];
+static float env_limit[2];
+static fdi_table_envelope_t env;
 static fdi_table_t t;
 
 /* A writable copy of the kinematic table. */
@@ -53,6 +56,15 @@ static int setup(void **state)
     t.signal_names = signal_names_copy;
     bad_gen = *fdi_kin_table.tests[0].gen; /* test 0 runs a copy of its generator that a case may corrupt */
     tests_copy[0].gen = &bad_gen;
+    env_signal[0] = (uint8_t)ROMO_SIG_VY_M; /* a valid envelope on two signals that a case may corrupt */
+    env_signal[1] = (uint8_t)ROMO_SIG_PSIDOT_M;
+    env_limit[0] = 1.0f;
+    env_limit[1] = 0.5f;
+    env.n_signals = 2U;
+    env.votes = 2U;
+    env.signal = env_signal;
+    env.limit = env_limit;
+    t.envelope = &env;
     return 0;
 }
 
@@ -60,7 +72,9 @@ static void test_kin_table_ok(void **state)
 {
     (void)state;
     assert_int_equal(fdi_table_check(&fdi_kin_table), FDI_OK);
-    assert_int_equal(fdi_table_check(&t), FDI_OK);
+    assert_int_equal(fdi_table_check(&t), FDI_OK); /* with an envelope */
+    t.envelope = NULL;
+    assert_int_equal(fdi_table_check(&t), FDI_OK); /* and without */
     assert_int_equal(fdi_table_check(NULL), FDI_BAD_ARG);
 }
 
@@ -109,6 +123,17 @@ static void test_corruptions(void **state)
     EXPECT_BAD(t.exoneration_margin = INFINITY);
     EXPECT_BAD(t.sensitivity_margin = 0.9f);
     EXPECT_BAD(t.sensitivity_margin = NAN);
+    EXPECT_BAD(env.n_signals = 0U);                    /* the operating envelope (fdi_table_envelope_t) */
+    EXPECT_BAD(env.n_signals = (uint8_t)(FDI_TABLE_MAX_ENVELOPE + 1U));
+    EXPECT_BAD(env.votes = 0U);
+    EXPECT_BAD(env.votes = 3U);                        /* more votes than signals */
+    EXPECT_BAD(env.signal = NULL);
+    EXPECT_BAD(env.limit = NULL);
+    EXPECT_BAD(env_signal[1] = (uint8_t)ROMO_SIG_COUNT); /* beyond the vehicle's signals */
+    EXPECT_BAD(env_signal[1] = (uint8_t)ROMO_SIG_VY_M);  /* the same signal twice */
+    EXPECT_BAD(env_limit[0] = 0.0f);
+    EXPECT_BAD(env_limit[1] = INFINITY);
+    EXPECT_BAD(env_limit[1] = NAN);
 }
 
 /* A test without a generator yet (gen NULL) is valid data. */

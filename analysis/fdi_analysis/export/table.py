@@ -89,7 +89,7 @@ static const float ${vehicle}_test_size[${n_faults} * ${n_tests}] = {
 ${sizes}
 };
 
-const char *const ${table}_equations[${n_tests}] = {
+${envelope}const char *const ${table}_equations[${n_tests}] = {
 ${equations}
 };
 
@@ -111,7 +111,19 @@ const fdi_table_t ${table} = {
     ${vehicle}_test_size,
     ${margin},
     ${sens_margin},
+    ${envelope_ref},
 };
+""")
+
+ENVELOPE_FMT = Template("""\
+/* The operating envelope the gates were calibrated in (fdi_table.h; [envelope] of
+   ${thresholds}): outside it when at least ${votes} of these signals exceed their limits,
+   ${margin} x their largest magnitude in the calibration drives. */
+static const uint8_t ${vehicle}_envelope_signals[${n}] = {${signals}};
+static const float ${vehicle}_envelope_limits[${n}] = {${limits}};
+static const fdi_table_envelope_t ${vehicle}_envelope = {
+    ${n}U, ${votes}U, ${vehicle}_envelope_signals, ${vehicle}_envelope_limits};
+
 """)
 
 TEST_FMT = Template("""\
@@ -153,6 +165,9 @@ class TableFile:
     sizes: tuple[tuple[float, ...], ...]
     size_note: str
     margin: float
+    envelope: tuple[tuple[str, float], ...] = ()  # (signal, limit) of the calibrated envelope; () = none
+    envelope_votes: int = 0
+    envelope_margin: float = 0.0
 
 
 # ------------------------------------------------------------------------------------------ computing
@@ -194,11 +209,24 @@ def table_file(model: Model, tests: Sequence[Candidate], thresholds: Thresholds,
     size_rows, margin = test_size_rows(list(st.faults), [t.label for t in tests], signatures, sizes)
     size_note = (f"reaction sizes from {sizes.source}, 0 = no reaction within the fault's limits" if sizes is not None
                  else "1 on the signature (no fault sizes given: classic exoneration)")
+    env = thresholds.envelope
+    envelope: tuple[tuple[str, float], ...] = ()
+    if env is not None:
+        missing = [s for s in env.signals if s not in env.limits]
+        unknown = [s for s in env.signals if s not in known_order]
+        if unknown:
+            raise ExportError(f"[envelope] of {thresholds.source}: {', '.join(unknown)} not measured signals of "
+                              f"{model.name}")
+        if missing:
+            raise ExportError(f"{thresholds.source} defines an [envelope] without calibrated limits of "
+                              f"{', '.join(missing)}: run fdi-tune calibrate")
+        envelope = tuple((s, env.limits[s]) for s in env.signals)
     return TableFile(
         banner=banner, names=names, model=model.name, thresholds=thresholds.source, design=thresholds.design,
         faults=tuple(st.faults), fault_names=tuple(f"{f.name} {f.desc}".strip() for f in model.faults),
         tests=tuple(rows), signatures=tuple(signatures), classes=tuple(classes),
-        sizes=tuple(tuple(r) for r in size_rows), size_note=size_note, margin=margin)
+        sizes=tuple(tuple(r) for r in size_rows), size_note=size_note, margin=margin, envelope=envelope,
+        envelope_votes=env.votes if env is not None else 0, envelope_margin=env.margin if env is not None else 0.0)
 
 
 # ------------------------------------------------------------------------------------------ rendering
@@ -231,7 +259,12 @@ def render_file(f: TableFile) -> tuple[str, str]:
                         for row, x in zip(f.sizes, f.faults, strict=True)),
         equations=_strings([t.equations for t in f.tests]), unknowns=_strings([t.unknowns for t in f.tests]),
         design=", ".join(c_float(x) for x in f.design), sig_count=n.sig_count, signal_names=n.signal_names,
-        margin=c_float(f.margin), sens_margin=c_float(SENSITIVITY_MARGIN))
+        margin=c_float(f.margin), sens_margin=c_float(SENSITIVITY_MARGIN),
+        envelope=ENVELOPE_FMT.substitute(
+            thresholds=comment_text(f.thresholds), votes=f.envelope_votes, margin=f"{f.envelope_margin:g}",
+            vehicle=n.vehicle, n=len(f.envelope), signals=", ".join(n.sig_index(s) for s, _ in f.envelope),
+            limits=", ".join(c_float(x) for _, x in f.envelope)) if f.envelope else "",
+        envelope_ref=f"&{n.vehicle}_envelope" if f.envelope else "NULL")
     return header, source
 
 

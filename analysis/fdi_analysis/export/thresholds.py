@@ -1,17 +1,42 @@
-"""The thresholds TOML file (`Thresholds`): gate, design point, the hand-written kinds' variances, and its
-generated parts, the hand-maintained part above them kept byte for byte: the [selection] table (the tests on
-board, by practical isolability, written by `fdi-analyze practical`) and, last, the [generated] table
-(variance per generated residual) and the [observer] table (the reference sensitivity of each observer
-generator's gain design), written by `fdi-tune calibrate`."""
+"""The thresholds TOML file (`Thresholds`): gate, design point, the hand-written kinds' variances, the operating
+envelope's definition ([envelope]: signals, votes, margin), and its generated parts, the hand-maintained part above
+them kept byte for byte: the [selection] table (the tests on board, by practical isolability, written by
+`fdi-analyze practical`) and, last, the [generated] table (variance per generated residual), the [observer] table
+(the reference sensitivity of each observer generator's gain design) and the [envelope_limits] table (per envelope
+signal, margin times the largest magnitude of the calibration drives), written by `fdi-tune calibrate`."""
 
 from __future__ import annotations
 
 import tomllib
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from fdi_analysis.residuals.observer import ObserverReference
+
+
+@dataclass(frozen=True)
+class Envelope:
+    """The operating envelope the gates are calibrated in (fw/include/fdi_table.h): outside it when at least `votes`
+    of `signals` exceed their limits (margin times the largest magnitude of the calibration drives)."""
+
+    signals: tuple[str, ...]
+    votes: int
+    margin: float
+    limits: dict[str, float] = field(default_factory=dict)  # written by `fdi-tune calibrate` ([envelope_limits])
+
+    @staticmethod
+    def of(doc: Mapping[str, object], limits: Mapping[str, object]) -> Envelope:
+        sig = doc.get("signals")
+        votes, margin = doc.get("votes"), doc.get("margin")
+        if not (isinstance(sig, list) and sig and all(isinstance(x, str) for x in sig) and len(set(sig)) == len(sig)):
+            raise ValueError("[envelope] signals: a list of distinct signal names")
+        if not (isinstance(votes, int) and 1 <= votes <= len(sig)):
+            raise ValueError(f"[envelope] votes: an integer 1..{len(sig)} (the number of signals)")
+        if not (isinstance(margin, (int, float)) and margin >= 1.0):
+            raise ValueError("[envelope] margin: a number >= 1")
+        lim = {str(k): float(v) for k, v in limits.items() if isinstance(v, (int, float))}
+        return Envelope(tuple(sig), votes, float(margin), lim)
 
 
 @dataclass(frozen=True)
@@ -25,6 +50,7 @@ class Thresholds:
     generated: dict[str, float] = field(default_factory=dict)  # by MSO equation set (space separated)
     selection: tuple[str, ...] = ()  # equation sets of the practical selection ([selection]); () = structural
     observer: dict[str, float] = field(default_factory=dict)  # c_ref of the observer generators ([observer])
+    envelope: Envelope | None = None  # [envelope] with its calibrated [envelope_limits]; None: no envelope
 
     @staticmethod
     def load(path: Path) -> Thresholds:
@@ -38,6 +64,7 @@ class Thresholds:
             generated={str(k): float(v) for k, v in doc.get("generated", {}).items()},
             selection=tuple(str(t) for t in doc.get("selection", {}).get("tests", [])),
             observer={str(k): float(v) for k, v in doc.get("observer", {}).items()},
+            envelope=(Envelope.of(doc["envelope"], doc.get("envelope_limits", {})) if "envelope" in doc else None),
         )
 
     def observer_reference(self) -> ObserverReference:
@@ -50,9 +77,10 @@ SELECTION_MARKER = "# ---- the tests on board, by practical isolability: written
 
 
 def with_generated(text: str, rows: Sequence[tuple[str, float, str]], provenance: str,
-                   observer: Sequence[tuple[str, float, str]] = ()) -> str:
-    """The file's text with its [generated] table (rows: equation set, variance, comment) and its [observer]
-    table (equation set, c_ref, comment) replaced."""
+                   observer: Sequence[tuple[str, float, str]] = (),
+                   envelope: Sequence[tuple[str, float, str]] = ()) -> str:
+    """The file's text with its [generated] table (rows: equation set, variance, comment), its [observer]
+    table (equation set, c_ref, comment) and its [envelope_limits] table (signal, limit, comment) replaced."""
     head = text.split(MARKER)[0].rstrip("\n") + "\n\n"
     lines = [MARKER, f"# {provenance}", "[generated]"]
     for eqs, var, comment in rows:
@@ -64,6 +92,12 @@ def with_generated(text: str, rows: Sequence[tuple[str, float, str]], provenance
         for eqs, c_ref, comment in observer:
             lines.append(f"# {comment}")
             lines.append(f'"{eqs}" = {c_ref:.3g}')
+    if envelope:
+        lines += ["", "# the operating envelope's limits ([envelope]): margin x the largest magnitude of the "
+                  "calibration drives (3 significant digits)", "[envelope_limits]"]
+        for sig, limit, comment in envelope:
+            lines.append(f"# {comment}")
+            lines.append(f"{sig} = {limit:.3g}")
     return head + "\n".join(lines) + "\n"
 
 

@@ -118,7 +118,8 @@ def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
             ("n_tests", ctypes.c_uint8), ("alarm_mask", ctypes.c_uint32), ("evaluable_mask", ctypes.c_uint32),
             ("status", ctypes.c_int * c.max_tests), ("residual", ctypes.c_float * c.max_tests),
             ("ratio", ctypes.c_float * c.max_tests), ("accused_mask", ctypes.c_uint32), ("iso", IsoResult),
-            ("sens_offset", ctypes.c_uint8 * (c.max_tests + 1)), ("sens", ctypes.c_float * c.max_sens),
+            ("in_envelope", ctypes.c_bool), ("sens_offset", ctypes.c_uint8 * (c.max_tests + 1)),
+            ("sens", ctypes.c_float * c.max_sens),
         ]
 
     class Result(ctypes.Structure):

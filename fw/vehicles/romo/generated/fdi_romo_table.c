@@ -160,6 +160,14 @@ static const float romo_test_size[25 * 12] = {
     0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.2f, 0.0f, 0.0f, 1.5f, 0.0f, 0.0f, 0.0f, /* f25 */
 };
 
+/* The operating envelope the gates were calibrated in (fdi_table.h; [envelope] of
+   analysis/models/romo_thresholds.toml): outside it when at least 2 of these signals exceed their limits,
+   1.25 x their largest magnitude in the calibration drives. */
+static const uint8_t romo_envelope_signals[3] = {ROMO_SIG_VY_M, ROMO_SIG_PSIDOT_M, ROMO_SIG_AY_M};
+static const float romo_envelope_limits[3] = {0.993f, 0.642f, 6.76f};
+static const fdi_table_envelope_t romo_envelope = {
+    3U, 2U, romo_envelope_signals, romo_envelope_limits};
+
 const char *const fdi_romo_table_equations[12] = {
     "K1 D1 S1 S3 S4 S5",
     "K2 D2 S2 S3 S4 S5",
@@ -204,4 +212,5 @@ const fdi_table_t fdi_romo_table = {
     romo_test_size,
     2.0f,
     1.5f,
+    &romo_envelope,
 };

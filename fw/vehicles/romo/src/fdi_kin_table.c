@@ -69,4 +69,5 @@ const fdi_table_t fdi_kin_table = {
     kin_test_size,
     FDI_KIN_EXONERATION_MARGIN,
     1.0f, /* no generator of this table gives sensitivities */
+    NULL, /* no calibrated envelope: the kinematic relations hold in any motion */
 };

@@ -109,4 +109,5 @@ const fdi_table_t fdi_three_tank_table = {
     three_tank_test_size,
     2.0f,
     1.5f,
+    NULL,
 };

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -36,7 +37,9 @@ def register(sub: Any) -> None:
         "CAN frames at their cycle times, held at the diagnosis steps, DBC quantisation; fdi_host.can.ecu_view), "
         "and write each residual's sigma (no raw alarm of the gate or the CUSUM in any drive inside each test's "
         "operating domain after the warm-up, times a 25 %% margin) into the [generated] table of the "
-        "thresholds file (the rest of the file is kept).",
+        "thresholds file, and, where the file defines an operating envelope ([envelope]: signals, votes, margin), "
+        "each envelope signal's limit, the margin times its largest magnitude in the drives after the warm-up, into "
+        "its [envelope_limits] table (the rest of the file is kept).",
         epilog=EXAMPLE,
     )
     p.add_argument("model", type=Path, help="model file (.toml)")
@@ -82,7 +85,17 @@ def register(sub: Any) -> None:
     q.set_defaults(func=run_sizes)
 
 
+def round_up(x: float, digits: int = 3) -> float:
+    """x rounded up to `digits` significant digits (a limit written as text never below the value it covers)."""
+    if x <= 0.0 or not math.isfinite(x):
+        return x
+    scale = 10.0 ** (math.floor(math.log10(x)) - digits + 1)
+    return math.ceil(x / scale - 1e-9) * scale
+
+
 def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from fdi_analysis.export.thresholds import Thresholds, with_generated
     from fdi_analysis.model_loader import load_model
     from fdi_analysis.residuals.evaluate import FilterDesign
@@ -119,8 +132,19 @@ def run(args: argparse.Namespace) -> int:
             assert c_ref is not None
             observer_rows.append((" ".join(g.equations), c_ref, f"{g.name}: observer for {g.observer.state}, "
                                   f"residual {g.residual_equation}"))
+    envelope_rows = []
+    if th.envelope is not None:
+        for sig in th.envelope.signals:
+            if any(sig not in d for d in signals):
+                print(f"error: [envelope] signal {sig!r} is not a measured signal of the drives", file=sys.stderr)
+                return EXIT_ERROR
+            peak = max(float(np.max(np.abs(np.asarray(d[sig], dtype=float)[skip:]))) for d in signals)
+            limit = round_up(th.envelope.margin * peak)
+            envelope_rows.append((sig, limit, f"{sig}: largest |value| {peak:.3g} in the calibration drives, times "
+                                              f"{th.envelope.margin:g}"))
+            print(f"envelope {sig}: largest |value| {peak:.3g}, limit {limit:.3g}")
     old = args.thresholds.read_text(encoding="utf-8")
-    new = with_generated(old, rows, provenance, observer_rows)
+    new = with_generated(old, rows, provenance, observer_rows, envelope_rows)
     if args.check:
         if new != old:
             print(f"{args.thresholds} is stale: run scripts/generate.sh (fdi-tune calibrate)", file=sys.stderr)
