@@ -11,7 +11,8 @@
 #           the ROMO target with and without its sensitivity code (-DFDI_GEN_SENSITIVITIES=0), sizeof(fdi_diag_t)
 # and the goals of issue 21 with PASS/MISS: <= 5,000 instructions per step on the M4 (largest step of the ROMO table
 # in the ECU's configuration, isolation included; with every sensitivity reported as information), sizeof(fdi_diag_t)
-# <= 4 KB on the M4, libfdi.a <= 32 KB of text.
+# <= 4 KB on the M4, <= 32 KB of text for the ROMO diagnosis as the ECU links it (libfdi.a + libfdi_romo.a; the
+# generic core alone as information).
 # Usage: scripts/bench_fw.sh
 set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -91,4 +92,9 @@ echo "ROMO table, Cortex-M4F, largest step of the drive (the ECU's configuration
   "$goal_insn instructions: $(verdict "${worst:-999999}" "$goal_insn")"
 echo "  (with every sensitivity reported at every step: ${worst_all:-?} instructions)"
 echo "sizeof(fdi_diag_t) on Cortex-M4F: ${ram:-?} <= $goal_ram bytes: $(verdict "${ram:-999999}" "$goal_ram")"
-echo "libfdi.a text on Cortex-M4F: $lib_text <= $goal_lib bytes: $(verdict "$lib_text" "$goal_lib")"
+# The goal was set on libfdi.a when it held the generated ROMO table too; the diagnosis the ECU links for ROMO is the
+# generic core plus the vehicle target (its generated generators, with the sensitivity code the exoneration needs).
+shipped=$((lib_text + romo_lib))
+echo "ROMO diagnosis as the ECU links it (libfdi.a + libfdi_romo.a) text on Cortex-M4F: $shipped <= $goal_lib bytes:" \
+  "$(verdict "$shipped" "$goal_lib")"
+echo "  (libfdi.a, the generic core alone: $lib_text bytes: $(verdict "$lib_text" "$goal_lib"))"

@@ -60,11 +60,11 @@
  * contains the true fault but may span several classes. episode_clear_steps = 1 and response_steps of 1
  * give the memoryless rule (isolation on this step's masks only).
  * Operating envelope: where the table has one (fdi_table.h) and at least `votes` of its signals usable at the step
- * exceed their limits, no alarm accuses and no quiet test exonerates: the test statuses are reported as usual, the
- * tests' alarm and quiet runs restart, an open episode keeps its accused tests and result (and ends as usual after
- * episode_clear_steps without an alarm), and without an episode an alarm is reported as detected with no candidate.
- * (A fault that spins the vehicle makes tests blind to it alarm at their gates, whose model error was never
- * calibrated there; isolating on those alarms names a wrong class.)
+ * exceed their limits, the gates are not validated, so no test is evaluable (as outside its operating domain: it
+ * restarts and warms up when back inside, so no evidence gathered outside, e.g. in its CUSUM, carries over), and an
+ * open episode holds: its accused tests and its result stay, it neither ends for want of alarms nor loses its
+ * isolation for want of exonerating tests. (A fault that spins the vehicle makes tests blind to it alarm at their
+ * gates, whose model error was never calibrated there; isolating on those alarms names a wrong class.)
  * Warm-up: fdi_diag_init() rejects warmup_steps shorter than the settling time of the table's design
  * point, FDI_DIAG_SETTLE_TAUS time constants of every filter stage (2 stages: 2 * 6 / (zeta * W)) and
  * of the observer (6 / L), rounded up to whole steps.

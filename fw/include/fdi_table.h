@@ -53,8 +53,7 @@
  *    the fault-free calibration drives times a margin). The frame is outside the envelope when at least `votes` of
  *    those signals, usable at the step, exceed their limits in magnitude (votes > 1: one faulty sensor alone does
  *    not take the diagnosis out of its envelope). Outside it no gate is validated (a test's model error there is
- *    unknown, e.g. in a spin), so alarms there neither accuse nor exonerate: the diagnoser holds its isolation
- *    (fdi_diag.h).
+ *    unknown, e.g. in a spin), so no test is evaluable there and the diagnoser holds its isolation (fdi_diag.h).
  *
  * Memory (flash, 32-bit target): fdi_table_t 60 bytes + 32 bytes per test (fdi_test_desc_t) + 12 bytes per
  * fault (name pointer, signature, class) + 4 bytes per (fault, test) + 4 bytes per signal + the strings; the

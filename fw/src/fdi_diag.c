@@ -966,38 +966,17 @@ static bool inside_envelope(const fdi_table_envelope_t *e, const fdi_frame_t *fr
     return (e == NULL) || (over < (uint32_t)e->votes);
 }
 
-/* Outside the calibrated envelope (fdi_table.h): no test accuses or exonerates. The tests' alarm and quiet runs start
-   again (a test takes part only after its response time back inside), the episode's accusations and result hold, and
-   it ends as usual after episode_clear_steps without an alarm; without an episode an alarm is reported as a detection
-   without candidates. */
-static void hold(fdi_diag_t *self, uint32_t alarm)
+/* Outside the calibrated envelope (fdi_table.h) no test is evaluable: the tests' alarm and quiet runs start again and
+   an open episode holds, its accusations and its result too (there is no evidence for or against any fault: it
+   neither ends for want of alarms nor loses its isolation for want of exonerating tests). Back inside, the tests
+   evaluate again after their warm-up. */
+static void hold(fdi_diag_t *self)
 {
     uint32_t i;
     for (i = 0U; i < (uint32_t)self->n_tests; ++i)
     {
         self->quiet_run[i] = 0U;
         self->alarm_run[i] = 0U;
-    }
-    if (self->accused != 0U)
-    {
-        self->calm = (alarm != 0U) ? 0U : sat_inc(self->calm);
-        if (self->calm >= self->episode_clear_steps)
-        {
-            self->accused = 0U;
-            self->undecided = undecided_faults(self);
-        }
-        else
-        {
-            self->episode_age = sat_inc(self->episode_age);
-        }
-    }
-    if (self->accused == 0U)
-    {
-        self->iso.candidates = 0U;
-        self->iso.class_mask = 0U;
-        self->iso.n_classes = 0U;
-        self->iso.detected = (alarm != 0U);
-        self->iso.isolated = false;
     }
 }
 
@@ -1075,13 +1054,15 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
             usable &= ~fdi_gen_bank_step(self->set, self->filt, &self->par.svf, in, usable, self->bank_live);
             self->bank_live = usable;
         }
+        /* outside the calibrated envelope no test is evaluable (fdi_table.h, fdi_diag.h) */
+        self->in_envelope = inside_envelope(self->table->envelope, frame, usable);
         for (i = 0U; i < (uint32_t)self->n_tests; ++i)
         {
             const fdi_test_desc_t *d = &self->table->tests[i];
             const uint32_t bit = (uint32_t)1U << i;
             bool in_domain = false;
             r[i] = 0.0f;
-            if ((d->gen != NULL) && ((usable & d->input_mask) == d->input_mask))
+            if (self->in_envelope && (d->gen != NULL) && ((usable & d->input_mask) == d->input_mask))
             {
                 /* a domain function shared with the test before (generated tables give every distinct condition
                    one function) is evaluated once per step: it reads only the frame */
@@ -1134,14 +1115,13 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
         self->alarm = alarm;
         track_residuals(self, evaluable, self->evaluable);
         self->evaluable = evaluable;
-        self->in_envelope = inside_envelope(self->table->envelope, frame, usable);
         if (self->in_envelope)
         {
             st = isolate(self, alarm, evaluable);
         }
         else
         {
-            hold(self, alarm);
+            hold(self);
         }
     }
     return st;

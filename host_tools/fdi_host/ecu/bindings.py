@@ -397,6 +397,7 @@ class EcuResult:
     ratios: tuple[float, ...]
     test_names: tuple[str, ...]
     sensitivities: tuple[tuple[float, ...], ...] = ()  # per test: d r / d f of its sens faults (with sensitivities)
+    in_envelope: bool = True  # inside the table's calibrated envelope (outside, the isolation holds: fdi_diag.h)
 
     @property
     def status_name(self) -> str:
@@ -573,6 +574,7 @@ class Ecu:
             ratios=tuple(float(d.ratio[i]) for i in range(n)),
             test_names=self.table.test_names,
             sensitivities=_sensitivities(d, n),
+            in_envelope=bool(d.in_envelope),
         )
 
 
@@ -634,7 +636,7 @@ class Diagnoser:
             detected=bool(r.iso.detected), isolated=bool(r.iso.isolated), iso_class=0,
             test_status=tuple(TEST_STATUS_NAMES[int(r.status[i])] for i in range(n)),
             residuals=tuple(float(r.residual[i]) for i in range(n)), ratios=tuple(float(r.ratio[i]) for i in range(n)),
-            test_names=self.table.test_names, sensitivities=_sensitivities(r, n))
+            test_names=self.table.test_names, sensitivities=_sensitivities(r, n), in_envelope=bool(r.in_envelope))
 
     def step(self, values: Mapping[str, float], validity: int | None = None) -> EcuResult:
         """One step with one frame (signals by name; a missing one is invalid); validity default: every signal

@@ -86,13 +86,13 @@ def _short(name: str) -> str:
 def events(trace: CaseTrace) -> list[str]:
     """The changes after the onset of the alarm pattern and of the candidates, one line each."""
     lines: list[str] = []
-    prev: tuple[int, int, bool] | None = None
+    prev: tuple[int, int, bool, bool] | None = None
     names = [_short(n) for n in trace.table.test_names]
     for r in trace.results:
         t = r.t_us * 1e-6
         if t < trace.spec.onset:
             continue
-        key = (r.alarm_mask, r.candidates, r.isolated)
+        key = (r.alarm_mask, r.candidates, r.isolated, r.in_envelope)
         if key == prev:
             continue
         prev = key
@@ -100,7 +100,8 @@ def events(trace: CaseTrace) -> list[str]:
         tests = ", ".join(f"{names[i]}{' (blind)' if trace.blind(i) else ''} {r.ratios[i]:.1f}" for i in alarmed)
         cands = "{" + ", ".join(r.candidate_labels()) + "}"
         state = "isolated" if r.isolated else ("detected" if r.detected else "quiet")
-        lines.append(f"{t - trace.spec.onset:+6.2f} s  {state:8s} candidates {cands}  alarms: {tests or '-'}")
+        held = "" if r.in_envelope else " (outside the envelope: held)"
+        lines.append(f"{t - trace.spec.onset:+6.2f} s  {state:8s} candidates {cands}{held}  alarms: {tests or '-'}")
     return lines
 
 
