@@ -84,7 +84,7 @@
  * scripts/bench_fw.sh (instructions per step of the vehicle tables it benchmarks over a simulated drive on x86-64
  * with callgrind and on Cortex-M4F under qemu -icount: fault-free, in an episode with one class left, in one with
  * several (undecided), largest step).
- * Memory: sizeof(fdi_diag_t) ~ 160 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28) +
+ * Memory: sizeof(fdi_diag_t) ~ 184 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28) +
  * 12 * FDI_DIAG_MAX_FILTERS + 5 * FDI_DIAG_MAX_SENS + 6 * FDI_TABLE_MAX_FAULTS + 2 * FDI_GEN_MAX_SLOTS +
  * 4 * FDI_DIAG_MAX_SENS_EVERY bytes (bound
  * asserted below; scripts/bench_fw.sh prints the value), caller-owned (static or stack); the library itself has no
@@ -183,6 +183,12 @@ typedef struct
     uint32_t bank_live; /* signals whose bank filters ran at the last step */
     bool in_envelope;   /* the last frame was inside the table's calibrated envelope (or it has none) */
     fdi_iso_result_t iso;
+    uint32_t iso_accused; /* the accused tests and cleared faults iso was matched with (iso_valid) */
+    uint32_t iso_cleared;
+    bool iso_valid;
+    uint32_t size_accused; /* the accused tests and settled quiet tests size_cleared was computed for */
+    uint32_t size_quiet;
+    uint32_t size_cleared; /* faults the reaction-size rule clears (fdi_iso_size_cleared) */
     fdi_eval_t eval[FDI_DIAG_MAX_TESTS];
     fdi_obs_t obs[FDI_DIAG_MAX_TESTS];     /* observer state of test i's generator */
     fdi_svf_t filt[FDI_DIAG_MAX_FILTERS];  /* the set's bank, then the hand-written generators' filters */
@@ -210,7 +216,7 @@ typedef struct
 } fdi_diag_t; /* opaque by convention */
 
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
-FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (160U + (sizeof(void *) * 2U) +
+FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (184U + (sizeof(void *) * 2U) +
                                          (FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28U)) +
                                          (sizeof(fdi_svf_t) * FDI_DIAG_MAX_FILTERS) +
                                          ((sizeof(float) + 1U) * FDI_DIAG_MAX_SENS) +

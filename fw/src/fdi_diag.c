@@ -411,6 +411,12 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             self->alarm = 0U;
             self->evaluable = 0U;
             self->in_envelope = true;
+            self->iso_valid = false;
+            self->size_accused = 0U; /* accused 0: no episode, never asked */
+            self->size_quiet = 0U;
+            self->size_cleared = 0U;
+            self->iso_accused = 0U;
+            self->iso_cleared = 0U;
             self->bank_live = 0U;
             self->size_tests = size_rule_tests(t);
             self->undecided = undecided_faults(self);
@@ -911,10 +917,18 @@ static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
             self->cleared_run[i] = ((online & fbit) != 0U) ? sat_inc(self->cleared_run[i]) : 0U;
             cleared |= (self->cleared_run[i] >= self->clear_confirm) ? fbit : 0U;
         }
-        /* only the tests of size_tests can clear by reaction sizes (fdi_iso_size_cleared gives 0 for the others) */
+        /* only the tests of size_tests can clear by reaction sizes (fdi_iso_size_cleared gives 0 for the others); the
+           rule reads nothing but the table and the two masks, so its result is kept until they change */
         if ((settled & self->size_tests) != 0U)
         {
-            cleared |= fdi_iso_size_cleared(self->table, self->accused, settled & self->size_tests);
+            const uint32_t quiet = settled & self->size_tests;
+            if ((self->accused != self->size_accused) || (quiet != self->size_quiet))
+            {
+                self->size_cleared = fdi_iso_size_cleared(self->table, self->accused, quiet);
+                self->size_accused = self->accused;
+                self->size_quiet = quiet;
+            }
+            cleared |= self->size_cleared;
         }
     }
     return cleared;
@@ -1005,8 +1019,17 @@ static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable
         cleared = exonerated(self, alarm);
     }
     /* accused tests stay in the alarm set even while not evaluable now: they alarmed in this episode; the faults
-       isolated first in the episode are exonerated no more */
-    st = fdi_iso_match(self->table, self->accused, cleared & ~self->latched, &self->iso);
+       isolated first in the episode are exonerated no more. The match of the same accused tests and cleared faults
+       as at the last step is the same (latch() below leaves it as it is then). */
+    cleared &= ~self->latched;
+    st = FDI_OK;
+    if (!self->iso_valid || (self->accused != self->iso_accused) || (cleared != self->iso_cleared))
+    {
+        st = fdi_iso_match(self->table, self->accused, cleared, &self->iso);
+        self->iso_accused = self->accused;
+        self->iso_cleared = cleared;
+        self->iso_valid = (st == FDI_OK);
+    }
     if (st == FDI_OK)
     {
         latch(self);

@@ -9,6 +9,9 @@
  * instructions per step (ticks * 40 / steps) and the largest single step over the whole drive.
  * Quantisation: 40 instructions per reading (the mean over hundreds of steps is far finer; the largest step is
  * exact to 40 instructions).
+ * Profile build (scripts/profile_m4.sh): -DBENCH_PROFILE runs only the configuration BENCH_ONLY (table * 2 +
+ * sensitivities) and calls fdi_diag_step through one never-inlined function per phase (profile_step_<phase>), so that
+ * an instruction trace attributes every step to its phase (fw/bench/m4/profile.py).
  */
 #include <stdint.h>
 
@@ -104,6 +107,56 @@ static void put_phase(const char *what, uint32_t ticks, uint32_t steps)
     }
 }
 
+#ifdef BENCH_PROFILE
+/* One function per phase, never inlined: a trace's instructions between a phase function's entry and the harness
+   belong to that phase's step. */
+__attribute__((noinline)) fdi_status_t profile_step_warmup(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
+__attribute__((noinline)) fdi_status_t profile_step_fault_free(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
+__attribute__((noinline)) fdi_status_t profile_step_episode(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
+__attribute__((noinline)) fdi_status_t profile_step_undecided(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
+fdi_status_t profile_step_warmup(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v)
+{
+    return fdi_diag_step(d, in, v);
+}
+fdi_status_t profile_step_fault_free(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v)
+{
+    return fdi_diag_step(d, in, v);
+}
+fdi_status_t profile_step_episode(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v)
+{
+    return fdi_diag_step(d, in, v);
+}
+fdi_status_t profile_step_undecided(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v)
+{
+    return fdi_diag_step(d, in, v);
+}
+
+static fdi_status_t phase_step(bench_phase_t ph, const fdi_frame_t *in, uint32_t v)
+{
+    fdi_status_t st;
+    if (ph == BENCH_FAULT_FREE)
+    {
+        st = profile_step_fault_free(&diag, in, v);
+    }
+    else if (ph == BENCH_EPISODE)
+    {
+        st = profile_step_episode(&diag, in, v);
+    }
+    else if (ph == BENCH_UNDECIDED)
+    {
+        st = profile_step_undecided(&diag, in, v);
+    }
+    else
+    {
+        st = profile_step_warmup(&diag, in, v);
+    }
+    return st;
+}
+#define BENCH_STEP(ph, in, v) phase_step((ph), (in), (v))
+#else
+#define BENCH_STEP(ph, in, v) fdi_diag_step(&diag, (in), (v))
+#endif
+
 /* Table k through the drive; false on a failing call. */
 static bool bench_table_drive(const bench_drive_t *drive, uint32_t k, bool sens, uint32_t t_empty)
 {
@@ -124,7 +177,7 @@ static bool bench_table_drive(const bench_drive_t *drive, uint32_t k, bool sens,
         const uint32_t validity = bench_drive_frame(drive, i, &in);
         const bench_phase_t ph = bench_phase(table, &res, i, drive->fault_step, &settled);
         const uint32_t t0 = SYST_CVR;
-        const fdi_status_t st = fdi_diag_step(&diag, &in, validity);
+        const fdi_status_t st = BENCH_STEP(ph, &in, validity);
         const uint32_t t = ticks_since(t0) - t_empty;
         ticks[ph] += t;
         count[ph]++;
@@ -185,7 +238,11 @@ int main(void)
         put("m4: cannot read fdi_bench_drive.bin (run qemu in the directory of the drive)\n");
         rc = 10;
     }
+#ifdef BENCH_PROFILE
+    for (k = BENCH_ONLY; (rc == 0) && (k < (BENCH_ONLY + 1U)); ++k)
+#else
     for (k = 0U; (rc == 0) && (k < (2U * BENCH_N_TABLES)); ++k)
+#endif
     {
         rc = bench_table_drive(&drive, k / 2U, (k % 2U) != 0U, t_empty) ? 0 : (int)(k + 1U);
     }

@@ -1,0 +1,110 @@
+"""Where the instructions of a diagnosis step go on the Cortex-M4F: per phase of the benchmark drive and per function,
+from qemu's instruction trace of the profile build of bench_m4.c (scripts/profile_m4.sh makes both).
+
+qemu -d in_asm,exec,nochain logs each translation block once with its instructions (in_asm) and every execution of
+a block (exec, unchained, so none is skipped). A step of a phase is every block executed from the entry of its
+profile_step_<phase> function up to the next block of the harness (bench_m4.c's own functions); a block's
+instructions count for the function holding it (the ELF's symbols, arm-none-eabi-nm). Printed: per phase the mean
+instructions per step in total and per function (the largest first), from the same run, so they add up.
+
+Usage: python fw/bench/m4/profile.py TRACE.log FIRMWARE.elf [--top N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import bisect
+import re
+import subprocess
+from collections import Counter, defaultdict
+from pathlib import Path
+
+PHASES = {"profile_step_warmup": "warm-up", "profile_step_fault_free": "fault-free",
+          "profile_step_episode": "episode", "profile_step_undecided": "undecided"}
+# the harness (bench_m4.c and its start-up): a block of these ends the step under way
+HARNESS = {"main", "bench_table_drive", "phase_step", "put", "put_u", "put_phase", "semi_call", "read_drive",
+           "ticks_since", "cal_loop", "Reset_Handler", "bench_exit"}
+BLOCK = re.compile(r"^0x([0-9a-f]{8}):\s")
+EXEC = re.compile(r"^Trace \d+: 0x[0-9a-f]+ \[[0-9a-f]+/([0-9a-f]+)/")
+
+
+class Symbols:
+    """The ELF's function symbols: address -> name."""
+
+    def __init__(self, elf: Path) -> None:
+        out = subprocess.run(["arm-none-eabi-nm", "-n", "-S", str(elf)], capture_output=True, text=True,
+                             check=True).stdout
+        rows = []
+        for line in out.splitlines():
+            p = line.split()
+            if len(p) >= 4 and p[2] in "tTwW":
+                rows.append((int(p[0], 16) & ~1, int(p[1], 16), p[3]))
+        rows.sort()
+        self.starts = [r[0] for r in rows]
+        self.rows = rows
+
+    def name(self, pc: int) -> str:
+        i = bisect.bisect_right(self.starts, pc) - 1
+        if i >= 0 and pc < self.rows[i][0] + self.rows[i][1]:
+            return self.rows[i][2]
+        return "?"
+
+
+def profile(trace: Path, syms: Symbols) -> tuple[dict[str, Counter[str]], Counter[str]]:
+    """(instructions per phase and function, steps per phase)."""
+    size: dict[int, int] = {}
+    cur: int | None = None
+    count = 0
+    per: dict[str, Counter[str]] = defaultdict(Counter)
+    steps: Counter[str] = Counter()
+    names: dict[int, str] = {}
+    phase: str | None = None
+    with trace.open(errors="replace") as fh:
+        for line in fh:
+            m = BLOCK.match(line)
+            if m:
+                cur = int(m.group(1), 16) if cur is None else cur
+                count += 1
+                continue
+            if cur is not None:  # the end of a block's listing
+                size[cur] = count
+                cur, count = None, 0
+            m = EXEC.match(line)
+            if not m:
+                continue
+            pc = int(m.group(1), 16)
+            fn = names.get(pc)
+            if fn is None:
+                fn = names[pc] = syms.name(pc)
+            if fn in PHASES and pc == syms.starts[bisect.bisect_right(syms.starts, pc) - 1]:
+                phase = PHASES[fn]
+                steps[phase] += 1
+            elif fn in HARNESS:
+                phase = None
+            if phase is not None:
+                per[phase][fn] += size.get(pc, 0)
+    return per, steps
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("trace", type=Path)
+    ap.add_argument("elf", type=Path)
+    ap.add_argument("--top", type=int, default=12, help="functions listed per phase (default 12)")
+    args = ap.parse_args()
+    per, steps = profile(args.trace, Symbols(args.elf))
+    for phase in PHASES.values():
+        n = steps.get(phase, 0)
+        if n == 0:
+            continue
+        total = sum(per[phase].values())
+        print(f"{phase}: {n} steps, {total / n:,.0f} instructions per step")
+        for fn, ins in per[phase].most_common(args.top):
+            print(f"  {ins / n:8,.0f}  {100 * ins / total:5.1f} %  {fn}")
+        rest = total - sum(v for _, v in per[phase].most_common(args.top))
+        if rest:
+            print(f"  {rest / n:8,.0f}  {100 * rest / total:5.1f} %  (the other functions)")
+
+
+if __name__ == "__main__":
+    main()
