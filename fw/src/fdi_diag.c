@@ -959,7 +959,6 @@ static void latch(fdi_diag_t *self)
     }
 }
 
-/* Episode bookkeeping and the isolation of this step (see "Isolation episodes" in fdi_diag.h). */
 /* Whether the frame is inside the table's calibrated envelope (fdi_table.h): fewer than `votes` of its signals that
    are usable at the step beyond their limits; always without an envelope. */
 static bool inside_envelope(const fdi_table_envelope_t *e, const fdi_frame_t *frame, uint32_t usable)
@@ -994,6 +993,7 @@ static void hold(fdi_diag_t *self)
     }
 }
 
+/* Episode bookkeeping and the isolation of this step (see "Isolation episodes" in fdi_diag.h). */
 static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable)
 {
     const uint32_t accused = self->accused;
