@@ -1,6 +1,6 @@
 /*
  * bench_host.c - host benchmark: one table through the drive of bench_drive.h, every fdi_diag_step called through
- * the wrapper of its phase (bench_step_warmup, bench_step_fault_free, bench_step_episode, bench_step_undecided). Run under
+ * the wrapper of its phase (bench_phase_step.h: bench_step_warmup, _fault_free, _episode, _undecided). Run under
  * `valgrind --tool=callgrind --collect-atstart=no --toggle-collect='bench_step_*'` (scripts/bench_fw.sh): the
  * inclusive instruction count of a wrapper divided by its step count (printed) is the cost per step of that phase.
  * Usage: bench_host DRIVE.bin TABLE(0 kinematic, 1 ROMO) SENSITIVITIES(0, 1)
@@ -9,36 +9,11 @@
 #include <stdlib.h>
 
 #include "bench_drive.h"
+#include "bench_phase_step.h"
 #include "fdi_diag.h"
 #include "fdi_gen.h"
 
 static uint32_t words[BENCH_WORDS];
-
-/* One wrapper per phase, never inlined: callgrind attributes each step to its phase. */
-__attribute__((noinline)) fdi_status_t bench_step_warmup(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
-__attribute__((noinline)) fdi_status_t bench_step_fault_free(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
-__attribute__((noinline)) fdi_status_t bench_step_episode(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
-__attribute__((noinline)) fdi_status_t bench_step_undecided(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
-
-fdi_status_t bench_step_warmup(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v)
-{
-    return fdi_diag_step(d, in, v);
-}
-
-fdi_status_t bench_step_fault_free(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v)
-{
-    return fdi_diag_step(d, in, v);
-}
-
-fdi_status_t bench_step_episode(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v)
-{
-    return fdi_diag_step(d, in, v);
-}
-
-fdi_status_t bench_step_undecided(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v)
-{
-    return fdi_diag_step(d, in, v);
-}
 
 int main(int argc, char **argv)
 {
@@ -75,23 +50,7 @@ int main(int argc, char **argv)
         fdi_frame_t in;
         const uint32_t validity = bench_drive_frame(&drive, k, &in);
         const bench_phase_t ph = bench_phase(table, &res, k, drive.fault_step, &settled);
-        fdi_status_t st;
-        if (ph == BENCH_UNDECIDED)
-        {
-            st = bench_step_undecided(&d, &in, validity);
-        }
-        else if (ph == BENCH_EPISODE)
-        {
-            st = bench_step_episode(&d, &in, validity);
-        }
-        else if (ph == BENCH_FAULT_FREE)
-        {
-            st = bench_step_fault_free(&d, &in, validity);
-        }
-        else
-        {
-            st = bench_step_warmup(&d, &in, validity);
-        }
+        const fdi_status_t st = bench_phase_step(&d, ph, &in, validity);
         count[ph]++;
         if ((st != FDI_OK) || (fdi_diag_result(&d, &res) != FDI_OK))
         {

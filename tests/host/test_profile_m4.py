@@ -1,6 +1,6 @@
 """fw/bench/m4/profile.py: qemu's trace of the profile build -> instructions per step, per phase and function. A
 synthetic trace: each block's instructions count for its function once per execution, a step of a phase runs from
-its profile_step_<phase> entry to the next block of the harness, blocks outside steps count for nothing."""
+its bench_step_<phase> entry to the next block of the harness, blocks outside steps count for nothing."""
 
 from __future__ import annotations
 
@@ -18,8 +18,8 @@ spec.loader.exec_module(profile_m4)
 
 class FakeSymbols(profile_m4.Symbols):  # type: ignore[misc, name-defined]
     def __init__(self) -> None:
-        self.rows = [(0x100, 0x40, "main"), (0x200, 0x10, "profile_step_fault_free"),
-                     (0x210, 0x10, "profile_step_undecided"), (0x300, 0x100, "fdi_diag_step"),
+        self.rows = [(0x100, 0x40, "main"), (0x200, 0x10, "bench_step_fault_free"),
+                     (0x210, 0x10, "bench_step_undecided"), (0x300, 0x100, "fdi_diag_step"),
                      (0x400, 0x80, "romo_gen_step")]
         self.starts = [r[0] for r in self.rows]
 
@@ -43,6 +43,6 @@ def test_steps_are_attributed_to_their_phase_and_function(tmp_path: Path) -> Non
     trace.write_text(log)
     per, steps_of = profile_m4.profile(trace, FakeSymbols())
     assert steps_of == {"fault-free": 2, "undecided": 1}
-    assert per["fault-free"] == {"profile_step_fault_free": 4, "fdi_diag_step": 28, "romo_gen_step": 40}
-    assert per["undecided"] == {"profile_step_undecided": 3, "fdi_diag_step": 14, "romo_gen_step": 80}
+    assert per["fault-free"] == {"bench_step_fault_free": 4, "fdi_diag_step": 28, "romo_gen_step": 40}
+    assert per["undecided"] == {"bench_step_undecided": 3, "fdi_diag_step": 14, "romo_gen_step": 80}
     assert "main" not in per["fault-free"] and "main" not in per["undecided"]

@@ -10,12 +10,15 @@
  * Quantisation: 40 instructions per reading (the mean over hundreds of steps is far finer; the largest step is
  * exact to 40 instructions).
  * Profile build (scripts/profile_m4.sh): -DBENCH_PROFILE runs only the configuration BENCH_ONLY (table * 2 +
- * sensitivities) and calls fdi_diag_step through one never-inlined function per phase (profile_step_<phase>), so that
- * an instruction trace attributes every step to its phase (fw/bench/m4/profile.py).
+ * sensitivities) and calls fdi_diag_step through one never-inlined function per phase (bench_step_<phase> of
+ * bench_phase_step.h), so that an instruction trace attributes every step to its phase (fw/bench/m4/profile.py).
  */
 #include <stdint.h>
 
 #include "bench_drive.h"
+#ifdef BENCH_PROFILE
+#include "bench_phase_step.h"
+#endif
 #include "fdi_diag.h"
 #include "fdi_ecu.h"
 
@@ -108,51 +111,7 @@ static void put_phase(const char *what, uint32_t ticks, uint32_t steps)
 }
 
 #ifdef BENCH_PROFILE
-/* One function per phase, never inlined: a trace's instructions between a phase function's entry and the harness
-   belong to that phase's step. */
-__attribute__((noinline)) fdi_status_t profile_step_warmup(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
-__attribute__((noinline)) fdi_status_t profile_step_fault_free(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
-__attribute__((noinline)) fdi_status_t profile_step_episode(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
-__attribute__((noinline)) fdi_status_t profile_step_undecided(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v);
-fdi_status_t profile_step_warmup(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v)
-{
-    return fdi_diag_step(d, in, v);
-}
-fdi_status_t profile_step_fault_free(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v)
-{
-    return fdi_diag_step(d, in, v);
-}
-fdi_status_t profile_step_episode(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v)
-{
-    return fdi_diag_step(d, in, v);
-}
-fdi_status_t profile_step_undecided(fdi_diag_t *d, const fdi_frame_t *in, uint32_t v)
-{
-    return fdi_diag_step(d, in, v);
-}
-
-static fdi_status_t phase_step(bench_phase_t ph, const fdi_frame_t *in, uint32_t v)
-{
-    fdi_status_t st;
-    if (ph == BENCH_FAULT_FREE)
-    {
-        st = profile_step_fault_free(&diag, in, v);
-    }
-    else if (ph == BENCH_EPISODE)
-    {
-        st = profile_step_episode(&diag, in, v);
-    }
-    else if (ph == BENCH_UNDECIDED)
-    {
-        st = profile_step_undecided(&diag, in, v);
-    }
-    else
-    {
-        st = profile_step_warmup(&diag, in, v);
-    }
-    return st;
-}
-#define BENCH_STEP(ph, in, v) phase_step((ph), (in), (v))
+#define BENCH_STEP(ph, in, v) bench_phase_step(&diag, (ph), (in), (v))
 #else
 #define BENCH_STEP(ph, in, v) fdi_diag_step(&diag, (in), (v))
 #endif

@@ -3,7 +3,7 @@ from qemu's instruction trace of the profile build of bench_m4.c (scripts/profil
 
 qemu -d in_asm,exec,nochain logs each translation block once with its instructions (in_asm) and every execution of
 a block (exec, unchained, so none is skipped). A step of a phase is every block executed from the entry of its
-profile_step_<phase> function up to the next block of the harness (bench_m4.c's own functions); a block's
+bench_step_<phase> function up to the next block of the harness (bench_m4.c's own functions); a block's
 instructions count for the function holding it (the ELF's symbols, arm-none-eabi-nm). Printed: per phase the mean
 instructions per step in total and per function (the largest first), from the same run, so they add up.
 
@@ -19,8 +19,8 @@ import subprocess
 from collections import Counter, defaultdict
 from pathlib import Path
 
-PHASES = {"profile_step_warmup": "warm-up", "profile_step_fault_free": "fault-free",
-          "profile_step_episode": "episode", "profile_step_undecided": "undecided"}
+PHASES = {"bench_step_warmup": "warm-up", "bench_step_fault_free": "fault-free",
+          "bench_step_episode": "episode", "bench_step_undecided": "undecided"}
 # the harness (bench_m4.c and its start-up): a block of these ends the step under way
 HARNESS = {"main", "bench_table_drive", "phase_step", "put", "put_u", "put_phase", "semi_call", "read_drive",
            "ticks_since", "cal_loop", "Reset_Handler", "bench_exit"}
