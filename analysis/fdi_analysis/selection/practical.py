@@ -92,6 +92,7 @@ class Screening:
         doc["candidates"] = [asdict(c) | {"sigma": c.sigma if math.isfinite(c.sigma) else None}
                              for c in self.candidates]
         text = json.dumps(doc, separators=(",", ":"), sort_keys=True, allow_nan=False) + "\n"
+        path.parent.mkdir(parents=True, exist_ok=True)
         if path.suffix == ".gz":
             path.write_bytes(gzip.compress(text.encode("utf-8"), mtime=0))
         else:

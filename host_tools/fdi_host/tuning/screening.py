@@ -26,6 +26,7 @@ structural fault signature that the practical selection works on (`fdi_analysis.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import multiprocessing as mp
 from collections.abc import Callable, Mapping, Sequence
@@ -48,7 +49,7 @@ from fdi_analysis.residuals.evaluate import (
     node_signals,
     step_response,
 )
-from fdi_analysis.residuals.generator import XHAT, Generator
+from fdi_analysis.residuals.generator import DOMAIN_FACTOR, XHAT, Generator
 from fdi_analysis.residuals.observer import ObserverReference
 from fdi_analysis.residuals.reasons import NotRealizableError
 from fdi_analysis.residuals.sensitivity import J_FLOOR, faulty_residual
@@ -234,6 +235,9 @@ class ScreenSetup:
     calibration: list[dict[str, FloatArray]]  # fault-free drives (all seeds) for sigma
     scenarios: dict[str, int]  # index in `calibration` of each scenario's own drive (its operating points)
     margin: float = MARGIN  # the FNR must clear the gate by this factor
+    # where a tyre-law test is evaluable: |vx| >= domain_factor x v_eps (the generators' DOMAIN_FACTOR; a study
+    # of a lower domain, e.g. `fdi-tune screen --domain-factor 0` at standstill, screens with another)
+    domain_factor: float = DOMAIN_FACTOR
 
 
 def screen_candidate(setup: ScreenSetup, c: Candidate, solver: Solver, solver_f: Solver,
@@ -245,6 +249,8 @@ def screen_candidate(setup: ScreenSetup, c: Candidate, solver: Solver, solver_f:
         g = synthesize(model, eqs, c.label, solver, setup.reference)
     except NotRealizableError as exc:
         return CandidateScreen(c.label, " ".join(eqs), (), math.nan, 0.0, 0, {}, str(exc))
+    if setup.domain_factor != DOMAIN_FACTOR and g.min_speed > 0.0:
+        g = dataclasses.replace(g, min_speed=g.min_speed / DOMAIN_FACTOR * setup.domain_factor)
     warm = round(WARMUP_S / setup.design.dt)
     runs = _residuals(g, bank)
     segs = [r[warm:] for r, _ in runs if len(r) > warm]
@@ -252,6 +258,9 @@ def screen_candidate(setup: ScreenSetup, c: Candidate, solver: Solver, solver_f:
         return CandidateScreen(c.label, " ".join(eqs), g.faults, math.nan, g.min_speed, 0, {},
                                "never evaluable on the calibration drives")
     sigma = calibrate(segs, setup.gate).sigma
+    if not math.isfinite(sigma):  # e.g. a division by the speed where the domain reaches standstill
+        return CandidateScreen(c.label, " ".join(eqs), g.faults, math.nan, g.min_speed, 0, {},
+                               "residual not finite on the calibration drives")
     margin = max(setup.margin, 1.0 / max(step_response(g, DETECT_S, setup.design), 1e-6))
     sens_fn = _sensitivity_fn(model, g, solver_f)
     steps = {f: setup.sizes.get(f, 1.0) for f in g.faults}

@@ -40,6 +40,11 @@ def register(sub: Any) -> None:
     p.add_argument("--out", type=Path, required=True, help="screening file to write (.json)")
     p.add_argument("--workers", type=int, default=2, help="worker processes (default 2)")
     p.add_argument("--only", nargs="*", default=None, help="screen only these candidates (labels, e.g. MSO7)")
+    p.add_argument("--scenarios", nargs="+", default=list(DEFAULT_SCENARIOS),
+                   help="manoeuvres to screen in (default: all five; sigma from their drives only)")
+    p.add_argument("--domain-factor", type=float, default=None,
+                   help="a study, not the selection's input: tyre-law tests evaluable from this multiple of the slip "
+                   "floor v_eps on (the generators' own factor by default; 0: everywhere, standstill included)")
     p.set_defaults(func=run)
 
 
@@ -48,6 +53,7 @@ def run(args: argparse.Namespace) -> int:
     from fdi_analysis.export.thresholds import Thresholds
     from fdi_analysis.model_loader import load_model
     from fdi_analysis.residuals.evaluate import FilterDesign
+    from fdi_analysis.residuals.generator import DOMAIN_FACTOR
     from fdi_analysis.residuals.selected import realizable
     from fdi_analysis.selection.practical import DETECT_S, MARGIN, SHARE, Screening
     from fdi_host.tuning.drives import fault_free_drives, observer_reference
@@ -60,9 +66,13 @@ def run(args: argparse.Namespace) -> int:
     size_file.check_faults([f.name for f in model.faults])
     sizes = dict(size_file.requirement)
     seeds = [None, *SCREENING_SEEDS]
-    drives = fault_free_drives(DEFAULT_SCENARIOS, seeds, None, design.dt, log=lambda s: print(s, file=sys.stderr))
-    scenarios = {sc: i * len(seeds) for i, sc in enumerate(DEFAULT_SCENARIOS)}  # each scenario's own drive
-    setup = ScreenSetup(model, observer_reference(th), th.gate, design, sizes, drives, scenarios, MARGIN)
+    names = tuple(args.scenarios)
+    factor = DOMAIN_FACTOR if args.domain_factor is None else args.domain_factor
+    if factor < 0.0:
+        raise SystemExit(f"fdi-tune screen: --domain-factor must be >= 0, not {factor:g}")
+    drives = fault_free_drives(names, seeds, None, design.dt, log=lambda s: print(s, file=sys.stderr))
+    scenarios = {sc: i * len(seeds) for i, sc in enumerate(names)}  # each scenario's own drive
+    setup = ScreenSetup(model, observer_reference(th), th.gate, design, sizes, drives, scenarios, MARGIN, factor)
     print(f"realizable candidates of {model.name} ...", file=sys.stderr)
     cands = realizable(model, args.workers)
     if args.only:
@@ -74,9 +84,12 @@ def run(args: argparse.Namespace) -> int:
 
     results = screen(setup, cands, args.workers, progress)
     provenance = (f"fdi-tune screen {args.model.as_posix()} --thresholds {args.thresholds.as_posix()} --sizes "
-                  f"{args.sizes.as_posix()}: fault-free drives of {', '.join(DEFAULT_SCENARIOS)} (their own seeds and "
+                  f"{args.sizes.as_posix()}: fault-free drives of {', '.join(names)} (their own seeds and "
                   f"{', '.join(map(str, SCREENING_SEEDS))}) as the ECU sees them")
-    Screening(model.name, provenance, th.gate, MARGIN, SHARE, sizes, tuple(DEFAULT_SCENARIOS),
+    if factor != DOMAIN_FACTOR:
+        provenance += f"; tyre-law tests evaluable from |vx| >= {factor:g} x v_eps (a study: the generators use " \
+                      f"{DOMAIN_FACTOR:g})"
+    Screening(model.name, provenance, th.gate, MARGIN, SHARE, sizes, names,
               tuple(results), DETECT_S, tuple(SCREENING_SEEDS)).dump(args.out)
     print(f"wrote {args.out}: {len(results)} candidates ({sum(1 for r in results if r.rejected)} without a generator)")
     return 0
