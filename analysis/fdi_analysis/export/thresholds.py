@@ -8,7 +8,7 @@ signal, margin times the largest magnitude of the calibration drives), written b
 from __future__ import annotations
 
 import tomllib
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -82,22 +82,22 @@ def with_generated(text: str, rows: Sequence[tuple[str, float, str]], provenance
     """The file's text with its [generated] table (rows: equation set, variance, comment), its [observer]
     table (equation set, c_ref, comment) and its [envelope_limits] table (signal, limit, comment) replaced."""
     head = text.split(MARKER)[0].rstrip("\n") + "\n\n"
-    lines = [MARKER, f"# {provenance}", "[generated]"]
-    for eqs, var, comment in rows:
-        lines.append(f"# {comment}")
-        lines.append(f'"{eqs}" = {var:.4g}')
+    lines = [MARKER, f"# {provenance}"]
+
+    def table(name: str, entries: Sequence[tuple[str, float, str]], key: Callable[[str], str], digits: str) -> None:
+        lines.append(f"[{name}]")
+        for k, value, comment in entries:
+            lines.extend([f"# {comment}", f"{key(k)} = {value:{digits}}"])
+
+    table("generated", rows, lambda eqs: f'"{eqs}"', ".4g")
     if observer:
         lines += ["", "# reference sensitivity c_ref = RMS of d r / d x on the reference drive (3 significant digits) "
-                  "of each observer generator: its gain's regularisation eps = (0.1 c_ref)^2", "[observer]"]
-        for eqs, c_ref, comment in observer:
-            lines.append(f"# {comment}")
-            lines.append(f'"{eqs}" = {c_ref:.3g}')
+                  "of each observer generator: its gain's regularisation eps = (0.1 c_ref)^2"]
+        table("observer", observer, lambda eqs: f'"{eqs}"', ".3g")
     if envelope:
         lines += ["", "# the operating envelope's limits ([envelope]): margin x the largest magnitude of the "
-                  "calibration drives (3 significant digits)", "[envelope_limits]"]
-        for sig, limit, comment in envelope:
-            lines.append(f"# {comment}")
-            lines.append(f"{sig} = {limit:.3g}")
+                  "calibration drives (3 significant digits)"]
+        table("envelope_limits", envelope, str, ".3g")
     return head + "\n".join(lines) + "\n"
 
 
