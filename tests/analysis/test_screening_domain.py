@@ -1,8 +1,8 @@
 """The screening's operating domain as a study parameter (`fdi-tune screen --domain-factor`): a tyre-law test,
 never evaluable in the low-speed manoeuvre with the generators' own domain (|vx| >= 4 v_eps = 2 m/s), is
 screened there at standstill when the factor is 0: its sigma comes from those drives and every fault of its
-signature gets a share and a median fault-to-noise ratio. A test whose residual is not finite there (MSO27 divides
-by the speed) is rejected with the reason, not written as NaN."""
+signature gets a share and a median fault-to-noise ratio. A test whose residual is not finite there (MSO27, at
+standstill) is rejected with the reason, not written as NaN."""
 
 from __future__ import annotations
 

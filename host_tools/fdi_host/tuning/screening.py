@@ -258,7 +258,7 @@ def screen_candidate(setup: ScreenSetup, c: Candidate, solver: Solver, solver_f:
         return CandidateScreen(c.label, " ".join(eqs), g.faults, math.nan, g.min_speed, 0, {},
                                "never evaluable on the calibration drives")
     sigma = calibrate(segs, setup.gate).sigma
-    if not math.isfinite(sigma):  # e.g. a division by the speed where the domain reaches standstill
+    if not math.isfinite(sigma):  # e.g. at standstill, where a study lowers the domain (--domain-factor)
         return CandidateScreen(c.label, " ".join(eqs), g.faults, math.nan, g.min_speed, 0, {},
                                "residual not finite on the calibration drives")
     margin = max(setup.margin, 1.0 / max(step_response(g, DETECT_S, setup.design), 1e-6))
