@@ -22,7 +22,7 @@ from pathlib import Path
 PHASES = {"bench_step_warmup": "warm-up", "bench_step_fault_free": "fault-free",
           "bench_step_episode": "episode", "bench_step_undecided": "undecided"}
 # the harness (bench_m4.c and its start-up): a block of these ends the step under way
-HARNESS = {"main", "bench_table_drive", "phase_step", "put", "put_u", "put_phase", "semi_call", "read_drive",
+HARNESS = {"main", "bench_table_drive", "bench_phase_step", "put", "put_u", "put_phase", "semi_call", "read_drive",
            "ticks_since", "cal_loop", "Reset_Handler", "bench_exit"}
 BLOCK = re.compile(r"^0x([0-9a-f]{8}):\s")
 EXEC = re.compile(r"^Trace \d+: 0x[0-9a-f]+ \[[0-9a-f]+/([0-9a-f]+)/")
