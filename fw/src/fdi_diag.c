@@ -699,10 +699,12 @@ static void raise_implied(fdi_diag_t *self, uint32_t i, uint32_t undecided, bool
         uint32_t k;
         if (fresh)
         {
-            for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
+            uint32_t left = g->sens_mask & undecided; /* the entries ascend by fault: stop after the last one wanted */
+            for (k = (uint32_t)self->sens_offset[i]; (left != 0U) && (k < (uint32_t)self->sens_offset[i + 1U]); ++k)
             {
                 const uint32_t j = (uint32_t)self->sens_fault[k];
                 const float s = fabsf(self->sens[k]);
+                left &= ~((uint32_t)1U << j);
                 if (((undecided & ((uint32_t)1U << j)) != 0U) && (s > 0.0f))
                 {
                     const float f = excess / s;
@@ -735,10 +737,12 @@ static uint32_t quiet_clears(const fdi_diag_t *self, uint32_t i, uint32_t undeci
     if (d->gen != NULL)
     {
         const float need = self->table->sensitivity_margin * d->gate * test_sigma(self, i);
+        uint32_t left = d->gen->sens_mask & undecided; /* the entries ascend by fault: stop after the last one wanted */
         uint32_t k;
-        for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
+        for (k = (uint32_t)self->sens_offset[i]; (left != 0U) && (k < (uint32_t)self->sens_offset[i + 1U]); ++k)
         {
             const uint32_t j = (uint32_t)self->sens_fault[k];
+            left &= ~((uint32_t)1U << j);
             if (((undecided & ((uint32_t)1U << j)) != 0U) && ((fabsf(self->sens[k]) * self->implied[j]) >= need))
             {
                 out |= (uint32_t)1U << j;
@@ -757,12 +761,14 @@ static uint32_t joint_clears(const fdi_diag_t *self, uint32_t settled, uint32_t 
     uint32_t out = 0U;
     if ((faults != 0U) && (settled != 0U)) /* most episode steps: nothing left to decide */
     {
-        float missing[FDI_TABLE_MAX_FAULTS];
+        float missing[FDI_TABLE_MAX_FAULTS]; /* read and written only at the faults of `faults` */
         const float per_margin = 1.0f / self->table->sensitivity_margin;
+        uint32_t left = faults;
         uint32_t i;
-        for (i = 0U; i < (uint32_t)self->n_faults; ++i)
+        for (i = 0U; (left != 0U) && (i < (uint32_t)self->n_faults); ++i)
         {
             missing[i] = 0.0f;
+            left &= ~((uint32_t)1U << i);
         }
         for (i = 0U; i < (uint32_t)self->n_tests; ++i)
         {
@@ -771,10 +777,13 @@ static uint32_t joint_clears(const fdi_diag_t *self, uint32_t settled, uint32_t 
             {
                 const float per_gate = 1.0f / (d->gate * test_sigma(self, i));
                 const float seen = larger(fabsf(self->residual[i]), fabsf(self->r_fast[i]));
+                uint32_t wanted = d->gen->sens_mask & faults; /* the entries ascend by fault: stop after the last */
                 uint32_t k;
-                for (k = (uint32_t)self->sens_offset[i]; k < (uint32_t)self->sens_offset[i + 1U]; ++k)
+                for (k = (uint32_t)self->sens_offset[i]; (wanted != 0U) && (k < (uint32_t)self->sens_offset[i + 1U]);
+                     ++k)
                 {
                     const uint32_t j = (uint32_t)self->sens_fault[k];
+                    wanted &= ~((uint32_t)1U << j);
                     if ((faults & ((uint32_t)1U << j)) != 0U)
                     {
                         /* capped: an unbounded implied size stays finite here */
@@ -788,9 +797,12 @@ static uint32_t joint_clears(const fdi_diag_t *self, uint32_t settled, uint32_t 
                 }
             }
         }
-        for (i = 0U; i < (uint32_t)self->n_faults; ++i)
+        left = faults;
+        for (i = 0U; (left != 0U) && (i < (uint32_t)self->n_faults); ++i)
         {
-            out |= (missing[i] >= 1.0f) ? ((uint32_t)1U << i) : 0U;
+            const uint32_t bit = (uint32_t)1U << i;
+            out |= (((faults & bit) != 0U) && (missing[i] >= 1.0f)) ? bit : 0U;
+            left &= ~bit;
         }
     }
     return out & faults;

@@ -169,6 +169,26 @@ def test_c_text_comes_from_named_templates() -> None:
                     f"{mod.__name__}.{node.name} has {node.end_lineno - node.lineno} lines"
 
 
+def test_sensitivities_reuse_the_residuals_temporaries() -> None:
+    """The sensitivity blocks read the residual's temporaries wherever a subexpression equals one: a flat sum that
+    a temporary over an earlier temporary stands for, its negation, a part of a longer sum, a call on it; the
+    rewritten expressions keep their value, and an expression that holds none is left as it is."""
+    import sympy
+
+    a, b, x, y = sympy.symbols("a b x y")
+    t1, t2, t3 = sympy.symbols("t1 t2 t3")
+    temps = [emit_generators._Temp(t1, -0.66 * a + b), emit_generators._Temp(t2, t1 + 0.66 * x),
+             emit_generators._Temp(t3, sympy.sqrt(t2))]
+    flat = b - 0.66 * a + 0.66 * x  # t2 written out: sympy flattened t1 into it
+    exprs = [flat * y, -flat, flat + 5 * y, sympy.sqrt(flat) * y, a * y + 2]
+    got = emit_generators._reusing(exprs, temps)
+    assert got == [t2 * y, -t2, t2 + 5 * y, t3 * y, a * y + 2]
+    v2 = (t1 + 0.66 * x).subs(t1, -0.66 * a + b)
+    value = {t2: v2, t3: sympy.sqrt(v2)}
+    for e, g in zip(exprs, got, strict=True):
+        assert sympy.simplify(g.xreplace(value) - e) == 0
+
+
 def test_the_calibrated_envelope_goes_into_the_table(repo: Path, generated: tuple[str, str], tmp_path: Path) -> None:
     """[envelope] of the thresholds file with the limits `fdi-tune calibrate` wrote: the table carries them (its
     signals, votes, limits) and points to them; an envelope without calibrated limits, or on a signal the model

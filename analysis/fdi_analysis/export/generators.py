@@ -18,6 +18,7 @@ templates below. Deterministic output.
 from __future__ import annotations
 
 import re
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from string import Template
@@ -411,18 +412,44 @@ def _ordered_shared(p: _Pass) -> list[list[_Temp]]:
 
 
 def _reusing(exprs: Sequence[sympy.Expr], temps: Sequence[_Temp]) -> list[sympy.Expr]:
-    """`exprs` with every subexpression that equals an available temporary's expression replaced by the
-    temporary (bottom up, exact subtrees: expensive calls such as cos, sqrt, max of the residual are shared)."""
+    """`exprs` with the subexpressions that an available temporary (in dependency order) already holds replaced by
+    it: top down, a subtree equal to a temporary's value written out over the nodes (sympy flattens sums and
+    products, so t47 = t15 + 0.66 xh with t15 = b4 - 0.66 b3 matches the flat sum b4 - 0.66 b3 + 0.66 xh), a sum
+    whose negation is such a value, the terms of a sum or factors of a product that make up such a value (largest
+    first); then bottom up the exact subtrees of a temporary's own expression. So the sensitivities reuse the
+    residual's sums, square roots, Max and calls instead of computing them again."""
+    value: dict[sympy.Basic, sympy.Basic] = {}
+    whole: dict[sympy.Basic, sympy.Symbol] = {}
+    for t in temps:
+        v = t.expr.xreplace(value)
+        value[t.symbol] = v
+        whole.setdefault(v, t.symbol)
+    parts = {op: sorted(((Counter(v.args), sym) for v, sym in whole.items() if v.func is op),
+                        key=lambda c: -sum(c[0].values()))
+             for op in (sympy.Add, sympy.Mul)}
     known = {t.expr: t.symbol for t in temps}
     memo: dict[sympy.Basic, sympy.Basic] = {}
+
+    def split(e: sympy.Basic) -> sympy.Basic:
+        left = Counter(e.args)
+        held: list[sympy.Basic] = []
+        for need, sym in parts[e.func]:
+            if sum(need.values()) < sum(left.values()) and not need - left:
+                left -= need
+                held.append(sym)
+        return e.func(*held, *[rw(a) for a in left.elements()]) if held else e.func(*[rw(a) for a in e.args])
 
     def rw(e: sympy.Basic) -> sympy.Basic:
         if e in memo:
             return memo[e]
-        if e.is_Atom:
-            out: sympy.Basic = e
+        if e in whole:
+            out: sympy.Basic = whole[e]
+        elif e.is_Atom:
+            out = e
+        elif e.func is sympy.Add and -e in whole:
+            out = -whole[-e]
         else:
-            out = e.func(*[rw(a) for a in e.args])
+            out = split(e) if e.func in parts else e.func(*[rw(a) for a in e.args])
             out = known.get(out, out)
         memo[e] = out
         return out
