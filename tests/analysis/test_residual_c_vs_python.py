@@ -40,9 +40,9 @@ def test_c_and_python_sensitivities_agree(repo: Path, tmp_path: Path) -> None:
     committed table (each fault of its sens_mask, ascending; the sensitivity blocks reuse the residual's common
     subexpressions, so a wrong reuse shows here): within 1e-3 of the sensitivity's scale on all but 0.25 % of the
     samples and within 2e-2 everywhere (the few samples where a Max or an Abs of the observer's gain switches
-    between the float and the double estimate). A sensitivity that is 0 as an expression (an observer generator
-    whose fault enters only through the estimated state's dynamics) is exactly 0 in C. With sensitivities requested
-    the residuals are the same as without (bit for bit)."""
+    between the float and the double estimate). A sensitivity that is 0 as an expression (a step fault with no
+    steady-state effect on the residual, seen only while it changes: `residuals.sensitivity`) is exactly 0 in C.
+    With sensitivities requested the residuals are the same as without (bit for bit)."""
     model = load_model(repo / "analysis/models/romo_grouped.toml")
     committed = committed_generators(repo, model)
     chosen = list(range(len(committed)))
