@@ -275,7 +275,6 @@ static BS F_(mplus_match)(const model_t *m, BS S, int16_t *eqvar, int16_t *vareq
     return reach;
 }
 
-/* Equivalence classes of the PSO node fr; keeps the classes inside R (and, MTES, holding a fault). */
 /* The successors of equation u in G inside S (u -> w when w holds the variable matched to u), and the meet
  * {u} U AND Dom(w) over the successors in `succ` (S, the top of the lattice, when there is none). Forced inline:
  * left to gcc -O3, the quasi-static count took 2 % longer on one core than with the lines written out. */
@@ -291,6 +290,7 @@ static inline __attribute__((always_inline)) BS F_(meet)(const BS *dom, BS S, BS
     return d;
 }
 
+/* Equivalence classes of the PSO node fr; keeps the classes inside R (and, MTES, holding a fault). */
 static void F_(classes)(F_(iter) *it, F_(frame) *fr, BS R) {
     const model_t *m = it->m;
     const BS S = fr->S, F = fr->F;
