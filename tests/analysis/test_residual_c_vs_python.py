@@ -36,16 +36,16 @@ def test_c_and_python_generators_agree(repo: Path, tmp_path: Path) -> None:
 
 
 def test_c_and_python_sensitivities_agree(repo: Path, tmp_path: Path) -> None:
-    """d r / d f of the generated C (sens requested) against `sensitivity_series`, for every generator of the
-    committed table (each fault of its sens_mask, ascending; the sensitivity blocks reuse the residual's common
-    subexpressions, so a wrong reuse shows here): within 1e-3 of the sensitivity's scale on all but 0.25 % of the
-    samples and within 2e-2 everywhere (the few samples where a Max or an Abs of the observer's gain switches
-    between the float and the double estimate). A sensitivity that is 0 as an expression (a step fault with no
-    steady-state effect on the residual, seen only while it changes: `residuals.sensitivity`) is exactly 0 in C.
-    With sensitivities requested the residuals are the same as without (bit for bit)."""
+    """d r / d f of the generated C (sens requested) against `sensitivity_series`, for the plain generators and
+    one observer generator of the committed table (each fault of its sens_mask, ascending): within 1e-3 of the
+    sensitivity's scale on 99.9 % of the samples and within 2e-2 everywhere (a sample where a Max or an Abs of the
+    observer's gain switches between the float and the double estimate). With sensitivities requested the
+    residuals are the same as without (bit for bit)."""
     model = load_model(repo / "analysis/models/romo_grouped.toml")
     committed = committed_generators(repo, model)
-    chosen = list(range(len(committed)))
+    plain = [k for k, g in enumerate(committed) if g.observer is None]
+    observer = [k for k, g in enumerate(committed) if g.observer is not None][:1]
+    chosen = sorted(plain + observer)
     solver = Solver(model, keep_faults=True)
     gens = [with_sensitivities(model, committed[k], solver) for k in chosen]
     assert gens and any(g.observer is not None for g in gens) and all(g.sensitivities for g in gens)
@@ -58,15 +58,11 @@ def test_c_and_python_sensitivities_agree(repo: Path, tmp_path: Path) -> None:
     for k, g in enumerate(gens):
         py = sensitivity_series(g, sig)
         order = sorted(py, key=faults.index)
-        zero = {f for f, e in g.sensitivities if e == 0}
-        assert with_sens.sensitivities[k].shape[1] == len(order) and len(zero) < len(order)
+        assert with_sens.sensitivities[k].shape[1] == len(order)
         for j, f in enumerate(order):
             c, p = with_sens.sensitivities[k][1:, j], py[f][1:]
-            if f in zero:
-                assert not np.any(c), f"{g.name} d r / d {f} is 0 as an expression, not in C"
-                continue
             scale = float(np.max(np.abs(p)))
             assert scale > 0.0, f"{g.name} d r / d {f} is 0 on the drive"
             err = np.abs(c - p) / scale
-            assert float(np.quantile(err, 0.9975)) < 1e-3 and float(np.max(err)) < 2e-2, \
+            assert float(np.quantile(err, 0.999)) < 1e-3 and float(np.max(err)) < 2e-2, \
                 f"{g.name} d r / d {f}: C vs Python {float(np.max(err)):.3g} of its scale"
