@@ -52,14 +52,22 @@ for table in 0 1; do
 done
 
 echo "== target (Cortex-M4F, arm-none-eabi-gcc -O3)"
-toolchain=()
-[ -f build/m4/CMakeCache.txt ] || toolchain=(-DCMAKE_TOOLCHAIN_FILE=cmake/arm-none-eabi-cortex-m4f.cmake)
-cmake -S . -B build/m4 "${toolchain[@]}" -DCMAKE_BUILD_TYPE=Release >/dev/null
+# configure_m4 DIR CMAKE_ARGS...: a Cortex-M4F build tree (the toolchain file only on its first configuration).
+configure_m4() {
+  local dir="$1" toolchain=()
+  shift
+  [ -f "$dir/CMakeCache.txt" ] || toolchain=(-DCMAKE_TOOLCHAIN_FILE=cmake/arm-none-eabi-cortex-m4f.cmake)
+  cmake -S . -B "$dir" "${toolchain[@]}" "$@" >/dev/null
+}
+# run_m4 DIR: the bare-metal bench of build tree DIR under qemu (its printed lines).
+run_m4() {
+  (cd build/bench && timeout 300 qemu-system-arm -M mps2-an386 -cpu cortex-m4 -icount shift=0 -nographic \
+    -monitor none -serial none -semihosting-config enable=on,target=native -kernel "$top/$1/fw/bench/fdi_bench_m4.elf" \
+    2>&1)
+}
+configure_m4 build/m4 -DCMAKE_BUILD_TYPE=Release
 cmake --build build/m4 -j 2 >/dev/null
-toolchain=()
-[ -f build/m4-nosens/CMakeCache.txt ] || toolchain=(-DCMAKE_TOOLCHAIN_FILE=cmake/arm-none-eabi-cortex-m4f.cmake)
-cmake -S . -B build/m4-nosens "${toolchain[@]}" -DCMAKE_BUILD_TYPE=Release -DCMAKE_C_FLAGS=-DFDI_GEN_SENSITIVITIES=0 \
-  >/dev/null
+configure_m4 build/m4-nosens -DCMAKE_BUILD_TYPE=Release -DCMAKE_C_FLAGS=-DFDI_GEN_SENSITIVITIES=0
 cmake --build build/m4-nosens -j 2 --target fdi_romo >/dev/null
 text_of() { arm-none-eabi-size -t "$1" | tail -1 | awk '{print $1}'; }
 for lib in fw/libfdi.a fw/ecu/libfdi_ecu.a fw/vehicles/romo/libfdi_romo.a fw/vehicles/romo/libfdi_romo_can.a \
@@ -75,21 +83,17 @@ lib_text="$(text_of build/m4/fw/libfdi.a)"
 echo "m4 flash: libfdi.a (generic core) text $lib_text B; ROMO target libfdi_romo.a text $romo_lib B" \
   "($romo_lib_nosens B with -DFDI_GEN_SENSITIVITIES=0), of which the generated generators $romo_gen B ($romo_gen_nosens B)"
 arm-none-eabi-size build/m4/fw/bench/fdi_bench_m4.elf
-m4_out="$(cd build/bench && timeout 300 qemu-system-arm -M mps2-an386 -cpu cortex-m4 -icount shift=0 -nographic \
-  -monitor none -serial none -semihosting-config enable=on,target=native -kernel "$top/build/m4/fw/bench/fdi_bench_m4.elf" 2>&1)"
+m4_out="$(run_m4 build/m4)"
 echo "$m4_out"
 
 # The same bench built for size (CMake MinSizeRel, -Os), as firmware is often built: its instruction counts and flash.
 echo "== target (Cortex-M4F, arm-none-eabi-gcc -Os, CMake MinSizeRel)"
-toolchain=()
-[ -f build/m4-os/CMakeCache.txt ] || toolchain=(-DCMAKE_TOOLCHAIN_FILE=cmake/arm-none-eabi-cortex-m4f.cmake)
-cmake -S . -B build/m4-os "${toolchain[@]}" -DCMAKE_BUILD_TYPE=MinSizeRel >/dev/null
+configure_m4 build/m4-os -DCMAKE_BUILD_TYPE=MinSizeRel
 cmake --build build/m4-os -j 2 --target fdi_bench_m4 >/dev/null
 lib_text_os="$(text_of build/m4-os/fw/libfdi.a)"
 romo_lib_os="$(text_of build/m4-os/fw/vehicles/romo/libfdi_romo.a)"
 echo "m4 -Os flash: libfdi.a (generic core) text $lib_text_os B; ROMO target libfdi_romo.a text $romo_lib_os B"
-m4_os_out="$(cd build/bench && timeout 300 qemu-system-arm -M mps2-an386 -cpu cortex-m4 -icount shift=0 -nographic \
-  -monitor none -serial none -semihosting-config enable=on,target=native -kernel "$top/build/m4-os/fw/bench/fdi_bench_m4.elf" 2>&1)"
+m4_os_out="$(run_m4 build/m4-os)"
 echo "$m4_os_out" | sed 's/^m4: /m4 -Os: /'
 
 echo "== goals (issue 21)"
