@@ -3,13 +3,16 @@
 # warm-up, fault-free, an episode with one class left, an undecided one) and per function, from qemu's instruction
 # trace of a profile build of the bare-metal bench (fw/bench/m4/bench_m4.c with -DBENCH_PROFILE, -g) analysed by
 # fw/bench/m4/profile.py. Prints numbers; not a test. The trace (~300 MB) is deleted afterwards.
-# Usage: scripts/profile_m4.sh [romo|kin] [off|on]   (default: the generated ROMO table as the ECU runs it: off)
+# Usage: scripts/profile_m4.sh [romo|kin] [off|on] [--lines FUNCTION]
+#   (default: the generated ROMO table as the ECU runs it: off; --lines also prints where FUNCTION's instructions go
+#   by source line, the code the compiler inlined into it included)
 set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$top"
 [ -x .venv/bin/python ] || bash scripts/bootstrap.sh
 table="${1:-romo}"
 sens="${2:-off}"
+shift $(( $# < 2 ? $# : 2 ))
 case "$table" in kin) k=0 ;; romo) k=2 ;; *) echo "table: romo or kin" >&2; exit 2 ;; esac
 case "$sens" in off) ;; on) k=$((k + 1)) ;; *) echo "sensitivities: off or on" >&2; exit 2 ;; esac
 drive="$top/build/bench/fdi_bench_drive.bin"
@@ -24,5 +27,5 @@ trace="$top/build/m4-prof/trace.log"
 (cd build/bench && timeout 900 qemu-system-arm -M mps2-an386 -cpu cortex-m4 -icount shift=0 -nographic -monitor none \
   -serial none -semihosting-config enable=on,target=native -kernel "$elf" -d in_asm,exec,nochain -D "$trace")
 echo "== per phase and function (Cortex-M4F instructions per fdi_diag_step, $table table, sensitivities $sens)"
-.venv/bin/python fw/bench/m4/profile.py "$trace" "$elf"
+.venv/bin/python fw/bench/m4/profile.py "$trace" "$elf" "$@"
 rm -f "$trace"

@@ -1,12 +1,15 @@
 """fw/bench/m4/profile.py: qemu's trace of the profile build -> instructions per step, per phase and function. A
 synthetic trace: each block's instructions count for its function once per execution, a step of a phase runs from
-its bench_step_<phase> entry to the next block of the harness, blocks outside steps count for nothing."""
+its bench_step_<phase> entry to the next block of the harness, blocks outside steps count for nothing; --lines
+spreads one function's instructions over the source lines of their addresses."""
 
 from __future__ import annotations
 
 import importlib.util
 import sys
 from pathlib import Path
+
+import pytest
 
 spec = importlib.util.spec_from_file_location("fdi_profile_m4", Path(__file__).resolve().parents[2] / "fw" / "bench"
                                               / "m4" / "profile.py")
@@ -32,7 +35,7 @@ def run(addr: int) -> str:
     return f"Trace 0: 0x7f00 [00000000/{addr:08x}/00000000/ff200000] x\n"
 
 
-def test_steps_are_attributed_to_their_phase_and_function(tmp_path: Path) -> None:
+def trace_of(tmp_path: Path) -> Path:
     log = "".join([block(0x100, 5), block(0x200, 2), block(0x210, 3), block(0x300, 10), block(0x400, 40),
                    block(0x308, 4)])
     # two fault-free steps and one undecided step, the harness between them
@@ -41,8 +44,32 @@ def test_steps_are_attributed_to_their_phase_and_function(tmp_path: Path) -> Non
     log += "".join(run(a) for a in steps)
     trace = tmp_path / "trace.log"
     trace.write_text(log)
-    per, steps_of = profile_m4.profile(trace, FakeSymbols())
+    return trace
+
+
+def test_steps_are_attributed_to_their_phase_and_function(tmp_path: Path) -> None:
+    prof = profile_m4.profile(trace_of(tmp_path), FakeSymbols())
+    per, steps_of = prof.per, prof.steps
     assert steps_of == {"fault-free": 2, "undecided": 1}
     assert per["fault-free"] == {"bench_step_fault_free": 4, "fdi_diag_step": 28, "romo_gen_step": 40}
     assert per["undecided"] == {"bench_step_undecided": 3, "fdi_diag_step": 14, "romo_gen_step": 80}
     assert "main" not in per["fault-free"] and "main" not in per["undecided"]
+
+
+def test_lines_spread_one_functions_instructions_over_its_source_lines(tmp_path: Path,
+                                                                       monkeypatch: pytest.MonkeyPatch,
+                                                                       capsys: pytest.CaptureFixture[str]) -> None:
+    prof = profile_m4.profile(trace_of(tmp_path), FakeSymbols(), "fdi_diag_step")
+    assert prof.blocks["fault-free"] == {0x300: 2, 0x308: 2}
+    assert prof.blocks["undecided"] == {0x300: 1, 0x308: 1}
+    # block 0x300 holds 0x300..0x312 (10 instructions), block 0x308 0x308..0x30e (4): the first 4 of 0x300 on line
+    # 7, the rest on line 9
+    lines = {a: ("d.c:7" if a < 0x308 else "d.c:9") for a in range(0x300, 0x314, 2)}
+    monkeypatch.setattr(profile_m4, "source_lines", lambda elf, addrs: {a: lines[a] for a in addrs})
+    profile_m4.print_lines(prof, Path("x.elf"), "fdi_diag_step", 5)
+    out = capsys.readouterr().out.splitlines()
+    # per fault-free step: 10 + 4 instructions, 4 on line 7, 6 + 4 on line 9
+    assert out[0] == "fault-free: fdi_diag_step, 14 instructions per step, by source line"
+    assert out[1].split() == ["10.0", "71.4", "%", "d.c:9"]
+    assert out[2].split() == ["4.0", "28.6", "%", "d.c:7"]
+    assert out[3].startswith("undecided: fdi_diag_step, 14 instructions")

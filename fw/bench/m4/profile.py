@@ -5,9 +5,11 @@ qemu -d in_asm,exec,nochain logs each translation block once with its instructio
 a block (exec, unchained, so none is skipped). A step of a phase is every block executed from the entry of its
 bench_step_<phase> function up to the next block of the harness (bench_m4.c's own functions); a block's
 instructions count for the function holding it (the ELF's symbols, arm-none-eabi-nm). Printed: per phase the mean
-instructions per step in total and per function (the largest first), from the same run, so they add up.
+instructions per step in total and per function (the largest first), from the same run, so they add up. With
+--lines FUNCTION, also the source lines of that function (and of what the compiler inlined into it) where its
+instructions go, per phase (arm-none-eabi-addr2line of every executed instruction's address).
 
-Usage: python fw/bench/m4/profile.py TRACE.log FIRMWARE.elf [--top N]
+Usage: python fw/bench/m4/profile.py TRACE.log FIRMWARE.elf [--top N] [--lines FUNCTION]
 """
 
 from __future__ import annotations
@@ -50,13 +52,21 @@ class Symbols:
         return "?"
 
 
-def profile(trace: Path, syms: Symbols) -> tuple[dict[str, Counter[str]], Counter[str]]:
-    """(instructions per phase and function, steps per phase)."""
-    size: dict[int, int] = {}
+class Profile:
+    """Instructions per phase and function, steps per phase, and block executions per phase of one function."""
+
+    def __init__(self) -> None:
+        self.per: dict[str, Counter[str]] = defaultdict(Counter)
+        self.steps: Counter[str] = Counter()
+        self.blocks: dict[str, Counter[int]] = defaultdict(Counter)  # phase -> block start -> executions
+        self.insns: dict[int, list[int]] = {}  # block start -> its instructions' addresses
+
+
+def profile(trace: Path, syms: Symbols, lines_of: str | None = None) -> Profile:
+    """Read the trace; block executions are kept for the function lines_of."""
+    out = Profile()
+    addrs: list[int] = []
     cur: int | None = None
-    count = 0
-    per: dict[str, Counter[str]] = defaultdict(Counter)
-    steps: Counter[str] = Counter()
     names: dict[int, str] = {}
     phase: str | None = None
     with trace.open(errors="replace") as fh:
@@ -64,11 +74,11 @@ def profile(trace: Path, syms: Symbols) -> tuple[dict[str, Counter[str]], Counte
             m = BLOCK.match(line)
             if m:
                 cur = int(m.group(1), 16) if cur is None else cur
-                count += 1
+                addrs.append(int(m.group(1), 16))
                 continue
             if cur is not None:  # the end of a block's listing
-                size[cur] = count
-                cur, count = None, 0
+                out.insns[cur] = addrs
+                cur, addrs = None, []
             m = EXEC.match(line)
             if not m:
                 continue
@@ -78,12 +88,48 @@ def profile(trace: Path, syms: Symbols) -> tuple[dict[str, Counter[str]], Counte
                 fn = names[pc] = syms.name(pc)
             if fn in PHASES and pc == syms.starts[bisect.bisect_right(syms.starts, pc) - 1]:
                 phase = PHASES[fn]
-                steps[phase] += 1
+                out.steps[phase] += 1
             elif fn in HARNESS:
                 phase = None
             if phase is not None:
-                per[phase][fn] += size.get(pc, 0)
-    return per, steps
+                out.per[phase][fn] += len(out.insns.get(pc, ()))
+                if fn == lines_of:
+                    out.blocks[phase][pc] += 1
+    return out
+
+
+def source_lines(elf: Path, addrs: list[int]) -> dict[int, str]:
+    """file:line (basename) of each address, innermost inlined frame first (arm-none-eabi-addr2line -i)."""
+    if not addrs:
+        return {}
+    text = subprocess.run(["arm-none-eabi-addr2line", "-e", str(elf), "-i", "-a", *[hex(a) for a in addrs]],
+                          capture_output=True, text=True, check=True).stdout
+    where: dict[int, str] = {}
+    cur: int | None = None
+    for line in text.splitlines():
+        if line.startswith("0x"):
+            cur = int(line, 16)
+        elif cur is not None and cur not in where:
+            where[cur] = Path(line.split(" ")[0]).name
+    return where
+
+
+def print_lines(prof: Profile, elf: Path, fn: str, top: int) -> None:
+    """Per phase, the source lines of fn's executed instructions (the most instructions first)."""
+    addrs = sorted({a for per in prof.blocks.values() for b in per for a in prof.insns.get(b, ())})
+    where = source_lines(elf, addrs)
+    for phase in PHASES.values():
+        n = prof.steps.get(phase, 0)
+        if n == 0 or not prof.blocks[phase]:
+            continue
+        per_line: Counter[str] = Counter()
+        for b, times in prof.blocks[phase].items():
+            for a in prof.insns.get(b, ()):
+                per_line[where.get(a, "?")] += times
+        total = sum(per_line.values())
+        print(f"{phase}: {fn}, {total / n:,.0f} instructions per step, by source line")
+        for loc, ins in per_line.most_common(top):
+            print(f"  {ins / n:8,.1f}  {100 * ins / total:5.1f} %  {loc}")
 
 
 def main() -> None:
@@ -91,8 +137,10 @@ def main() -> None:
     ap.add_argument("trace", type=Path)
     ap.add_argument("elf", type=Path)
     ap.add_argument("--top", type=int, default=12, help="functions listed per phase (default 12)")
+    ap.add_argument("--lines", metavar="FUNCTION", help="also where FUNCTION's instructions go, by source line")
     args = ap.parse_args()
-    per, steps = profile(args.trace, Symbols(args.elf))
+    prof = profile(args.trace, Symbols(args.elf), args.lines)
+    per, steps = prof.per, prof.steps
     for phase in PHASES.values():
         n = steps.get(phase, 0)
         if n == 0:
@@ -104,6 +152,8 @@ def main() -> None:
         rest = total - sum(v for _, v in per[phase].most_common(args.top))
         if rest:
             print(f"  {rest / n:8,.0f}  {100 * rest / total:5.1f} %  (the other functions)")
+    if args.lines:
+        print_lines(prof, args.elf, args.lines, 2 * args.top)
 
 
 if __name__ == "__main__":
