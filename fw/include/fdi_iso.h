@@ -30,8 +30,9 @@
  *   n_classes  = number of distinct classes among the candidates,
  *   isolated   = (n_classes == 1): the fault is isolated as far as the structure allows; class_mask then
  *                holds the faults structurally not isolable from it (one bit if uniquely isolable).
- * Cost: n_faults iterations of 2-3 AND/compare operations (2 * n_tests more with exoneration for the
- * faults that explain the alarms), plus one per candidate class.
+ * Cost: n_faults iterations of 2-3 AND/compare operations (with exoneration, for each fault that explains the
+ * alarms, at most 2 * n_tests more: the tests up to the last quiet one, then up to the last alarmed one), plus one
+ * per candidate class.
  * Memory: none (pure function of its arguments).
  */
 #ifndef FDI_ISO_H

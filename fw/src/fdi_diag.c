@@ -585,26 +585,28 @@ static uint16_t sat_inc(uint16_t x)
     return (x < 0xFFFFU) ? (uint16_t)(x + 1U) : x;
 }
 
-/* The tests whose sensitivities the exoneration may read at this step (decided before the evaluation, so a
-   superset): a sensitivity of an undecided fault, and in alarm for its response time should it alarm now, or settled
-   and quiet should it stay quiet (the conditions of exonerated() on this step's counters). */
-static uint32_t sens_wanted(const fdi_diag_t *self, uint32_t undecided)
+/* Of the tests of `among`, those whose sensitivities the exoneration may read at this step (decided before the
+   evaluation, so a superset): a sensitivity of an undecided fault, and in alarm for its response time should it alarm
+   now, or settled and quiet should it stay quiet (the conditions of exonerated() on this step's counters). */
+static uint32_t sens_wanted(const fdi_diag_t *self, uint32_t undecided, uint32_t among)
 {
     const uint32_t age = (uint32_t)sat_inc(self->episode_age);
+    uint32_t left = among;
     uint32_t want = 0U;
     uint32_t i;
-    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+    for (i = 0U; (left != 0U) && (i < (uint32_t)self->n_tests); ++i)
     {
         const fdi_test_desc_t *d = &self->table->tests[i];
         const uint32_t bit = (uint32_t)1U << i;
-        const uint32_t resp = (uint32_t)d->response_steps + (uint32_t)self->set_count;
-        if ((d->gen != NULL) && ((d->gen->sens_mask & undecided) != 0U))
+        if (((left & bit) != 0U) && (d->gen != NULL) && ((d->gen->sens_mask & undecided) != 0U))
         {
+            const uint32_t resp = (uint32_t)d->response_steps + (uint32_t)self->set_count;
             const bool alarm_ready = (uint32_t)sat_inc(self->alarm_run[i]) >= resp;
             const bool quiet_ready = ((self->accused & bit) == 0U) && ((uint32_t)sat_inc(self->quiet_run[i]) >= resp) &&
                                      (age >= resp);
             want |= (alarm_ready || quiet_ready) ? bit : 0U;
         }
+        left &= ~bit;
     }
     return want;
 }
@@ -808,27 +810,6 @@ static uint32_t joint_clears(const fdi_diag_t *self, uint32_t settled, uint32_t 
     return out & faults;
 }
 
-/* The residuals' averages over SETTLE_FAST_S and SETTLE_SLOW_S (restarted when a test becomes evaluable again). */
-static void track_residuals(fdi_diag_t *self, uint32_t evaluable, uint32_t before)
-{
-    uint32_t i;
-    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
-    {
-        const uint32_t bit = (uint32_t)1U << i;
-        const float r = self->residual[i];
-        if ((evaluable & before & bit) != 0U)
-        {
-            self->r_fast[i] += self->fast_gain * (r - self->r_fast[i]);
-            self->r_slow[i] += self->slow_gain * (r - self->r_slow[i]);
-        }
-        else
-        {
-            self->r_fast[i] = r;
-            self->r_slow[i] = r;
-        }
-    }
-}
-
 /* Episode start/end and age (see "Isolation episodes" in fdi_diag.h). */
 static void track_episode(fdi_diag_t *self, uint32_t alarm)
 {
@@ -885,10 +866,18 @@ static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
     {
         uint32_t settled = 0U;
         uint32_t online = 0U;
+        uint32_t left = undecided;
         uint32_t i;
-        for (i = 0U; i < (uint32_t)self->n_faults; ++i)
+        /* the implied sizes and confirmation runs of the undecided faults only: no other is read again in the
+           episode (undecided_faults), and track_episode resets them all at the next */
+        for (i = 0U; (left != 0U) && (i < (uint32_t)self->n_faults); ++i)
         {
-            self->implied[i] *= self->implied_keep;
+            const uint32_t fbit = (uint32_t)1U << i;
+            if ((left & fbit) != 0U)
+            {
+                self->implied[i] *= self->implied_keep;
+                left &= ~fbit;
+            }
         }
         for (i = 0U; i < (uint32_t)self->n_tests; ++i)
         {
@@ -923,11 +912,16 @@ static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
         }
         /* the joint rule reads the tests' latest sensitivities: only those computed in this episode */
         online |= joint_clears(self, settled & self->sens_known, undecided & ~online);
-        for (i = 0U; i < (uint32_t)self->n_faults; ++i)
+        left = undecided;
+        for (i = 0U; (left != 0U) && (i < (uint32_t)self->n_faults); ++i)
         {
             const uint32_t fbit = (uint32_t)1U << i;
-            self->cleared_run[i] = ((online & fbit) != 0U) ? sat_inc(self->cleared_run[i]) : 0U;
-            cleared |= (self->cleared_run[i] >= self->clear_confirm) ? fbit : 0U;
+            if ((left & fbit) != 0U)
+            {
+                self->cleared_run[i] = ((online & fbit) != 0U) ? sat_inc(self->cleared_run[i]) : 0U;
+                cleared |= (self->cleared_run[i] >= self->clear_confirm) ? fbit : 0U;
+                left &= ~fbit;
+            }
         }
         /* only the tests of size_tests can clear by reaction sizes (fdi_iso_size_cleared gives 0 for the others); the
            rule reads nothing but the table and the two masks, so its result is kept until they change */
@@ -991,35 +985,13 @@ static bool inside_envelope(const fdi_table_envelope_t *e, const fdi_frame_t *fr
     return (e == NULL) || (over < (uint32_t)e->votes);
 }
 
-/* Outside the calibrated envelope (fdi_table.h) no test is evaluable: the tests' alarm and quiet runs start again and
-   an open episode holds, its accusations and its result too (there is no evidence for or against any fault: it
-   neither ends for want of alarms nor loses its isolation for want of exonerating tests). Back inside, the tests
-   evaluate again after their warm-up. */
-static void hold(fdi_diag_t *self)
-{
-    uint32_t i;
-    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
-    {
-        self->quiet_run[i] = 0U;
-        self->alarm_run[i] = 0U;
-    }
-}
-
 /* Episode bookkeeping and the isolation of this step (see "Isolation episodes" in fdi_diag.h). */
-static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable)
+static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm)
 {
     const uint32_t accused = self->accused;
     uint32_t latched = self->latched;
     uint32_t cleared = 0U;
     fdi_status_t st;
-    uint32_t i;
-    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
-    {
-        const uint32_t bit = (uint32_t)1U << i;
-        const bool quiet = ((evaluable & bit) != 0U) && ((alarm & bit) == 0U);
-        self->quiet_run[i] = quiet ? sat_inc(self->quiet_run[i]) : 0U;
-        self->alarm_run[i] = ((alarm & bit) != 0U) ? sat_inc(self->alarm_run[i]) : 0U;
-    }
     track_episode(self, alarm);
     if ((self->accused != accused) || (self->latched != latched))
     {
@@ -1053,6 +1025,35 @@ static fdi_status_t isolate(fdi_diag_t *self, uint32_t alarm, uint32_t evaluable
     return st;
 }
 
+/* The tests that run at this step (inside the envelope): a generator whose inputs are usable and whose domain
+   holds; r[i] = 0 for each. */
+static uint32_t runnable(const fdi_diag_t *self, const fdi_frame_t *in, uint32_t usable, float *r)
+{
+    fdi_gen_domain_fn_t domain_fn = NULL;
+    bool domain_ok = false;
+    bool have_domain = false;
+    uint32_t run = 0U;
+    uint32_t i;
+    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+    {
+        const fdi_test_desc_t *d = &self->table->tests[i];
+        r[i] = 0.0f;
+        if ((d->gen != NULL) && ((usable & d->input_mask) == d->input_mask))
+        {
+            /* a domain function shared with the test before (generated tables give every distinct condition one
+               function) is evaluated once per step: it reads only the frame */
+            if (!have_domain || (d->gen->in_domain != domain_fn))
+            {
+                domain_fn = d->gen->in_domain;
+                domain_ok = fdi_gen_in_domain(d->gen, in);
+                have_domain = true;
+            }
+            run |= domain_ok ? ((uint32_t)1U << i) : 0U;
+        }
+    }
+    return run;
+}
+
 fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t validity)
 {
     fdi_status_t st = FDI_OK;
@@ -1067,13 +1068,11 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
         const fdi_frame_t *in = frame;
         const bool episode = (self->mode == FDI_ISO_EXONERATION) && (self->accused != 0U);
         const uint32_t undecided = episode ? self->undecided : 0U;
-        fdi_gen_domain_fn_t domain_fn = NULL;
-        bool domain_ok = false;
-        bool have_domain = false;
         uint32_t want = 0U;
-        uint32_t run = 0U;
+        uint32_t run;
         uint32_t alarm = 0U;
         uint32_t evaluable = 0U;
+        uint32_t idle;
         uint32_t ok;
         uint32_t i;
         float r[FDI_DIAG_MAX_TESTS];
@@ -1091,25 +1090,13 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
         }
         /* outside the calibrated envelope no test is evaluable (fdi_table.h, fdi_diag.h) */
         self->in_envelope = inside_envelope(self->table->envelope, frame, usable);
-        for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+        run = self->in_envelope ? runnable(self, in, usable, r) : 0U;
+        /* the tests that do not run (none in steady state): restarted once they run again */
+        idle = ~run & (((uint32_t)self->n_tests >= 32U) ? 0xFFFFFFFFU : (((uint32_t)1U << self->n_tests) - 1U));
+        for (i = 0U; (idle != 0U) && (i < (uint32_t)self->n_tests); ++i)
         {
-            const fdi_test_desc_t *d = &self->table->tests[i];
             const uint32_t bit = (uint32_t)1U << i;
-            bool in_domain = false;
-            r[i] = 0.0f;
-            if (self->in_envelope && (d->gen != NULL) && ((usable & d->input_mask) == d->input_mask))
-            {
-                /* a domain function shared with the test before (generated tables give every distinct condition
-                   one function) is evaluated once per step: it reads only the frame */
-                if (!have_domain || (d->gen->in_domain != domain_fn))
-                {
-                    domain_fn = d->gen->in_domain;
-                    domain_ok = fdi_gen_in_domain(d->gen, in);
-                    have_domain = true;
-                }
-                in_domain = domain_ok;
-            }
-            if (!in_domain)
+            if ((idle & bit) != 0U)
             {
                 if ((self->rearm & bit) == 0U)
                 {
@@ -1118,10 +1105,7 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
                 self->rearm |= bit;
                 self->residual[i] = 0.0f;
                 self->ratio[i] = 0.0f;
-            }
-            else
-            {
-                run |= bit;
+                idle &= ~bit;
             }
         }
         if (self->sensitivities)
@@ -1130,33 +1114,44 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
         }
         else if (undecided != 0U)
         {
-            want = sens_wanted(self, undecided) & sens_turn(self);
+            want = sens_wanted(self, undecided, sens_turn(self));
         }
         else
         {
             /* none needed */
         }
         ok = run_generators(self, in, run, want, r);
+        /* each test: its evaluation; its residual's averages over SETTLE_FAST_S and SETTLE_SLOW_S (restarted when it
+           becomes evaluable again); its quiet and alarm runs. Outside the envelope no test runs, so the runs start
+           again, and an open episode holds, its accusations and result too: there is no evidence for or against
+           any fault, so it neither ends for want of alarms nor loses its isolation for want of exonerating tests
+           (fdi_diag.h); back inside, the tests evaluate again after their warm-up. */
         for (i = 0U; i < (uint32_t)self->n_tests; ++i)
         {
             const uint32_t bit = (uint32_t)1U << i;
             bool test_alarm = false;
-            if (((run & bit) != 0U) && evaluate(self, i, (ok & bit) != 0U, r[i], &test_alarm))
+            const bool test_evaluable = ((run & bit) != 0U) && evaluate(self, i, (ok & bit) != 0U, r[i], &test_alarm);
+            const float ri = self->residual[i];
+            if (test_evaluable && ((self->evaluable & bit) != 0U))
             {
-                evaluable |= bit;
-                alarm |= test_alarm ? bit : 0U;
+                self->r_fast[i] += self->fast_gain * (ri - self->r_fast[i]);
+                self->r_slow[i] += self->slow_gain * (ri - self->r_slow[i]);
             }
+            else
+            {
+                self->r_fast[i] = ri;
+                self->r_slow[i] = ri;
+            }
+            evaluable |= test_evaluable ? bit : 0U;
+            alarm |= test_alarm ? bit : 0U;
+            self->quiet_run[i] = (test_evaluable && !test_alarm) ? sat_inc(self->quiet_run[i]) : 0U;
+            self->alarm_run[i] = test_alarm ? sat_inc(self->alarm_run[i]) : 0U;
         }
         self->alarm = alarm;
-        track_residuals(self, evaluable, self->evaluable);
         self->evaluable = evaluable;
         if (self->in_envelope)
         {
-            st = isolate(self, alarm, evaluable);
-        }
-        else
-        {
-            hold(self);
+            st = isolate(self, alarm);
         }
     }
     return st;

@@ -28,24 +28,30 @@ static bool iso_exonerated(const fdi_table_t *table, uint32_t j, uint32_t alarm_
     const float *row = &table->test_size[(size_t)j * (size_t)nt];
     float least = 0.0f; /* the smallest reaction size of a quiet test that may clear j (0: none) */
     bool cleared = false;
+    uint32_t left = quiet; /* the tests of a mask still to look at: each loop stops after its last one */
     uint32_t i;
-    for (i = 0U; i < nt; ++i)
+    for (i = 0U; (left != 0U) && (i < nt); ++i)
     {
-        if (((quiet & ((uint32_t)1U << i)) != 0U) && (row[i] > 0.0f) && ((iso_sens_mask(table, i) & fbit) == 0U) &&
-            ((least <= 0.0f) || (row[i] < least)))
+        const uint32_t bit = (uint32_t)1U << i;
+        if (((left & bit) != 0U) && (row[i] > 0.0f) && ((least <= 0.0f) || (row[i] < least)) &&
+            ((iso_sens_mask(table, i) & fbit) == 0U))
         {
             least = row[i];
         }
+        left &= ~bit;
     }
     if (least > 0.0f) /* else no quiet test can clear j: the alarms need not be looked at */
     {
         const float need = table->exoneration_margin * least; /* the quiet test that reacts at the smallest size */
         float implied = 0.0f;
         bool beyond = false;
-        for (i = 0U; (i < nt) && !beyond; ++i)
+        left = alarm_mask;
+        for (i = 0U; (left != 0U) && (i < nt) && !beyond; ++i)
         {
-            if ((alarm_mask & ((uint32_t)1U << i)) != 0U)
+            const uint32_t bit = (uint32_t)1U << i;
+            if ((left & bit) != 0U)
             {
+                left &= ~bit;
                 if (row[i] <= 0.0f)
                 {
                     beyond = true;
