@@ -9,7 +9,9 @@
 #   target: Cortex-M4F under qemu-system-arm -M mps2-an386 -icount shift=0 (SysTick counted, calibrated by a known
 #           loop): the same per phase and the largest single step of the drive; arm-none-eabi-size of the libraries,
 #           the ROMO target with and without its sensitivity code (-DFDI_GEN_SENSITIVITIES=0), sizeof(fdi_diag_t);
-#           all of it at -O3 (CMake Release) and, as firmware is often built, at -Os (MinSizeRel)
+#           all of it at -O3 (CMake Release, the generated generators at -Os: cmake/FdiGenerated.cmake), with every
+#           source at -O3 (FDI_GENERATED_FOR_SIZE=OFF, the ROMO table only), and, as firmware is often built, at -Os
+#           (MinSizeRel)
 # and the goals of issue 21 with PASS/MISS: <= 5,000 instructions per step on the M4 (largest step of the ROMO table
 # in the ECU's configuration, isolation included; with every sensitivity reported as information), sizeof(fdi_diag_t)
 # <= 4 KB on the M4, <= 32 KB of text for the ROMO diagnosis as the ECU links it (libfdi.a + libfdi_romo.a; the
@@ -51,7 +53,7 @@ for table in 0 1; do
   done
 done
 
-echo "== target (Cortex-M4F, arm-none-eabi-gcc -O3)"
+echo "== target (Cortex-M4F, arm-none-eabi-gcc -O3, the generated generators -Os: FDI_GENERATED_FOR_SIZE=ON)"
 # configure_m4 DIR CMAKE_ARGS...: a Cortex-M4F build tree (the toolchain file only on its first configuration).
 configure_m4() {
   local dir="$1" toolchain=()
@@ -85,6 +87,15 @@ echo "m4 flash: libfdi.a (generic core) text $lib_text B; ROMO target libfdi_rom
 arm-none-eabi-size build/m4/fw/bench/fdi_bench_m4.elf
 m4_out="$(run_m4 build/m4)"
 echo "$m4_out"
+
+# The same bench with every source at -O3 (the generated generators too): what FDI_GENERATED_FOR_SIZE changes.
+echo "== target (Cortex-M4F, arm-none-eabi-gcc -O3 for every source: FDI_GENERATED_FOR_SIZE=OFF)"
+configure_m4 build/m4-o3 -DCMAKE_BUILD_TYPE=Release -DFDI_GENERATED_FOR_SIZE=OFF
+cmake --build build/m4-o3 -j 2 --target fdi_bench_m4 >/dev/null
+romo_gen_o3="$(arm-none-eabi-size "build/m4-o3/$gens/fdi_romo_generators.c.obj" | tail -1 | awk '{print $1}')"
+echo "m4 all -O3 flash: ROMO target libfdi_romo.a text $(text_of build/m4-o3/fw/vehicles/romo/libfdi_romo.a) B, of which" \
+  "the generated generators $romo_gen_o3 B"
+run_m4 build/m4-o3 | grep -E "ROMO table" | sed 's/^m4: /m4 all -O3: /'
 
 # The same bench built for size (CMake MinSizeRel, -Os), as firmware is often built: its instruction counts and flash.
 echo "== target (Cortex-M4F, arm-none-eabi-gcc -Os, CMake MinSizeRel)"
