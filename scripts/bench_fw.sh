@@ -77,8 +77,8 @@ for lib in fw/libfdi.a fw/ecu/libfdi_ecu.a fw/vehicles/romo/libfdi_romo.a fw/veh
   arm-none-eabi-size -t "build/m4/$lib"
 done
 gens=fw/vehicles/romo/CMakeFiles/fdi_romo.dir/generated
-romo_gen="$(arm-none-eabi-size "build/m4/$gens/fdi_romo_generators.c.obj" | tail -1 | awk '{print $1}')"
-romo_gen_nosens="$(arm-none-eabi-size "build/m4-nosens/$gens/fdi_romo_generators.c.obj" | tail -1 | awk '{print $1}')"
+romo_gen="$(text_of "build/m4/$gens/fdi_romo_generators.c.obj")"
+romo_gen_nosens="$(text_of "build/m4-nosens/$gens/fdi_romo_generators.c.obj")"
 romo_lib="$(text_of build/m4/fw/vehicles/romo/libfdi_romo.a)"
 romo_lib_nosens="$(text_of build/m4-nosens/fw/vehicles/romo/libfdi_romo.a)"
 lib_text="$(text_of build/m4/fw/libfdi.a)"
@@ -92,7 +92,7 @@ echo "$m4_out"
 echo "== target (Cortex-M4F, arm-none-eabi-gcc -O3 for every source: FDI_GENERATED_FOR_SIZE=OFF)"
 configure_m4 build/m4-o3 -DCMAKE_BUILD_TYPE=Release -DFDI_GENERATED_FOR_SIZE=OFF
 cmake --build build/m4-o3 -j 2 --target fdi_bench_m4 >/dev/null
-romo_gen_o3="$(arm-none-eabi-size "build/m4-o3/$gens/fdi_romo_generators.c.obj" | tail -1 | awk '{print $1}')"
+romo_gen_o3="$(text_of "build/m4-o3/$gens/fdi_romo_generators.c.obj")"
 echo "m4 all -O3 flash: ROMO target libfdi_romo.a text $(text_of build/m4-o3/fw/vehicles/romo/libfdi_romo.a) B, of which" \
   "the generated generators $romo_gen_o3 B"
 run_m4 build/m4-o3 | grep -E "ROMO table" | sed 's/^m4: /m4 all -O3: /'

@@ -73,8 +73,8 @@ def profile(trace: Path, syms: Symbols, lines_of: str | None = None) -> Profile:
         for line in fh:
             m = BLOCK.match(line)
             if m:
-                cur = int(m.group(1), 16) if cur is None else cur
                 addrs.append(int(m.group(1), 16))
+                cur = addrs[0]
                 continue
             if cur is not None:  # the end of a block's listing
                 out.insns[cur] = addrs
