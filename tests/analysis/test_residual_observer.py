@@ -23,7 +23,7 @@ import sympy
 from fdi_analysis.model import Model
 from fdi_analysis.model_loader import load_model
 from fdi_analysis.residuals.causality import synthesize
-from fdi_analysis.residuals.evaluate import residual
+from fdi_analysis.residuals.evaluate import FilterDesign, node_signals, observer_run, residual
 from fdi_analysis.residuals.generator import OBSERVER_EPS, XHAT
 from fdi_analysis.residuals.observer import ObserverReference, pole
 from fdi_analysis.residuals.realizability import why_not_realizable
@@ -159,6 +159,44 @@ def test_observer_residual_on_the_tank(tank: Model) -> None:
     assert np.max(np.abs(rf[100:200])) < 1e-6  # fault-free part: consistent signals, residual ~ 0
     r_ss = fu * (c1 * c1 + o.eps) / (lam * c1)
     assert float(np.mean(rf[-50:])) == pytest.approx(r_ss, rel=0.05)
+
+
+def test_observer_step_keeps_the_gain_of_its_prediction(tank: Model) -> None:
+    """observer_run (and the emitted C it is the reference of) follows the discretisation of observer.py: the gain
+    L1 and the pole are evaluated once per step at the previous estimate, and the observer input kept for the next
+    step is F(xh[k]) + L1 r[k]. Checked on a transient (level sensor 0.3 off at the reset), where the estimate moves
+    and the gain with it, against the hand recursion; the gain evaluated again at xh[k] gives another residual."""
+    ref = tank_signals(400, 0.5)
+    g = synthesize(tank, MSO, "T", reference=ObserverReference(signals=ref))
+    o = g.observer
+    assert o is not None
+    sig = tank_signals(60, 0.5, z_offset=0.3)
+    r, xs = observer_run(g, sig, node_signals(g, sig, FilterDesign()), FilterDesign())
+    sign = 1 if sympy.simplify(g.expr - (raw("y") - K * sympy.sqrt(XHAT))) == 0 else -1
+    lam, eps, dt = o.pole, o.eps, FilterDesign().dt
+
+    def hand(gain_again: bool) -> np.ndarray:
+        def parts(x: float, k: int) -> tuple[float, float, float]:  # F, e, L at estimate x and sample k
+            e = sign * (sig["y"][k] - K * math.sqrt(x))
+            c = -sign * K / (2.0 * math.sqrt(x))
+            return sig["u"][k] - sig["y"][k], e, -lam * c / (c * c + eps)
+
+        out = np.zeros(len(sig["u"]))
+        x = float(sig["z"][0])
+        f, e, gain = parts(x, 0)
+        g_prev = f + gain * e
+        for k in range(1, len(out)):
+            f, e, gain = parts(x, k)
+            c = -sign * K / (2.0 * math.sqrt(x))
+            jac = gain * c  # a = 0
+            x = x + math.expm1(jac * dt) / jac * 0.5 * (g_prev + f + gain * e)
+            f, out[k], gain_new = parts(x, k)
+            g_prev = f + (gain_new if gain_again else gain) * out[k]
+        return out
+
+    assert xs[0] == pytest.approx(1.3) and abs(xs[30] - xs[1]) > 0.01  # the estimate moves: so does the gain
+    assert np.max(np.abs(r - hand(gain_again=False))) <= 1e-12
+    assert np.max(np.abs(r - hand(gain_again=True))) > 1e-6
 
 
 def test_state_not_observable_from_the_residual_equation(tmp_path: Path) -> None:

@@ -170,21 +170,22 @@ ${sens}""")
 
 OBSERVER_FMT = Template("""\
         fdi_obs_t *const o = &io->obs[io->at[${slot}]];
-${own}        float xh = 0.0f;
+${own}        float xp = o->xh;
         if ((io->restart & 0x${bit}U) != 0U)
         {
 ${restart}
         }
-        else
         {
-            const float xp = o->xh;
 ${predict}
-            xh = fdi_gen_obs_predict(o, io->par, f + (l * e), a + (l * c));
-        }
-        {
+            float xh = xp; /* at a restart: the reset value */
+            if ((io->restart & 0x${bit}U) == 0U)
+            {
+                xh = fdi_gen_obs_predict(o, io->par, f + (l * e), a + (l * c));
+            }
+            /* the observer input kept for the next step takes this prediction's gain l (at xp, not again at xh) */
 ${at_new}
             io->r[io->at[${slot}]] = value;
-            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, f + (l * value)) != FDI_OK))
+            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK))
             {
                 io->failed |= 0x${bit}U;
             }
@@ -193,8 +194,8 @@ ${sens}
 
 RESET_SENSOR_FMT = Template("""\
             const float x0 = ${x0}; /* ${state} from its sensor outside the MSO set */
-            xh = fdi_float_is_finite(x0) ? x0 : 0.0f;""")
-RESET_CONST_FMT = Template("            xh = ${x0};")
+            xp = fdi_float_is_finite(x0) ? x0 : 0.0f;""")
+RESET_CONST_FMT = Template("            xp = ${x0};")
 
 SENS_FMT = Template("""\
 #if FDI_GEN_SENSITIVITIES
@@ -342,8 +343,8 @@ def _slot_exprs(k: int, g: Generator) -> tuple[list[str], list[str], list[sympy.
     if o is None:
         return [], ["value"], [g.expr]
     pre = [o.update, o.gain, o.a, o.c, g.expr]
-    new = [o.update, o.gain, g.expr]
-    return (["f", "l", "a", "c", "e"], ["f", "l", "value"],
+    new = [o.update, g.expr]
+    return (["f", "l", "a", "c", "e"], ["fx", "value"],
             [_renamed(e, XHAT, _xp(k)) for e in pre] + [_renamed(e, XHAT, _xh(k)) for e in new])
 
 
@@ -460,12 +461,13 @@ def _reusing(exprs: Sequence[sympy.Expr], temps: Sequence[_Temp]) -> list[sympy.
 def _sens_block(k: int, g: Generator, name: _Names, faults: Sequence[str], temps: Sequence[_Temp],
                 indent: str) -> str:
     """The sensitivity block of slot k: d r / d f of `g.sensitivities`, in ascending fault order, from the
-    temporaries in scope `temps` and common subexpressions of their own."""
+    temporaries in scope `temps` and common subexpressions of their own; an observer slot's at the estimate its
+    step predicted from (xp, `evaluate.sensitivity_estimate`), where its gain and Jacobian are in scope."""
     if not g.sensitivities:
         return ""
     ordered = sorted(g.sensitivities, key=lambda fs: faults.index(fs[0]))
-    # the temporaries at the slot's new estimate, over XHAT as the sensitivities are (their expressions are short)
-    exprs = _reusing([e for _, e in ordered], [_Temp(t.symbol, _renamed(t.expr, _xh(k), XHAT)) for t in temps])
+    # the sensitivities over the slot's previous estimate, as the temporaries of its prediction are
+    exprs = _reusing([_renamed(e, XHAT, _xp(k)) for _, e in ordered], temps)
     subs, red = sympy.cse(exprs, symbols=sympy.numbered_symbols("s"), order="canonical")
     sname = replace(name, temps=name.temps | {str(s) for s, _ in subs})
     lines = [f"{indent}    const float {s} = {to_c(e, sname)};" for s, e in subs]
@@ -484,7 +486,7 @@ def _slot_body(k: int, g: Generator, p: _Pass, name: _Names, faults: Sequence[st
     own = [t for t in p.temps if t.symbol not in p.owner and p.mask[t.symbol] == 1 << k]
     pre = [t for t in p.temps if p.owner.get(t.symbol) == (k, "pre")]
     post = [t for t in p.temps if p.owner.get(t.symbol) == (k, "post")]
-    scope = [t for t in p.temps if t.symbol not in p.owner and p.mask[t.symbol] >> k & 1] + post
+    scope = [t for t in p.temps if t.symbol not in p.owner and p.mask[t.symbol] >> k & 1] + pre
     out = p.outputs[k]
     red = p.reduced[out.start:out.start + len(out.predict) + len(out.at_new)]
     bit = f"{1 << k:08X}"

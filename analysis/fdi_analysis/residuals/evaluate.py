@@ -135,7 +135,7 @@ def observer_run(g: Generator, signals: Mapping[str, FloatArray], values: Mappin
     assert o is not None
     syms = [XHAT, *[n.symbol for n in g.nodes]]
     fn = sympy.lambdify(syms, [o.update, o.gain, o.a, o.c, g.expr], modules=SCALAR_MODULES, cse=True)
-    fn_next = sympy.lambdify(syms, [o.update + o.gain * g.expr, g.expr], modules=SCALAR_MODULES, cse=True)
+    fn_next = sympy.lambdify(syms, [o.update, g.expr], modules=SCALAR_MODULES, cse=True)
     cols = [np.asarray(values[n], dtype=float).tolist() for n in g.nodes]
     rows = list(zip(*cols, strict=True)) if cols else [()] * len(next(iter(signals.values())))
     n = len(rows)
@@ -143,7 +143,8 @@ def observer_run(g: Generator, signals: Mapping[str, FloatArray], values: Mappin
     x0 = x0 if math.isfinite(x0) else 0.0  # as the C: the sensor outside the MSO set is not checked
     r = np.zeros(n)
     xs = np.zeros(n)
-    xh, (g_prev, _) = x0, fn_next(x0, *rows[0])
+    f, gain, _, _, e = fn(x0, *rows[0])
+    xh, g_prev = x0, f + gain * e
     xs[0] = xh
     dt = design.dt
     for k in range(1, n):
@@ -153,7 +154,8 @@ def observer_run(g: Generator, signals: Mapping[str, FloatArray], values: Mappin
             jac = a + gain * c
             phi = math.expm1(jac * dt) / jac if abs(jac * dt) > SMALL_JDT else dt
             xh = xh + phi * 0.5 * (g_prev + g1)
-            g_prev, r[k] = fn_next(xh, *rows[k])
+            f, r[k] = fn_next(xh, *rows[k])
+            g_prev = f + gain * r[k]  # the input kept for the next step, with this prediction's gain
         except (OverflowError, ZeroDivisionError):  # the estimate has diverged (a large fault): alarm from here on
             r[k:] = math.inf
             xs[k:] = math.nan
@@ -162,16 +164,24 @@ def observer_run(g: Generator, signals: Mapping[str, FloatArray], values: Mappin
     return r, xs
 
 
+def sensitivity_estimate(xs: FloatArray) -> FloatArray:
+    """Per sample, the estimate at which an observer generator's step computes its sensitivities: the one its
+    prediction starts from (the previous sample's estimate; at the first sample, the reset value), where its gain
+    and Jacobian are already evaluated."""
+    return np.concatenate((xs[:1], xs[:-1]))
+
+
 def sensitivity_series(g: Generator, signals: Mapping[str, FloatArray],
                        design: FilterDesign | None = None) -> dict[str, FloatArray]:
-    """d r / d f of each fault of `g.sensitivities` at every sample (observer generators at their estimate)."""
+    """d r / d f of each fault of `g.sensitivities` at every sample (observer generators at the estimate of
+    `sensitivity_estimate`)."""
     design = design or FilterDesign()
     if not g.sensitivities:
         return {}
     values = node_signals(g, signals, design)
     syms = [XHAT, *[n.symbol for n in g.nodes]]
     n = len(next(iter(signals.values())))
-    xs = observer_run(g, signals, values, design)[1] if g.observer is not None else np.zeros(n)
+    xs = sensitivity_estimate(observer_run(g, signals, values, design)[1]) if g.observer is not None else np.zeros(n)
     fn = sympy.lambdify(syms, [e for _, e in g.sensitivities], modules=VECTOR_MODULES, cse=True)
     out = fn(xs, *[values[node] for node in g.nodes])
     return {f: np.asarray(v, dtype=float) * np.ones(n) for (f, _), v in zip(g.sensitivities, out, strict=True)}

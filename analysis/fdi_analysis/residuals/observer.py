@@ -20,15 +20,21 @@ Discretisation for the step dt (the style of fdi_obs.h: exponential of the error
 stable for every pole J < 0 however fast (a wheel's own slip dynamics reach a ~ -400 1/s, J dt ~ -4, where
 forward Euler would diverge): with G(x, u) ~ J x + b(u) over one step,
 
-    G1 = G(xh[k-1], u[k]),  J = a + L c at (xh[k-1], u[k]),  phi = expm1(J dt) / J   (dt when |J dt| < 1e-6)
-    xh[k] = xh[k-1] + phi * (Gp + G1) / 2,   Gp = G(xh[k-1], u[k-1]) kept from the previous step
-    r[k]  = e(xh[k], u[k])
+    L1 = L(xh[k-1], u[k]),  G1 = F(xh[k-1], u[k]) + L1 e(xh[k-1], u[k]),  J = a + L1 c at (xh[k-1], u[k]),
+    phi = expm1(J dt) / J   (dt when |J dt| < 1e-6)
+    xh[k] = xh[k-1] + phi * (Gp + G1) / 2,   r[k] = e(xh[k], u[k])
+    Gp for the next step = F(xh[k], u[k]) + L1 r[k]   (the gain of this step's prediction)
 
-which is exact for a linear G with the input b averaged over the step. At a reset xh = the state from its
-measurement outside the MSO set when the model has one (`initial_estimate`; a fault there only moves the
-initial error, which decays with the error pole inside the diagnoser's warm-up), else 0. That sensor is
-not among the generator's inputs (the test's signals stay those of its MSO set, so the diagnoser does not
-check it): a non-finite value gives 0.
+which is exact for a linear G with the input b averaged over the step. The gain and its Jacobian are
+evaluated once per step, at the prediction: evaluating them again at xh[k] would change Gp only by
+(L(xh[k]) - L1) r[k], a product of two small terms, at the cost of the Jacobian's second evaluation in every
+step (the README's performance section has the measured difference). The on-line sensitivities d r / d f
+are computed at xh[k-1] too, with that gain and Jacobian (`evaluate.sensitivity_estimate`).
+
+At a restart (no prediction; L1 = L(xh[k], u[k])) xh = the state from its measurement outside the MSO set when
+the model has one (`initial_estimate`; a fault there only moves the initial error, which decays with the error
+pole inside the diagnoser's warm-up), else 0. That sensor is not among the generator's inputs (the test's
+signals stay those of its MSO set, so the diagnoser does not check it): a non-finite value gives 0.
 """
 
 from __future__ import annotations

@@ -47,6 +47,7 @@ from fdi_analysis.residuals.evaluate import (
     in_domain,
     initial_values,
     node_signals,
+    sensitivity_estimate,
     step_response,
 )
 from fdi_analysis.residuals.generator import DOMAIN_FACTOR, XHAT, Generator
@@ -125,14 +126,15 @@ def _observer_batch(g: Generator, bank: NodeBank, runs: Sequence[int]) -> list[t
         cols.append(arr)
     syms = [XHAT, *[node.symbol for node in g.nodes]]
     fn = sympy.lambdify(syms, [o.update, o.gain, o.a, o.c, g.expr], modules=VECTOR_MODULES, cse=True)
-    fn_next = sympy.lambdify(syms, [o.update + o.gain * g.expr, g.expr], modules=VECTOR_MODULES, cse=True)
+    fn_next = sympy.lambdify(syms, [o.update, g.expr], modules=VECTOR_MODULES, cse=True)
     x0 = np.array([float(initial_values(g, {k: v[:1] for k, v in bank.raw(g, r).items()})[0]) for r in runs])
     x0 = np.where(np.isfinite(x0), x0, 0.0)
     xh = x0
     r = np.zeros((m, n))
     xs = np.zeros((m, n))
     xs[:, 0] = xh
-    g_prev = np.asarray(fn_next(xh, *[c[:, 0] for c in cols])[0], dtype=float) * np.ones(m)
+    f0, gain0, _, _, e0 = (np.asarray(v, dtype=float) * np.ones(m) for v in fn(xh, *[c[:, 0] for c in cols]))
+    g_prev = f0 + gain0 * e0
     dt = bank.design.dt
     for k in range(1, n):
         args = [c[:, k] for c in cols]
@@ -143,7 +145,7 @@ def _observer_batch(g: Generator, bank: NodeBank, runs: Sequence[int]) -> list[t
         phi = np.where(small, dt, np.expm1(jac * dt) / np.where(small, 1.0, jac))
         xh = xh + phi * 0.5 * (g_prev + g1)
         nxt, res = fn_next(xh, *args)
-        g_prev = np.asarray(nxt, dtype=float) * np.ones(m)
+        g_prev = np.asarray(nxt, dtype=float) * np.ones(m) + gain * res  # with this prediction's gain
         r[:, k] = res
         xs[:, k] = xh
     return [(r[i, : lens[i]], xs[i, : lens[i]]) for i in range(m)]
@@ -275,7 +277,7 @@ def screen_candidate(setup: ScreenSetup, c: Candidate, solver: Solver, solver_f:
         for run in mine if sens_fn is not None else []:
             assert sens_fn is not None
             vals = bank.values(g, run)
-            xs = runs[run][1]
+            xs = sensitivity_estimate(runs[run][1])  # where the C computes the sensitivities
             keep = slice(warm, None)  # after the run's own warm-up (and so after the drive's first seconds)
             args = [vals[node] for node in g.nodes]
             up, down = sens_fn(xs, args, steps, one_sided=1), sens_fn(xs, args, steps, one_sided=-1)
