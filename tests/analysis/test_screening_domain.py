@@ -1,7 +1,7 @@
 """The screening's operating domain as a study parameter (`fdi-tune screen --domain-factor`): a tyre-law test,
 never evaluable in the low-speed manoeuvre with the generators' own domain (|vx| >= 4 v_eps = 2 m/s), is
 screened there at standstill when the factor is 0: its sigma comes from those drives and every fault of its
-signature gets a share and a median fault-to-noise ratio. A test whose residual is not finite there (MSO27, at
+signature gets a share and a median fault-to-noise ratio. A test whose residual is not finite there (MSO338, at
 standstill) is rejected with the reason, not written as NaN."""
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ def test_domain_factor_screens_a_tyre_law_test_at_standstill(repo: Path) -> None
     drives = [drive("low_speed", seed=seed, as_ecu_sees=True)[1] for seed in (None, 1001)]
     names = [e.id for e in model.equations]
     screening = json.loads(gzip.decompress((repo / "analysis/models/romo_screening.json.gz").read_bytes()))
-    mso27 = next(c["equations"].split() for c in screening["candidates"] if c["label"] == "MSO27")
+    mso338 = next(c["equations"].split() for c in screening["candidates"] if c["label"] == "MSO338")
 
     def screened(eqs: list[str], label: str, factor: float) -> CandidateScreen:
         setup = ScreenSetup(model, observer_reference(th), th.gate, design, sizes, drives, {"low_speed": 0}, MARGIN,
@@ -55,6 +55,6 @@ def test_domain_factor_screens_a_tyre_law_test_at_standstill(repo: Path) -> None
     assert set(study.per_fault) == set(study.faults) and "f23" in study.faults  # the wheel-2 speed sensor
     for fs in study.per_fault.values():
         assert 0.0 <= fs.share["low_speed"] <= 1.0 and fs.median_fnr["low_speed"] >= 0.0
-    nan = screened(mso27, "MSO27", 0.0)
+    nan = screened(mso338, "MSO338", 0.0)
     assert nan.rejected == "residual not finite on the calibration drives" and not nan.per_fault
-    assert screened(mso27, "MSO27", DOMAIN_FACTOR).rejected == "never evaluable on the calibration drives"
+    assert screened(mso338, "MSO338", DOMAIN_FACTOR).rejected == "never evaluable on the calibration drives"
