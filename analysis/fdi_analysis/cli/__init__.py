@@ -11,10 +11,9 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Sequence
-from pathlib import Path
 
-from fdi_analysis.cli.common import add_version, run, use_file_backend
-from fdi_analysis.resources import model_file, shipped_models
+from fdi_analysis.cli.common import add_version, run_subcommand
+from fdi_analysis.resources import shipped_models
 
 EPILOG = """examples:
   fdi-analyze report analysis/models/romo_quasistatic.toml -o out/romo
@@ -45,18 +44,4 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    from fdi_analysis.export.fault_sizes import FaultSizesError
-    from fdi_analysis.export.table import ExportError
-    from fdi_analysis.model import ModelError
-    from fdi_analysis.residuals.reasons import NotRealizableError
-    from fdi_analysis.residuals.selected import SelectionError
-    from fdi_analysis.structure import StructureError
-
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if isinstance(getattr(args, "model", None), Path):
-        args.model = model_file(args.model)  # a bare name: the shipped model
-    use_file_backend()
-    return run("fdi-analyze", lambda: int(args.func(args)),
-               (ModelError, StructureError, ExportError, FaultSizesError, SelectionError, NotRealizableError))
-
+    return run_subcommand("fdi-analyze", build_parser(), argv)

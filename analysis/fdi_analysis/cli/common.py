@@ -16,8 +16,10 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from pathlib import Path
 
+from fdi_analysis.resources import model_file
 from fdi_analysis.version import __version__
 
 EXIT_OK = 0
@@ -75,3 +77,14 @@ def use_file_backend() -> None:
     import matplotlib
 
     matplotlib.use("Agg")
+
+
+def run_subcommand(prog: str, parser: argparse.ArgumentParser, argv: Sequence[str] | None = None) -> int:
+    """The main of a command line with subcommands (`fdi-analyze`, `fdi-tune`): parse `argv`, take a bare MODEL
+    name for the shipped model of that name, plot to files, and `run` the chosen subcommand's ``func`` (every
+    typed error of the project is a ValueError, so one of `INPUT_ERRORS`)."""
+    args = parser.parse_args(argv)
+    if isinstance(getattr(args, "model", None), Path):
+        args.model = model_file(args.model)
+    use_file_backend()
+    return run(prog, lambda: int(args.func(args)))

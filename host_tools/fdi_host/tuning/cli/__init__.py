@@ -7,16 +7,8 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
-from pathlib import Path
 
-from fdi_analysis.cli.common import add_version, run, use_file_backend
-from fdi_analysis.export.fault_sizes import FaultSizesError
-from fdi_analysis.export.table import ExportError
-from fdi_analysis.model import ModelError
-from fdi_analysis.residuals.reasons import NotRealizableError
-from fdi_analysis.residuals.selected import SelectionError
-from fdi_analysis.resources import model_file
-from fdi_analysis.structure import StructureError
+from fdi_analysis.cli.common import add_version, run_subcommand
 from fdi_host.tuning.cli import calibrate, kin, residuals, screen
 
 SUBCOMMANDS = (screen, calibrate, residuals, kin)
@@ -49,13 +41,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if isinstance(getattr(args, "model", None), Path):
-        args.model = model_file(args.model)  # a bare name: the shipped model
-    use_file_backend()
-    return run("fdi-tune", lambda: int(args.func(args)),
-               (ModelError, StructureError, ExportError, FaultSizesError, SelectionError, NotRealizableError))
+    return run_subcommand("fdi-tune", build_parser(), argv)
 
 
 if __name__ == "__main__":
