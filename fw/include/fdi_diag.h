@@ -262,4 +262,28 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
 /* Copy the result of the last step (all tests NOT_EVALUABLE before the first step). */
 fdi_status_t fdi_diag_result(const fdi_diag_t *self, fdi_diag_result_t *out);
 
+/* The evidence of the on-line exoneration after the last step ("Isolation episodes" above), for traces and
+   tests: why a fault is still a candidate. Entries of faults outside `undecided` are 0 (the rule no longer reads
+   them in this episode); outside an episode, everything is 0. */
+typedef struct
+{
+    uint16_t episode_age;                       /* steps since the episode's first alarm (saturating); 0: none */
+    uint32_t undecided;                         /* faults the exoneration can still change (explain every accused
+                                                   test, not latched) */
+    uint32_t latched;                           /* the class isolated first in the episode (exonerated no more),
+                                                   FDI_DIAG_CONTRADICTED, or 0 */
+    float implied[FDI_TABLE_MAX_FAULTS];        /* F_j: the size the recent settled alarms imply (a lower bound;
+                                                   0: no bound yet; 1e30: no size explains them) */
+    uint16_t cleared_run[FDI_TABLE_MAX_FAULTS]; /* consecutive steps the on-line rule has cleared fault j (it leaves
+                                                   the candidates at 0.1 s) */
+    uint32_t cleared;                           /* the faults exonerated at the step (the on-line rule, confirmed,
+                                                   or the reaction sizes; the latched class never) */
+    uint32_t clears[FDI_DIAG_MAX_TESTS];        /* per test: the faults it clears alone at F (its last decision; 0
+                                                   while it has not settled quiet) */
+} fdi_diag_evidence_t;
+
+/* Copy the exoneration's evidence after the last step into *out (read only; no cost to the step). BAD_ARG on
+   NULL. */
+fdi_status_t fdi_diag_explain(const fdi_diag_t *self, fdi_diag_evidence_t *out);
+
 #endif /* FDI_DIAG_H */

@@ -1198,3 +1198,30 @@ fdi_status_t fdi_diag_result(const fdi_diag_t *self, fdi_diag_result_t *out)
     }
     return st;
 }
+
+fdi_status_t fdi_diag_explain(const fdi_diag_t *self, fdi_diag_evidence_t *out)
+{
+    fdi_status_t st = FDI_BAD_ARG;
+    if ((self != NULL) && (out != NULL) && (self->table != NULL))
+    {
+        const bool episode = self->accused != 0U;
+        const uint32_t undecided = episode ? self->undecided : 0U;
+        uint32_t i;
+        out->episode_age = episode ? self->episode_age : 0U;
+        out->undecided = undecided;
+        out->latched = episode ? self->latched : 0U;
+        out->cleared = episode ? self->iso_cleared : 0U; /* the cleared faults this step's match used */
+        for (i = 0U; i < FDI_TABLE_MAX_FAULTS; ++i)
+        {
+            const bool open = ((undecided & ((uint32_t)1U << (i & 31U))) != 0U) && (i < (uint32_t)self->n_faults);
+            out->implied[i] = open ? self->implied[i] : 0.0f;
+            out->cleared_run[i] = open ? self->cleared_run[i] : 0U;
+        }
+        for (i = 0U; i < FDI_DIAG_MAX_TESTS; ++i)
+        {
+            out->clears[i] = (episode && (i < (uint32_t)self->n_tests)) ? (self->clears[i] & undecided) : 0U;
+        }
+        st = FDI_OK;
+    }
+    return st;
+}

@@ -1,5 +1,6 @@
 /*
- * fuzz_diag.c - libFuzzer harness of the diagnoser step path (fdi_diag_init / fdi_diag_step / fdi_diag_result).
+ * fuzz_diag.c - libFuzzer harness of the diagnoser step path (fdi_diag_init / fdi_diag_step / fdi_diag_result /
+ * fdi_diag_explain).
  *
  * From the input: a table (the kinematic table, the generated ROMO table, or a random table of the ROMO
  * target's generator descriptors, hand-written and generated, that passes fdi_table_check()), a configuration
@@ -363,6 +364,33 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             }
             FUZZ_CHECK((res.alarm_mask & ~res.accused_mask) == 0U, "alarm not accused");
             FUZZ_CHECK(res.iso.detected == (res.accused_mask != 0U), "detected != episode active");
+            {
+                /* the exoneration's evidence agrees with the result: outside an episode it is empty; in one, a
+                   candidate is latched or undecided and never cleared */
+                fdi_diag_evidence_t ev;
+                FUZZ_CHECK(fdi_diag_explain(&d, &ev) == FDI_OK, "explain");
+                if (res.accused_mask == 0U)
+                {
+                    FUZZ_CHECK((ev.episode_age == 0U) && (ev.undecided == 0U) && (ev.cleared == 0U) &&
+                                   (ev.latched == 0U),
+                               "evidence outside an episode");
+                }
+                else if (ev.latched != FDI_DIAG_CONTRADICTED)
+                {
+                    FUZZ_CHECK((res.iso.candidates & ~(ev.undecided | ev.latched)) == 0U,
+                               "a candidate neither undecided nor latched");
+                    FUZZ_CHECK((res.iso.candidates & ev.cleared) == 0U, "a cleared candidate");
+                }
+                else
+                {
+                    FUZZ_CHECK(res.iso.candidates == 0U, "candidates of a contradicted episode");
+                }
+                for (i = 0U; i < FDI_TABLE_MAX_FAULTS; ++i)
+                {
+                    FUZZ_CHECK(!isnan(ev.implied[i]) && (ev.implied[i] >= 0.0f), "implied size %u: %g", i,
+                               (double)ev.implied[i]);
+                }
+            }
             if (res.accused_mask == 0U)
             {
                 FUZZ_CHECK(res.iso.candidates == 0U && !res.iso.detected && !res.iso.isolated,

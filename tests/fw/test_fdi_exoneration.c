@@ -255,6 +255,56 @@ static void test_weak_quiet_test_does_not_clear(void **state)
     assert_int_equal(run(&d, 6U, 20.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0x1U);
 }
 
+/* fdi_diag_explain reads out the rule's evidence: the implied sizes, the confirmation runs, each quiet test's
+   decision, the latched class. */
+static void test_explain_shows_the_evidence_of_the_rule(void **state)
+{
+    fdi_diag_t d;
+    fdi_diag_evidence_t ev;
+    (void)state;
+    assert_int_equal(fdi_diag_explain(NULL, &ev), FDI_BAD_ARG);
+    warm(&d, FDI_ISO_EXONERATION);
+    assert_int_equal(fdi_diag_explain(&d, NULL), FDI_BAD_ARG);
+    assert_int_equal(fdi_diag_explain(&d, &ev), FDI_OK);
+    assert_int_equal(ev.episode_age, 0U); /* no episode: nothing to show */
+    assert_int_equal(ev.undecided, 0U);
+    assert_float_equal(ev.implied[0], 0.0f, 0.0f);
+    assert_float_equal(ev.implied[1], 0.0f, 0.0f);
+    assert_int_equal(ev.clears[1], 0U);
+    /* test 0 alarms at 20 with d r0 / d a = 2 and d r0 / d b = 1: a >= (20 - 3) / 2 = 8.5, b >= 17; test 1, quiet,
+       sees b with 0.4: 0.4 * 17 = 6.8 < 7.5, it clears nothing */
+    assert_int_equal(run(&d, 300U, 20.0f, 2.0f, 1.0f, 0.0f, 0.4f), 0x3U);
+    assert_int_equal(fdi_diag_explain(&d, &ev), FDI_OK);
+    assert_true((ev.episode_age > 250U) && (ev.episode_age <= 300U));
+    assert_int_equal(ev.undecided, 0x3U);
+    assert_int_equal(ev.latched, 0U);
+    assert_float_equal(ev.implied[0], 8.5f, 0.01f);
+    assert_float_equal(ev.implied[1], 17.0f, 0.01f);
+    assert_int_equal(ev.cleared_run[1], 0U);
+    assert_int_equal(ev.clears[1], 0U);
+    /* with 0.5 test 1 clears b (8.5 >= 7.5): 5 steps of the 10 that confirm it */
+    assert_int_equal(run(&d, 5U, 20.0f, 2.0f, 1.0f, 0.0f, 0.5f), 0x3U);
+    assert_int_equal(fdi_diag_explain(&d, &ev), FDI_OK);
+    assert_int_equal(ev.clears[1], 0x2U);
+    assert_int_equal(ev.cleared_run[1], 5U);
+    assert_int_equal(ev.cleared, 0U); /* not yet confirmed */
+    assert_int_equal(ev.clears[0], 0U); /* in alarm: it clears nothing */
+    /* confirmed: {a} isolated and latched; b, cleared, can still come back (undecided), a is decided */
+    assert_int_equal(run(&d, 6U, 20.0f, 2.0f, 1.0f, 0.0f, 0.5f), 0x1U);
+    assert_int_equal(fdi_diag_explain(&d, &ev), FDI_OK);
+    assert_int_equal(ev.latched, 0x1U);
+    assert_int_equal(ev.undecided, 0x2U);
+    assert_int_equal(ev.cleared, 0x2U);
+    assert_float_equal(ev.implied[0], 0.0f, 0.0f);
+    assert_float_equal(ev.implied[1], 17.0f, 0.01f);
+    /* the episode ends (no alarm for 5 steps, once the CUSUM has drained): nothing to show again */
+    assert_int_equal(run(&d, 400U, 0.0f, 2.0f, 1.0f, 0.0f, 0.5f), 0U);
+    assert_int_equal(fdi_diag_explain(&d, &ev), FDI_OK);
+    assert_int_equal(ev.episode_age, 0U);
+    assert_int_equal(ev.latched, 0U);
+    assert_float_equal(ev.implied[1], 0.0f, 0.0f);
+}
+
 static void test_a_weak_spell_resets_the_confirmation(void **state)
 {
     fdi_diag_t d;
@@ -508,6 +558,7 @@ int main(void)
     const struct CMUnitTest list[] = {
         cmocka_unit_test(test_quiet_test_clears_where_it_would_have_seen_the_fault),
         cmocka_unit_test(test_weak_quiet_test_does_not_clear),
+        cmocka_unit_test(test_explain_shows_the_evidence_of_the_rule),
         cmocka_unit_test(test_implied_size_needs_a_settled_residual),
         cmocka_unit_test(test_no_exoneration_mode_never_clears),
         cmocka_unit_test(test_implied_size_follows_recent_evidence),

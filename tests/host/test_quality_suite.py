@@ -123,6 +123,11 @@ def test_quick_suite(table: str, tmp_path: Path) -> None:
     md = markdown(res)
     assert "| f4 |" in md and "quick mode" in md and "| cornering |" in md
     assert dataclasses.asdict(res.cases[0])["fault"] == "f1"
+    # a study with other ECU settings says so in both reports (fdi-quality --ecu)
+    assert "ECU settings other than the defaults" not in md
+    study = dataclasses.replace(res, config=dataclasses.replace(res.config, ecu=(("noise_allowance", 2),)))
+    assert "ECU settings other than the defaults: noise_allowance = 2." in markdown(study)
+    assert json.loads(json.dumps(to_dict(study)))["config"]["ecu"] == [["noise_allowance", 2]]
 
 
 def test_cli_errors_and_help(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:

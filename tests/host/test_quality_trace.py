@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import itertools
+import math
 from pathlib import Path
 
 import pytest
 
 from fdi_analysis.cli.common import EXIT_ERROR
 from fdi_host.quality import trace
-from fdi_host.quality.cli import main
+from fdi_host.quality.cli import main, parse_ecu_settings
 from fdi_host.quality.suite import QualityError, SuiteConfig, evaluate_case
 
 
@@ -36,6 +38,10 @@ def test_trace_is_the_suite_case_and_names_blind_alarms(tmp_path: Path, capsys: 
             if f" {name} " in ln or f" {name} (blind)" in ln:
                 assert (f"{name} (blind)" in ln) == case.blind(i)
     assert ("isolated" in "\n".join(lines)) == (outcome in ("exact", "wrong"))
+    # the listing gives |r| / (gate sigma): the square root of the evaluator's ratio r^2 / (gate sigma)^2
+    first = next(r for r in case.results if r.detected)
+    i = next(i for i in range(case.table.n_tests) if first.alarm_mask >> i & 1)
+    assert f"{names[i]} {math.sqrt(first.ratios[i]):.1f}" in "\n".join(lines)
     code = main(["--table", "romo", "--trace", "f4:cornering:2001", "--out", str(tmp_path)])
     assert code == 0
     assert (tmp_path / "trace-f4-cornering-2001.png").stat().st_size > 10_000
@@ -60,3 +66,62 @@ def test_trace_needs_a_required_size(tmp_path: Path) -> None:
     sizes.write_text("[requirement]\nf1 = 0.5\n", encoding="utf-8")
     with pytest.raises(QualityError, match="no required size for f4"):
         trace.trace_case("romo", "f4", "cornering", 2001, cfg=SuiteConfig(table="romo", sizes_file=sizes))
+
+
+@pytest.fixture(scope="module")
+def f13_fig6() -> trace.CaseTrace:
+    # f13 (wheel 4 drive torque) in Fig. 6: several faults explain the first alarms and leave one by one
+    return trace.trace_case("romo", "f13", "fig6", 2001)
+
+
+def test_trace_shows_the_evidence_of_the_exoneration(f13_fig6: trace.CaseTrace) -> None:
+    case = f13_fig6
+    steps = list(zip(case.results, case.evidence, strict=True))
+    assert len(steps) == len(case.results) > 100
+    left_any = False
+    for r, e in steps:
+        if not r.detected:
+            assert e.episode_age == 0 and e.undecided == 0 and not any(e.implied) and e.cleared == 0
+            continue
+        assert e.episode_age > 0
+        # a candidate is either latched (the class isolated first) or still undecided, and never cleared
+        assert r.candidates & ~(e.undecided | e.latched) == 0
+        assert r.candidates & e.cleared == 0
+        # entries of decided faults read 0
+        assert all(e.implied[k] == 0.0 and e.cleared_run[k] == 0 for k in range(case.table.n_faults)
+                   if not e.undecided >> k & 1)
+    for (r0, _), (r1, e1) in itertools.pairwise(steps):
+        left = r0.candidates & ~r1.candidates
+        if left and r0.accused_mask == r1.accused_mask:
+            # with the same accused tests a fault leaves only as exonerated: by the on-line rule after 0.1 s of
+            # clearing (10 steps at 10 ms), or by reaction sizes
+            assert left & ~e1.cleared == 0
+            left_any = True
+    assert left_any
+    # before the isolation the vy offset f5 is the last other candidate: the alarms bound its size (a small vy
+    # offset explains them) and the rule clears it for 10 steps in a row
+    lines = trace.evidence(case)
+    assert any(" f5 0.0" in ln for ln in lines)
+    assert any("f5 " in ln and "cleared 1 steps" in ln for ln in lines)
+    assert "undecided candidates every 0.1 s" in trace.report(case)
+
+
+def _first_isolation(case: trace.CaseTrace) -> int:
+    return next(r.step for r in case.results if r.isolated)
+
+
+def test_ecu_settings_reach_the_ecu(f13_fig6: trace.CaseTrace, capsys: pytest.CaptureFixture[str]) -> None:
+    # a smaller noise allowance subtracts less from the alarms: larger implied sizes at the same steps, and f5
+    # (the last other candidate) leaves earlier
+    cfg = SuiteConfig(table="romo", ecu=parse_ecu_settings("romo", ["noise_allowance=2"]))
+    assert cfg.ecu == (("noise_allowance", 2),)
+    study = trace.trace_case("romo", "f13", "fig6", 2001, cfg=cfg)
+    f5 = 4
+    pairs = [(a.implied[f5], b.implied[f5]) for a, b in zip(f13_fig6.evidence, study.evidence, strict=True)
+             if a.implied[f5] > 0.0 and b.implied[f5] > 0.0]
+    assert pairs and all(b > a for a, b in pairs[:20])
+    assert _first_isolation(study) < _first_isolation(f13_fig6)
+    # the CLI refuses what the ECU does not know, naming it
+    for bad, what in (("bogus=1", "bogus"), ("noise_allowance", "KEY=VALUE"), ("mode=weird", "weird")):
+        assert main(["--table", "romo", "--ecu", bad, "--quick"]) == EXIT_ERROR
+        assert what in capsys.readouterr().err

@@ -23,7 +23,8 @@
 /* sizeof / offsetof / capacities the bindings check: 0 fdi_ecu_t, 1 config, 2 counters, 3 result, 4 tx,
    5 offsetof(result, diag), 6 offsetof(diag result, iso), 7 FDI_DIAG_MAX_TESTS, 8 fdi_diag_t, 9 FDI_ECU_MAX_MSGS,
    10 FDI_DIAG_MAX_SENS, 11 offsetof(diag result, sens_offset), 12 fdi_diag_result_t, 13 fdi_diag_config_t,
-   14 FDI_GEN_N_PARAMS, 15 FDI_FRAME_MAX_SIGNALS, 16 FDI_ECU_HISTORY; else 0. */
+   14 FDI_GEN_N_PARAMS, 15 FDI_FRAME_MAX_SIGNALS, 16 FDI_ECU_HISTORY, 17 fdi_diag_evidence_t,
+   18 FDI_TABLE_MAX_FAULTS; else 0. */
 size_t fdi_py_sizeof(int what)
 {
     size_t n = 0U;
@@ -46,6 +47,8 @@ size_t fdi_py_sizeof(int what)
     case 14: n = FDI_GEN_N_PARAMS; break;
     case 15: n = FDI_FRAME_MAX_SIGNALS; break;
     case 16: n = FDI_ECU_HISTORY; break;
+    case 17: n = sizeof(fdi_diag_evidence_t); break;
+    case 18: n = FDI_TABLE_MAX_FAULTS; break;
     default: break;
     }
     return n;
@@ -71,6 +74,12 @@ const fdi_table_t *fdi_py_table(const char *name)
         }
     }
     return t;
+}
+
+/* The exoneration's evidence of an ECU's diagnoser after its last step (fdi_diag_explain). */
+int fdi_py_ecu_explain(const fdi_ecu_t *ecu, fdi_diag_evidence_t *out)
+{
+    return (int)((ecu != NULL) ? fdi_diag_explain(&ecu->diag, out) : FDI_BAD_ARG);
 }
 
 /* The built-in buses by name ("romo"); NULL for others. */

@@ -37,7 +37,7 @@ from numpy.typing import NDArray
 from fdi_host.can.dbc import DIAG_ID
 
 __all__ = ["BUSES", "DIAG_ID", "REASONS", "TABLES", "BusInfo", "DiagRun", "Diagnoser", "Ecu", "EcuCounters",
-           "EcuError", "EcuResult", "MessageCounters", "TableInfo", "bus_info", "table_info"]
+           "EcuError", "EcuResult", "Evidence", "MessageCounters", "TableInfo", "bus_info", "table_info"]
 
 REASONS: tuple[str, ...] = (
     "unknown_id", "own_frame", "bad_dlc", "bad_crc", "out_of_range", "repeated_counter", "counter_jump",
@@ -75,6 +75,7 @@ class _Caps:
     n_params: int
     max_signals: int
     kept_frames: int  # FDI_ECU_HISTORY: frames the ECU keeps per message for the time alignment
+    max_faults: int  # FDI_TABLE_MAX_FAULTS
 
 
 def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
@@ -136,11 +137,18 @@ def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
     class Tx(ctypes.Structure):
         _fields_ = [("n_frames", ctypes.c_uint8), ("frame", Frame * 1)]
 
+    class Evidence(ctypes.Structure):
+        _fields_ = [
+            ("episode_age", ctypes.c_uint16), ("undecided", ctypes.c_uint32), ("latched", ctypes.c_uint32),
+            ("implied", ctypes.c_float * c.max_faults), ("cleared_run", ctypes.c_uint16 * c.max_faults),
+            ("cleared", ctypes.c_uint32), ("clears", ctypes.c_uint32 * c.max_tests),
+        ]
+
     class SignalFrame(ctypes.Structure):
         _fields_ = [("value", ctypes.c_float * c.max_signals)]
 
     return {"Config": Config, "Counters": Counters, "Result": Result, "Tx": Tx, "DiagResult": DiagResult,
-            "DiagConfig": DiagConfig, "SignalFrame": SignalFrame}
+            "DiagConfig": DiagConfig, "SignalFrame": SignalFrame, "Evidence": Evidence}
 
 
 @dataclass(frozen=True)
@@ -165,10 +173,10 @@ def _lib() -> _Lib:
         return int(dll.fdi_py_sizeof(what))
 
     caps = _Caps(max_tests=size(7), max_msgs=size(9), max_sens=size(10), n_params=size(14), max_signals=size(15),
-                 kept_frames=size(16))
+                 kept_frames=size(16), max_faults=size(18))
     types = _struct_types(caps)
     for what, name in ((1, "Config"), (2, "Counters"), (3, "Result"), (4, "Tx"), (12, "DiagResult"),
-                       (13, "DiagConfig")):
+                       (13, "DiagConfig"), (17, "Evidence")):
         c_size, py_size = size(what), ctypes.sizeof(types[name])
         if c_size != py_size:
             raise ImportError(f"fdi_host.ecu.bindings: ctypes mirror of {name} has {py_size} bytes, C has {c_size}")
@@ -192,6 +200,7 @@ def _lib() -> _Lib:
         "fdi_ecu_counters": (st, [vp, vp]),
         "fdi_ecu_result": (st, [vp, vp]),
         "fdi_ecu_align_us": (ctypes.c_uint32, [vp]),
+        "fdi_py_ecu_explain": (st, [vp, vp]),
         "fdi_py_process": (ctypes.c_long, [vp, ctypes.c_long, vp, vp, vp, vp, vp, vp, ctypes.c_long]),
         "fdi_diag_config_default": (st, [vp, vp]),
         "fdi_diag_init": (st, [vp, vp]),
@@ -407,6 +416,20 @@ class EcuResult:
         return [f"f{j + 1}" for j in range(32) if self.candidates >> j & 1]
 
 
+@dataclass(frozen=True)
+class Evidence:
+    """The on-line exoneration's evidence after a step (fdi_diag_explain): why a fault is still a candidate.
+    Entries of faults outside `undecided` are 0; outside an episode everything is."""
+
+    episode_age: int  # steps since the episode's first alarm (0: no episode)
+    undecided: int  # fault bitmask: the faults the exoneration can still change
+    latched: int  # the class isolated first in the episode (0xFFFFFFFF: contradicted; 0: none yet)
+    implied: tuple[float, ...]  # per fault: the size the settled alarms imply (0: no bound yet; 1e30: unbounded)
+    cleared_run: tuple[int, ...]  # per fault: steps in a row the rule has cleared it
+    cleared: int  # fault bitmask: exonerated at the step (on-line rule confirmed, or reaction sizes)
+    clears: tuple[int, ...]  # per test: fault bitmask it clears alone at the implied sizes (its last decision)
+
+
 # ------------------------------------------------------------------------------------------ the ECU
 def _t_us(t: float) -> int:
     return round(t * 1e6) & 0xFFFFFFFF
@@ -557,6 +580,18 @@ class Ecu:
         return EcuCounters(
             int(c.frames), {r: int(c.rejected[k]) for k, r in enumerate(REASONS)}, int(c.steps),
             int(c.steps_skipped), int(c.tx_frames), msgs,
+        )
+
+    def explain(self) -> Evidence:
+        """The exoneration's evidence after the last step (fdi_diag_explain of the ECU's diagnoser)."""
+        e = self._types["Evidence"]()
+        _check(self._dll.fdi_py_ecu_explain(self._self, ctypes.byref(e)), "fdi_diag_explain")
+        nf = self.table.n_faults
+        return Evidence(
+            episode_age=int(e.episode_age), undecided=int(e.undecided), latched=int(e.latched),
+            implied=tuple(float(e.implied[j]) for j in range(nf)),
+            cleared_run=tuple(int(e.cleared_run[j]) for j in range(nf)), cleared=int(e.cleared),
+            clears=tuple(int(e.clears[i]) for i in range(self.table.n_tests)),
         )
 
     def result(self) -> EcuResult:

@@ -10,7 +10,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from fdi_analysis.cli.common import add_version, fail
-from fdi_host.ecu.bindings import TABLES
+from fdi_host.ecu.bindings import TABLES, Ecu, EcuError
 from fdi_host.quality.report import markdown, write_json, write_markdown
 from fdi_host.quality.suite import CASE_SEEDS, DEFAULT_SIZES, QualityError, SuiteConfig, run_suite
 from fdi_host.sim.scenario import SCENARIOS
@@ -21,8 +21,33 @@ EXAMPLES = """examples:
   fdi-quality --table romo --quick --out out/quality-quick   # CI size: cornering, one seed, 0.3 min fault-free
   fdi-quality --table romo --faults f6 f10 --scenarios cornering slalom --shapes step ramp --multipliers 1 2
   fdi-quality --table romo --trace f6:straight:2001 --out out/trace   # one case step by step: alarms, candidates,
-                                                                      # ratios plot (trace-f6-straight-2001.png)
+                                                                      # the exoneration's evidence, ratios plot
+                                                                      # (trace-f6-straight-2001.png)
+  fdi-quality --table romo --ecu noise_allowance=2 --out out/quality-na2   # a study with another ECU setting
 """
+
+
+def parse_ecu_settings(table: str, items: list[str]) -> tuple[tuple[str, float | int | str], ...]:
+    """["noise_allowance=2", ...] -> (("noise_allowance", 2), ...), checked by building an ECU with them."""
+    out: list[tuple[str, float | int | str]] = []
+    for item in items:
+        key, sep, text = item.partition("=")
+        if not sep or not key.strip() or not text.strip():
+            raise ValueError(f"--ecu {item!r}: expected KEY=VALUE, e.g. noise_allowance=2")
+        value: float | int | str = text.strip()
+        for kind in (int, float):
+            try:
+                value = kind(text)
+                break
+            except ValueError:
+                continue
+        out.append((key.strip(), value))
+    if out:
+        try:
+            Ecu(table, **dict(out))
+        except (TypeError, ValueError, EcuError) as exc:
+            raise ValueError(f"--ecu: {exc}") from exc
+    return tuple(out)
 
 
 def quick_config(table: str) -> SuiteConfig:
@@ -44,11 +69,18 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--shapes", nargs="+", default=None, choices=("step", "ramp"))
     p.add_argument("--fault-free-minutes", type=float, default=None, help="fault-free driving (default 30)")
     p.add_argument("--sizes", type=Path, default=DEFAULT_SIZES, help="required fault sizes (TOML [requirement])")
+    p.add_argument("--ecu", metavar="KEY=VALUE", action="append", default=[],
+                   help="an ECU setting other than its default, for studies (repeatable; e.g. noise_allowance=2, "
+                        "sens_every=1, cusum_h=100: the options of fdi_host.ecu.bindings.Ecu); the report names them")
     p.add_argument("--trace", metavar="FAULT:SCENARIO:SEED", default=None,
                    help="instead of the suite: one step-fault case at its required size (x the first multiplier), "
                         "its alarms and candidates step by step (and a plot of the ratios in --out)")
     p.add_argument("-o", "--out", type=Path, default=None, help="folder for quality.json and quality.md")
     args = p.parse_args(argv)
+    try:
+        args.ecu = parse_ecu_settings(args.table, args.ecu)
+    except ValueError as exc:
+        return fail("fdi-quality", exc)
     if args.trace is not None:
         return _trace(args)
     base = quick_config(args.table) if args.quick else SuiteConfig(table=args.table)
@@ -62,6 +94,7 @@ def main(argv: list[str] | None = None) -> int:
             faults=tuple(args.faults) if args.faults else (),
             fault_free_minutes=base.fault_free_minutes if args.fault_free_minutes is None else args.fault_free_minutes,
             sizes_file=args.sizes,
+            ecu=args.ecu,
         )
         with tqdm(desc="quality", unit="run", file=sys.stderr) as bar:
             def progress(text: str) -> None:
@@ -89,8 +122,8 @@ def _trace(args: argparse.Namespace) -> int:
     try:
         fault, scenario, seed = trace.parse_case(args.trace)
         mult = args.multipliers[0] if args.multipliers else 1.0
-        case = trace.trace_case(args.table, fault, scenario, seed, mult, SuiteConfig(table=args.table,
-                                                                                     sizes_file=args.sizes))
+        case = trace.trace_case(args.table, fault, scenario, seed, mult,
+                                SuiteConfig(table=args.table, sizes_file=args.sizes, ecu=args.ecu))
         print(trace.report(case))
         if args.out is not None:
             args.out.mkdir(parents=True, exist_ok=True)

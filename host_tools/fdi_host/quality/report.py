@@ -77,7 +77,8 @@ def markdown(result: SuiteResult) -> str:
         f"case there does: detected within {1000 * DELAY_GOAL_S:.0f} ms of the onset; isolated to exactly its "
         f"structural class (method B over the tests on board) within {ISOLATION_GOAL_S:g} s of the detection; "
         "never a wrong class.",
-        "",
+        *(["", f"ECU settings other than the defaults: {', '.join(f'{k} = {v}' for k, v in cfg.ecu)}.", ""]
+          if cfg.ecu else [""]),
         f"| scenario | detected in time (goal >= {DETECTION_GOAL_FAULTS}) | isolated in time "
         f"(goal >= {ISOLATION_GOAL_FAULTS}) | wrong class | faults not detected in time | faults not isolated "
         "in time |",

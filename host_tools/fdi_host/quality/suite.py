@@ -32,6 +32,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -71,6 +72,7 @@ class SuiteConfig:
     pre_onset_s: float = 5.0
     fault_free_minutes: float = 30.0
     sizes_file: Path = DEFAULT_SIZES
+    ecu: tuple[tuple[str, float | int | str], ...] = ()  # ECU settings other than the defaults (Ecu's overrides)
 
     def __post_init__(self) -> None:
         bad = [s for s in self.shapes if s not in ("step", "ramp")]
@@ -222,9 +224,19 @@ def case_onset(cfg: SuiteConfig, base: SimResult) -> float:
     return round(cfg.onset_fraction * float(base.t[-1]), 3)
 
 
+def ecu_settings(cfg: SuiteConfig) -> dict[str, Any]:
+    """The ECU's options other than the defaults (keyword arguments of Ecu and of the replays)."""
+    return dict(cfg.ecu)
+
+
+def replay_start(cfg: SuiteConfig, onset: float) -> float:
+    """Where a case's replay starts: pre_onset_s before the fault onset."""
+    return max(0.0, onset - cfg.pre_onset_s)
+
+
 def replay_case(cfg: SuiteConfig, drive: SimResult, onset: float, db: RomoDatabase) -> list[EcuResult]:
-    """The ECU's steps of one case's faulty drive, replayed from pre_onset_s before the fault onset."""
-    return replay(cfg.table, build_frames(drive, db), t_start=max(0.0, onset - cfg.pre_onset_s))
+    """The ECU's steps of one case's faulty drive, replayed from `replay_start`."""
+    return replay(cfg.table, build_frames(drive, db), t_start=replay_start(cfg, onset), **ecu_settings(cfg))
 
 
 def run_suite(cfg: SuiteConfig, progress: Callable[[str], None] | None = None) -> SuiteResult:
@@ -284,7 +296,7 @@ def fault_free_drives(
             break
         scen = load_scenario(name)
         drive = simulate(scen, [], seed=seed)
-        res = replay(cfg.table, build_frames(drive, db))
+        res = replay(cfg.table, build_frames(drive, db), **ecu_settings(cfg))
         ev = iso = 0
         prev_d = prev_i = False
         for r in res:

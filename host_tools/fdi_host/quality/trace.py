@@ -3,12 +3,15 @@
 `fdi-quality --trace f6:straight:2001` runs the case exactly as the suite does (the same drive, fault onset,
 required size and replay through the C ECU core) and reports, in the order they happened, the changes of the
 alarm pattern and of the candidate set, naming for every alarmed test whether its signature contains the fault
-(a test structurally blind to the fault that alarms excludes it, whatever the other tests say). The plot shows
+(a test structurally blind to the fault that alarms excludes it, whatever the other tests say), then, every 0.1 s
+while candidates are undecided, the exoneration's evidence (fdi_diag_explain): the size each one would need to
+have by the settled alarms, how long the on-line rule has cleared it, and which quiet tests clear it. The plot shows
 each test's normalised ratio |r| / (gate sigma) over time, blind tests dashed, with the candidate count below.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,13 +20,23 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fdi_host.can.dbc import RomoDatabase
-from fdi_host.ecu.bindings import EcuResult, TableInfo, table_info
-from fdi_host.quality.suite import QualityError, SuiteConfig, case_onset, load_fault_sizes, replay_case
+from fdi_host.can.traffic import build_frames
+from fdi_host.ecu.bindings import EcuResult, Evidence, TableInfo, table_info
+from fdi_host.ecu.offline import replay_explained
+from fdi_host.quality.suite import (
+    QualityError,
+    SuiteConfig,
+    case_onset,
+    ecu_settings,
+    load_fault_sizes,
+    replay_start,
+)
 from fdi_host.sim.faults import FAULT_IDS, FaultSpec
 from fdi_host.sim.scenario import SCENARIOS, load_scenario
 from fdi_host.sim.vehicle_sim import faulty_drive, simulate
 
 AFTER_ONSET_S = 4.0  # how long after the onset the trace looks
+UNBOUNDED = 1e29  # implied sizes from here on: no size of the fault explains the alarms (fdi_diag.c UNBOUNDED_SIZE)
 FloatArray = NDArray[np.float64]
 
 
@@ -37,6 +50,7 @@ class CaseTrace:
     # the vehicle after the onset (true states of the simulator), faulty and fault-free: largest |vy| [m/s],
     # largest |psidot| [rad/s], smallest vx [m/s]; a fault that makes the vehicle spin leaves every model's domain
     motion: tuple[tuple[float, float, float], tuple[float, float, float]] = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    evidence: tuple[Evidence, ...] = ()  # the exoneration's evidence after each step of `results`
 
     @property
     def fault_index(self) -> int:
@@ -68,15 +82,22 @@ def trace_case(table: str, fault: str, scenario: str, seed: int, multiplier: flo
     onset = case_onset(cfg, base)
     spec = FaultSpec(fault, onset, size * multiplier)
     drive = faulty_drive(base, spec)
-    res = replay_case(cfg, drive, onset, RomoDatabase())
-    kept = tuple(r for r in res if r.t_us * 1e-6 <= onset + AFTER_ONSET_S)
+    frames = build_frames(drive, RomoDatabase())
+    steps = [s for s in replay_explained(table, frames, t_start=replay_start(cfg, onset), **ecu_settings(cfg))
+             if s[0].t_us * 1e-6 <= onset + AFTER_ONSET_S]
     window = (drive.t >= onset) & (drive.t <= onset + AFTER_ONSET_S)
 
     def motion(true: Mapping[str, FloatArray]) -> tuple[float, float, float]:
         return (float(np.max(np.abs(true["vy"][window]))), float(np.max(np.abs(true["psidot"][window]))),
                 float(np.min(true["vx"][window])))
 
-    return CaseTrace(info, spec, scenario, seed, kept, (motion(drive.true), motion(base.true)))
+    return CaseTrace(info, spec, scenario, seed, tuple(r for r, _ in steps), (motion(drive.true), motion(base.true)),
+                     tuple(e for _, e in steps))
+
+
+def gates(ratio: float) -> float:
+    """|r| / (gate sigma) from the evaluator's test ratio r^2 / (gate^2 sigma^2) (fdi_eval.h)."""
+    return math.sqrt(ratio)
 
 
 def _short(name: str) -> str:
@@ -97,11 +118,45 @@ def events(trace: CaseTrace) -> list[str]:
             continue
         prev = key
         alarmed = [i for i in range(trace.table.n_tests) if r.alarm_mask >> i & 1]
-        tests = ", ".join(f"{names[i]}{' (blind)' if trace.blind(i) else ''} {r.ratios[i]:.1f}" for i in alarmed)
+        tests = ", ".join(f"{names[i]}{' (blind)' if trace.blind(i) else ''} {gates(r.ratios[i]):.1f}"
+                          for i in alarmed)
         cands = "{" + ", ".join(r.candidate_labels()) + "}"
         state = "isolated" if r.isolated else ("detected" if r.detected else "quiet")
         held = "" if r.in_envelope else " (outside the envelope: held)"
         lines.append(f"{t - trace.spec.onset:+6.2f} s  {state:8s} candidates {cands}{held}  alarms: {tests or '-'}")
+    return lines
+
+
+def _size(f: float) -> str:
+    return "no bound yet" if f <= 0.0 else ("unbounded" if f >= UNBOUNDED else f"{f:.3g}")
+
+
+def evidence(trace: CaseTrace, every_s: float = 0.1) -> list[str]:
+    """Every `every_s` while candidates are undecided: for each, the size F the settled alarms imply (Table I
+    units) and for how many steps in a row the on-line rule has cleared it, and the quiet tests that clear it alone
+    (fdi_diag.h: a quiet test clears f where |d r / d f| F reaches the margin times its gate)."""
+    lines: list[str] = []
+    names = [_short(n) for n in trace.table.test_names]
+    next_t = 0.0
+    for r, e in zip(trace.results, trace.evidence, strict=True):
+        t = r.t_us * 1e-6 - trace.spec.onset
+        open_ = e.undecided & r.candidates
+        if t < next_t - 1e-6 or not open_:
+            continue
+        next_t = t + every_s
+        parts, waiting = [], []
+        for j in range(trace.table.n_faults):
+            if not open_ >> j & 1:
+                continue
+            by = [names[i] for i, m in enumerate(e.clears) if m >> j & 1]
+            if e.implied[j] <= 0.0 and not e.cleared_run[j] and not by:
+                waiting.append(f"f{j + 1}")
+                continue
+            run = f", cleared {e.cleared_run[j]} steps" if e.cleared_run[j] else ""
+            parts.append(f"f{j + 1} {_size(e.implied[j])}{run}{' by ' + ', '.join(by) if by else ''}")
+        if waiting:
+            parts.append("no bound yet: " + ", ".join(waiting))
+        lines.append(f"{t:+6.2f} s  " + "; ".join(parts))
     return lines
 
 
@@ -116,7 +171,10 @@ def report(trace: CaseTrace) -> str:
               f"({vy0:.2f}) m/s, largest |yaw rate| {r:.2f} ({r0:.2f}) rad/s, smallest vx {vx:.2f} ({vx0:.2f}) m/s")
     return "\n".join([head, motion, f"tests blind to {trace.spec.fault}: {', '.join(blind) or '-'}",
                       "time after onset, state, candidates, alarmed tests with their ratio |r| / (gate sigma):",
-                      *events(trace)])
+                      *events(trace),
+                      "undecided candidates every 0.1 s: the size F the settled alarms imply, how long the on-line "
+                      "rule has cleared it, the quiet tests that clear it alone:",
+                      *(evidence(trace) or ["-"])])
 
 
 def plot(trace: CaseTrace, path: Path) -> None:
@@ -130,7 +188,7 @@ def plot(trace: CaseTrace, path: Path) -> None:
     t = [r.t_us * 1e-6 - trace.spec.onset for r in res]
     fig, (ax, axc) = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True, height_ratios=(3, 1))
     for i, name in enumerate(trace.table.test_names):
-        y = [max(r.ratios[i], 1e-3) for r in res]
+        y = [max(gates(r.ratios[i]), 1e-3) for r in res]
         ax.plot(t, y, "--" if trace.blind(i) else "-", lw=1.2, label=_short(name) + (" (blind)" if trace.blind(i)
                                                                                      else ""))
     ax.axhline(1.0, color="k", lw=0.8)
