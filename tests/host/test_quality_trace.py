@@ -115,6 +115,8 @@ def test_ecu_settings_reach_the_ecu(f13_fig6: trace.CaseTrace, capsys: pytest.Ca
     # (the last other candidate) leaves earlier
     cfg = SuiteConfig(table="romo", ecu=parse_ecu_settings("romo", ["noise_allowance=2"]))
     assert cfg.ecu == (("noise_allowance", 2),)
+    assert parse_ecu_settings("romo", ["sensitivities=false", "cusum_h=120.5", "mode=exoneration"]) == (
+        ("sensitivities", False), ("cusum_h", 120.5), ("mode", "exoneration"))
     study = trace.trace_case("romo", "f13", "fig6", 2001, cfg=cfg)
     f5 = 4
     pairs = [(a.implied[f5], b.implied[f5]) for a, b in zip(f13_fig6.evidence, study.evidence, strict=True)

@@ -34,13 +34,17 @@ def parse_ecu_settings(table: str, items: list[str]) -> tuple[tuple[str, float |
         key, sep, text = item.partition("=")
         if not sep or not key.strip() or not text.strip():
             raise ValueError(f"--ecu {item!r}: expected KEY=VALUE, e.g. noise_allowance=2")
-        value: float | int | str = text.strip()
-        for kind in (int, float):
-            try:
-                value = kind(text)
-                break
-            except ValueError:
-                continue
+        word = text.strip()
+        value: float | int | str = word
+        if word.lower() in ("true", "false"):  # sensitivities=false must not read as a non-empty string
+            value = word.lower() == "true"
+        else:
+            for kind in (int, float):
+                try:
+                    value = kind(word)
+                    break
+                except ValueError:
+                    continue
         out.append((key.strip(), value))
     if out:
         try:
