@@ -39,10 +39,10 @@
  *     f_j >= (min(|r_i|, |0.1 s average|) - noise_allowance sigma_i) / |s_ij|,
  *     and the largest recent bound is the size the alarms imply, F_j (the bounds are forgotten with a 1 s time
  *     constant: where an alarmed test's sensitivity passes near zero its bound spikes). A fault j of test i's
- *     signature that its generator lists no sensitivity for, while it lists others, has a steady-state
- *     sensitivity of exactly zero (fdi_gen.h: it reaches r_i only through a filtered derivative, e.g. a vx
- *     offset in a_x = d vx / dt - psidot vy): no size of j explains the settled alarm, F_j is unbounded and any
- *     settled quiet test with a nonzero sensitivity to j clears it. A settled quiet test q
+ *     signature that its generator lists no sensitivity for has a steady-state sensitivity of
+ *     exactly zero (fdi_gen.h: it reaches r_i only through a filtered derivative, e.g. a vx offset in
+ *     a_x = d vx / dt - psidot vy): test i gives it no bound, because a drift of j (a steady rate) explains its
+ *     settled alarm as well as a constant size of a fault of its sensitivities does. A settled quiet test q
  *     clears j when |s_qj| F_j >= sensitivity_margin * gate_q * sigma_q: at that size it would have crossed its
  *     gate with margin. Several settled quiet tests clear j together where none does alone: with the
  *     sensitivities taken sensitivity_margin times smaller, test q would show a response its residual lacks by
@@ -201,7 +201,7 @@ typedef struct
     uint16_t quiet_run[FDI_DIAG_MAX_TESTS]; /* consecutive evaluable steps without alarm (saturating) */
     uint16_t alarm_run[FDI_DIAG_MAX_TESTS]; /* consecutive steps in alarm (saturating) */
     uint32_t clears[FDI_DIAG_MAX_TESTS];    /* faults each settled quiet test clears on line (last decision) */
-    float implied[FDI_TABLE_MAX_FAULTS];    /* fault sizes the recent alarms imply (lower bounds) */
+    float implied[FDI_TABLE_MAX_FAULTS];    /* fault sizes the recent alarms imply (to first order) */
     uint16_t cleared_run[FDI_TABLE_MAX_FAULTS]; /* consecutive steps the on-line rule cleared each fault */
     float r_fast[FDI_DIAG_MAX_TESTS];       /* each residual's average over 0.1 s ... */
     float r_slow[FDI_DIAG_MAX_TESTS];       /* ... and over 0.3 s (whether it has settled) */
@@ -272,8 +272,9 @@ typedef struct
                                                    test, not latched) */
     uint32_t latched;                           /* the class isolated first in the episode (exonerated no more),
                                                    FDI_DIAG_CONTRADICTED, or 0 */
-    float implied[FDI_TABLE_MAX_FAULTS];        /* F_j: the size the recent settled alarms imply (a lower bound;
-                                                   0: no bound yet; 1e30: no size explains them) */
+    float implied[FDI_TABLE_MAX_FAULTS];        /* F_j: the size the recent settled alarms imply (a lower bound
+                                                   to first order: where a sensitivity passes near zero it can
+                                                   exceed the true size; 0: no bound yet) */
     uint16_t cleared_run[FDI_TABLE_MAX_FAULTS]; /* consecutive steps the on-line rule has cleared fault j (it leaves
                                                    the candidates at 0.1 s) */
     uint32_t cleared;                           /* the faults exonerated at the step (the on-line rule, confirmed,

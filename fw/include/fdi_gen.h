@@ -128,7 +128,8 @@ typedef struct
     uint32_t input_mask;           /* frame signals the step and the domain read (non-zero) */
     uint32_t sens_mask;            /* faults (bit j = fault j of the table) whose d r / d f_j the step outputs;
                                       when non-zero, a fault of the test's signature left out has a steady-state
-                                      sensitivity of exactly zero (the diagnoser relies on it, fdi_diag.h) */
+                                      sensitivity of exactly zero (it reaches r only while it changes: the
+                                      diagnoser bounds no size of it by this test, fdi_diag.h) */
     uint8_t n_filters;             /* hand-written: instance filter states it uses (<= FDI_GEN_MAX_FILTERS); slot: 0 */
     uint8_t n_obs;                 /* observer states it uses: 0 or 1 */
     const fdi_gen_set_t *set;      /* the set of a generated generator; NULL for a hand-written one */

@@ -32,12 +32,8 @@
    candidates only once the on-line rule has cleared it for CLEAR_CONFIRM_S. */
 #define IMPLIED_TAU_S 1.0f
 #define CLEAR_CONFIRM_S 0.1f
-/* The size a settled alarm implies for a fault of the test's signature that its generator lists no sensitivity for
-   although it lists others: that fault's steady-state sensitivity is identically zero (it reaches the residual
-   only through a filtered derivative, fdi_gen.h), so no size of it explains a settled residual. Finite, so that
-   |s| * size stays a number (it may round to +Inf, which compares as intended). */
-#define UNBOUNDED_SIZE 1.0e30f
-/* largest missing response (in gates) one quiet test adds to the joint rule: finite squares for unbounded sizes */
+/* largest missing response (in gates) one quiet test adds to the joint rule: finite squares where an implied size
+   is huge (an alarmed test's sensitivity near zero) */
 #define JOINT_LACK_CAP 1.0e3f
 /* During an episode a test's sensitivities are computed every SENS_EVERY steps, the tests in turn (40 ms at 10 ms:
    a quarter of the tests' sensitivity code per step; the rule's decisions are confirmed over CLEAR_CONFIRM_S). */
@@ -680,11 +676,12 @@ static float larger(float a, float b)
     return (a > b) ? a : b;
 }
 
-/* Test i is in alarm and has been for its response time: once its residual has settled, its average and its fresh
-   sensitivities (when `fresh`) bound the size of each undecided fault of its sens_mask from below; the episode keeps
-   the largest bound (see fdi_diag.h). A fault of its signature without a sensitivity (while the generator lists
-   some) cannot explain a settled residual at all: its bound is UNBOUNDED_SIZE, with or without fresh sensitivities. */
-static void raise_implied(fdi_diag_t *self, uint32_t i, uint32_t undecided, bool fresh)
+/* Test i is in alarm and has been for its response time, with fresh sensitivities: once its residual has settled,
+   its average and its sensitivities bound the size of each undecided fault of its sens_mask from below; the
+   episode keeps the largest bound (see fdi_diag.h). A fault of its signature without a sensitivity (its
+   steady-state sensitivity is zero: it reaches the residual only through a filtered derivative) gets no bound: a
+   drift of it explains a settled residual. */
+static void raise_implied(fdi_diag_t *self, uint32_t i, uint32_t undecided)
 {
     const fdi_gen_desc_t *g = self->table->tests[i].gen;
     const float sigma = test_sigma(self, i);
@@ -697,33 +694,19 @@ static void raise_implied(fdi_diag_t *self, uint32_t i, uint32_t undecided, bool
     const float excess = least - (self->noise_allowance * sigma);
     if ((g != NULL) && (g->sens_mask != 0U) && settled && (excess > 0.0f))
     {
-        const uint32_t unexplained = self->table->tests[i].fault_mask & ~g->sens_mask & undecided;
+        uint32_t left = g->sens_mask & undecided; /* the entries ascend by fault: stop after the last one wanted */
         uint32_t k;
-        if (fresh)
+        for (k = (uint32_t)self->sens_offset[i]; (left != 0U) && (k < (uint32_t)self->sens_offset[i + 1U]); ++k)
         {
-            uint32_t left = g->sens_mask & undecided; /* the entries ascend by fault: stop after the last one wanted */
-            for (k = (uint32_t)self->sens_offset[i]; (left != 0U) && (k < (uint32_t)self->sens_offset[i + 1U]); ++k)
+            const uint32_t j = (uint32_t)self->sens_fault[k];
+            const float s = fabsf(self->sens[k]);
+            left &= ~((uint32_t)1U << j);
+            if (((undecided & ((uint32_t)1U << j)) != 0U) && (s > 0.0f))
             {
-                const uint32_t j = (uint32_t)self->sens_fault[k];
-                const float s = fabsf(self->sens[k]);
-                left &= ~((uint32_t)1U << j);
-                if (((undecided & ((uint32_t)1U << j)) != 0U) && (s > 0.0f))
+                const float f = excess / s;
+                if (fdi_float_is_finite(f) && (f > self->implied[j]))
                 {
-                    const float f = excess / s;
-                    if (fdi_float_is_finite(f) && (f > self->implied[j]))
-                    {
-                        self->implied[j] = f;
-                    }
-                }
-            }
-        }
-        if (unexplained != 0U)
-        {
-            for (k = 0U; k < (uint32_t)self->n_faults; ++k)
-            {
-                if ((unexplained & ((uint32_t)1U << k)) != 0U)
-                {
-                    self->implied[k] = UNBOUNDED_SIZE;
+                    self->implied[j] = f;
                 }
             }
         }
@@ -788,7 +771,7 @@ static uint32_t joint_clears(const fdi_diag_t *self, uint32_t settled, uint32_t 
                     wanted &= ~((uint32_t)1U << j);
                     if ((faults & ((uint32_t)1U << j)) != 0U)
                     {
-                        /* capped: an unbounded implied size stays finite here */
+                        /* capped: a huge implied size stays finite here */
                         const float expect = fabsf(self->sens[k]) * self->implied[j] * per_margin;
                         const float lack = smaller(JOINT_LACK_CAP, (expect - seen) * per_gate);
                         if (lack > 0.0f)
@@ -883,9 +866,9 @@ static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
         {
             const uint32_t bit = (uint32_t)1U << i;
             const uint32_t resp = (uint32_t)self->table->tests[i].response_steps + (uint32_t)self->set_count;
-            if (((alarm & bit) != 0U) && ((uint32_t)self->alarm_run[i] >= resp))
+            if (((alarm & self->fresh & bit) != 0U) && ((uint32_t)self->alarm_run[i] >= resp))
             {
-                raise_implied(self, i, undecided, (self->fresh & bit) != 0U);
+                raise_implied(self, i, undecided);
             }
             if (((self->accused & bit) == 0U) && ((uint32_t)self->quiet_run[i] >= resp) &&
                 ((uint32_t)self->episode_age >= resp))

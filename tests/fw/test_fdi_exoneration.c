@@ -10,7 +10,8 @@
  * b >= (R - 3) / |d r0 / d b| (noise allowance 3 sigma), and test 1 clears b when |d r1 / d b| times that size
  * reaches 1.5 * 5 = 7.5 for 10 steps (0.1 s) in a row. Test 2 stays quiet and weak (d r2 / d a = 0.1) unless a
  * case says otherwise. In table_zero_b, test 0's generator lists d r0 / d a only: b is in its signature with a
- * steady-state sensitivity of exactly zero (as a fault that enters through a filtered derivative). In
+ * steady-state sensitivity of exactly zero (as a fault that enters through a filtered derivative: a drift of b
+ * explains a settled alarm of test 0). In
  * table_two_quiet, test 2 sees b instead of a (d r2 / d b = frame[6]): two quiet tests that may clear b together.
  * table_envelope is `table` with an operating envelope on frame[7] (|v| <= 1) and frame[8] (|w| <= 1), 2 votes.
  */
@@ -359,31 +360,37 @@ static void test_implied_size_follows_recent_evidence(void **state)
     assert_int_equal(run(&d, 200U, 9.0f, 1.0f, 1.0f, 0.0f, 0.5f), 0x3U);
 }
 
-static void test_a_fault_without_steady_state_sensitivity_cannot_explain_a_settled_alarm(void **state)
+static void test_a_settled_alarm_does_not_bound_a_fault_it_sees_only_through_its_rate(void **state)
 {
     fdi_diag_t d;
     uint32_t k;
     (void)state;
-    /* test 0 lists no sensitivity to b although b is in its signature: no size of b explains its settled alarm,
-       so even a quiet test that is barely sensitive to b (d r1 / d b = 0.001) clears it: {a} */
+    /* test 0 lists no sensitivity to b although b is in its signature: b reaches r0 only through a filtered
+       derivative, so a drift of b explains r0's settled alarm at any size. Test 0 bounds a only (a >= 17, and
+       test 2 with d r2 / d a = 0.1 does not clear it), b gets no bound and stays a candidate however strongly
+       the quiet test 1 would see it (d r1 / d b = 1.0, or 0.001): {a, b} */
     active = &table_zero_b;
     warm(&d, FDI_ISO_EXONERATION);
-    assert_int_equal(run(&d, 100U, 20.0f, 1.0f, 1.0f, 0.0f, 0.001f), 0x1U);
-    /* a quiet test that is blind to b (d r1 / d b = 0) never clears it */
+    assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 1.0f), 0x3U);
+    assert_true(d.implied[1] <= 0.0f);
+    assert_true(d.implied[0] > 16.9f);
     warm(&d, FDI_ISO_EXONERATION);
-    assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 0.0f), 0x3U);
-    /* the alarm must have settled first: a decaying kick (as in test_implied_size_needs_a_settled_residual)
-       clears nothing, however long it lasts */
+    assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 0.001f), 0x3U);
+    /* a decaying kick (as in test_implied_size_needs_a_settled_residual) clears nothing either */
     warm(&d, FDI_ISO_EXONERATION);
     for (k = 0U; k < 60U; ++k)
     {
-        const uint32_t c = run(&d, 1U, (400.0f * powf(0.95f, (float)k)) + 6.0f, 1.0f, 1.0f, 0.0f, 0.001f);
+        const uint32_t c = run(&d, 1U, (400.0f * powf(0.95f, (float)k)) + 6.0f, 1.0f, 1.0f, 0.0f, 1.0f);
         assert_true((c == 0U) || (c == 0x3U));
     }
+    /* with test 0's sensitivity to b listed (table), the same alarm bounds b >= 17 and test 1 clears it: {a} */
+    active = &table;
+    warm(&d, FDI_ISO_EXONERATION);
+    assert_int_equal(run(&d, 100U, 20.0f, 1.0f, 1.0f, 0.0f, 1.0f), 0x1U);
     /* a generator that lists no sensitivities at all says nothing about b's: b stays a candidate */
     active = &table_no_sens;
     warm(&d, FDI_ISO_EXONERATION);
-    assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 0.001f), 0x3U);
+    assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 1.0f), 0x3U);
     active = &table;
 }
 
@@ -564,7 +571,7 @@ int main(void)
         cmocka_unit_test(test_implied_size_follows_recent_evidence),
         cmocka_unit_test(test_a_weak_spell_resets_the_confirmation),
         cmocka_unit_test(test_the_first_isolation_is_latched),
-        cmocka_unit_test(test_a_fault_without_steady_state_sensitivity_cannot_explain_a_settled_alarm),
+        cmocka_unit_test(test_a_settled_alarm_does_not_bound_a_fault_it_sees_only_through_its_rate),
         cmocka_unit_test(test_quiet_tests_clear_together_what_each_misses),
         cmocka_unit_test(test_sensitivities_in_turn),
         cmocka_unit_test(test_outside_the_envelope_no_test_is_evaluable_and_the_isolation_holds),

@@ -77,8 +77,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="an ECU setting other than its default, for studies (repeatable; e.g. noise_allowance=2, "
                         "sens_every=1, cusum_h=100: the options of fdi_host.ecu.bindings.Ecu); the report names them")
     p.add_argument("--trace", metavar="FAULT:SCENARIO:SEED", default=None,
-                   help="instead of the suite: one step-fault case at its required size (x the first multiplier), "
-                        "its alarms and candidates step by step (and a plot of the ratios in --out)")
+                   help="instead of the suite: one case at its required size (x the first multiplier; a step, or the "
+                        "first of --shapes), its alarms and candidates step by step (and a plot of the ratios in "
+                        "--out)")
     p.add_argument("-o", "--out", type=Path, default=None, help="folder for quality.json and quality.md")
     args = p.parse_args(argv)
     try:
@@ -126,12 +127,13 @@ def _trace(args: argparse.Namespace) -> int:
     try:
         fault, scenario, seed = trace.parse_case(args.trace)
         mult = args.multipliers[0] if args.multipliers else 1.0
+        shape = args.shapes[0] if args.shapes else "step"
         case = trace.trace_case(args.table, fault, scenario, seed, mult,
-                                SuiteConfig(table=args.table, sizes_file=args.sizes, ecu=args.ecu))
+                                SuiteConfig(table=args.table, sizes_file=args.sizes, ecu=args.ecu), shape)
         print(trace.report(case))
         if args.out is not None:
             args.out.mkdir(parents=True, exist_ok=True)
-            png = args.out / f"trace-{fault}-{scenario}-{seed}.png"
+            png = args.out / f"trace-{fault}-{scenario}-{seed}{'' if shape == 'step' else '-' + shape}.png"
             trace.plot(case, png)
             print(f"wrote {png}")
     except (QualityError, OSError) as exc:

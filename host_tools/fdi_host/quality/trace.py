@@ -36,7 +36,6 @@ from fdi_host.sim.scenario import SCENARIOS, load_scenario
 from fdi_host.sim.vehicle_sim import faulty_drive, simulate
 
 AFTER_ONSET_S = 4.0  # how long after the onset the trace looks
-UNBOUNDED = 1e29  # implied sizes from here on: no size of the fault explains the alarms (fdi_diag.c UNBOUNDED_SIZE)
 FloatArray = NDArray[np.float64]
 
 
@@ -71,8 +70,9 @@ def parse_case(text: str) -> tuple[str, str, int]:
 
 
 def trace_case(table: str, fault: str, scenario: str, seed: int, multiplier: float = 1.0,
-               cfg: SuiteConfig | None = None) -> CaseTrace:
-    """Run one step-fault case as `run_suite` does (onset, required size x multiplier, pre-onset replay)."""
+               cfg: SuiteConfig | None = None, shape: str = "step") -> CaseTrace:
+    """Run one case as `run_suite` does (onset, required size x multiplier, a step or a ramp over cfg.ramp_s,
+    pre-onset replay)."""
     cfg = cfg if cfg is not None else SuiteConfig(table=table)
     info = table_info(table)
     size = load_fault_sizes(cfg.sizes_file).get(fault)
@@ -80,7 +80,10 @@ def trace_case(table: str, fault: str, scenario: str, seed: int, multiplier: flo
         raise QualityError(f"no required size for {fault} in {cfg.sizes_file} [requirement]")
     base = simulate(load_scenario(scenario), [], seed=seed)
     onset = case_onset(cfg, base)
-    spec = FaultSpec(fault, onset, size * multiplier)
+    if shape not in ("step", "ramp"):
+        raise QualityError(f"unknown fault shape {shape!r}; use step, ramp")
+    spec = (FaultSpec(fault, onset, size * multiplier) if shape == "step"
+            else FaultSpec(fault, onset, size * multiplier, shape="ramp", ramp=cfg.ramp_s))
     drive = faulty_drive(base, spec)
     frames = build_frames(drive, RomoDatabase())
     steps = [s for s in replay_explained(table, frames, t_start=replay_start(cfg, onset), **ecu_settings(cfg))
@@ -128,7 +131,7 @@ def events(trace: CaseTrace) -> list[str]:
 
 
 def _size(f: float) -> str:
-    return "no bound yet" if f <= 0.0 else ("unbounded" if f >= UNBOUNDED else f"{f:.3g}")
+    return "no bound yet" if f <= 0.0 else f"{f:.3g}"
 
 
 def evidence(trace: CaseTrace, every_s: float = 0.1) -> list[str]:
@@ -152,7 +155,8 @@ def evidence(trace: CaseTrace, every_s: float = 0.1) -> list[str]:
             if e.implied[j] <= 0.0 and not e.cleared_run[j] and not by:
                 waiting.append(f"f{j + 1}")
                 continue
-            run = f", cleared {e.cleared_run[j]} steps" if e.cleared_run[j] else ""
+            n = e.cleared_run[j]
+            run = f", cleared {n} step{'' if n == 1 else 's'}" if n else ""
             parts.append(f"f{j + 1} {_size(e.implied[j])}{run}{' by ' + ', '.join(by) if by else ''}")
         if waiting:
             parts.append("no bound yet: " + ", ".join(waiting))
@@ -162,7 +166,8 @@ def evidence(trace: CaseTrace, every_s: float = 0.1) -> list[str]:
 
 def report(trace: CaseTrace) -> str:
     j = trace.fault_index
-    head = (f"{trace.spec.fault} at {trace.spec.magnitude:g} ({trace.table.fault_names[j]}), {trace.scenario}, "
+    ramp = f" (a ramp over {trace.spec.ramp:g} s)" if trace.spec.shape == "ramp" else ""
+    head = (f"{trace.spec.fault} at {trace.spec.magnitude:g}{ramp} ({trace.table.fault_names[j]}), {trace.scenario}, "
             f"seed {trace.seed}, onset {trace.spec.onset:g} s, table {trace.table.name}; expected class "
             f"{{{', '.join(trace.table.fault_labels(trace.table.iso_class[j]))}}}")
     blind = [_short(n) for i, n in enumerate(trace.table.test_names) if trace.blind(i)]
@@ -196,7 +201,8 @@ def plot(trace: CaseTrace, path: Path) -> None:
     ax.set_ylim(1e-2, None)
     ax.set_ylabel("|r| / (gate sigma)")
     ax.legend(ncol=4, fontsize=7, loc="upper left")
-    ax.set_title(f"{trace.spec.fault} {trace.spec.magnitude:g}, {trace.scenario}, seed {trace.seed} "
+    ax.set_title(f"{trace.spec.fault} {trace.spec.magnitude:g}{' ramp' if trace.spec.shape == 'ramp' else ''}, "
+                 f"{trace.scenario}, seed {trace.seed} "
                  f"(table {trace.table.name}): ratios, tests blind to the fault dashed")
     axc.step(t, [bin(r.candidates).count("1") for r in res], where="post", label="candidates")
     axc.step(t, [int(r.isolated) for r in res], where="post", label="isolated")
