@@ -373,7 +373,7 @@ static void test_a_settled_alarm_does_not_bound_a_fault_it_sees_only_through_its
     warm(&d, FDI_ISO_EXONERATION);
     assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 1.0f), 0x3U);
     assert_true(d.implied[1] <= 0.0f);
-    assert_true(d.implied[0] > 16.9f);
+    assert_true(d.implied[0] > 16.0f); /* 17, forgotten a little between fresh sensitivities */
     warm(&d, FDI_ISO_EXONERATION);
     assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 0.001f), 0x3U);
     /* a decaying kick (as in test_implied_size_needs_a_settled_residual) clears nothing either */
