@@ -12,7 +12,7 @@ import pytest
 from fdi_analysis.cli.common import EXIT_ERROR
 from fdi_host.quality import trace
 from fdi_host.quality.cli import main, parse_ecu_settings
-from fdi_host.quality.suite import QualityError, SuiteConfig, evaluate_case
+from fdi_host.quality.suite import QualityError, SuiteConfig, case_spec, evaluate_case
 
 
 @pytest.mark.parametrize("bad", ["f6:straight", "f99:straight:1", "f6:motorway:1", "f6:straight:x"])
@@ -78,8 +78,9 @@ def test_a_drifting_velocity_sensor_is_isolated_to_its_own_class(fault: str, sce
     case = trace.trace_case("romo", fault, scenario, 2001, cfg=cfg, shape="ramp")
     assert case.spec.shape == "ramp" and case.spec.ramp == cfg.ramp_s
     j = case.fault_index
-    _, _, outcome, _, _, final, _ = evaluate_case(case.results, case.spec, case.spec.onset + cfg.ramp_s,
-                                                 case.table.iso_class[j])
+    _, t_ref = case_spec(cfg, fault, case.spec.onset, case.spec.magnitude, "ramp", 1.0)
+    assert t_ref == case.spec.onset + cfg.ramp_s  # the ramp reaches the required size
+    _, _, outcome, _, _, final, _ = evaluate_case(case.results, case.spec, t_ref, case.table.iso_class[j])
     assert outcome == "exact" and final == (fault,)
     assert "(a ramp over 2 s)" in trace.report(case)
 

@@ -12,7 +12,7 @@ from tqdm import tqdm
 from fdi_analysis.cli.common import add_version, fail
 from fdi_host.ecu.bindings import TABLES, Ecu, EcuError
 from fdi_host.quality.report import markdown, write_json, write_markdown
-from fdi_host.quality.suite import CASE_SEEDS, DEFAULT_SIZES, QualityError, SuiteConfig, run_suite
+from fdi_host.quality.suite import CASE_SEEDS, DEFAULT_SIZES, SHAPES, QualityError, SuiteConfig, run_suite
 from fdi_host.sim.scenario import SCENARIOS
 
 EXAMPLES = """examples:
@@ -70,7 +70,7 @@ def main(argv: list[str] | None = None) -> int:
                    help=f"noise seeds of the fault cases (default {' '.join(map(str, CASE_SEEDS))})")
     p.add_argument("--multipliers", nargs="+", type=float, default=None,
                    help="sizes as multiples of the required size (default 1)")
-    p.add_argument("--shapes", nargs="+", default=None, choices=("step", "ramp"))
+    p.add_argument("--shapes", nargs="+", default=None, choices=SHAPES)
     p.add_argument("--fault-free-minutes", type=float, default=None, help="fault-free driving (default 30)")
     p.add_argument("--sizes", type=Path, default=DEFAULT_SIZES, help="required fault sizes (TOML [requirement])")
     p.add_argument("--ecu", metavar="KEY=VALUE", action="append", default=[],

@@ -53,6 +53,7 @@ ISOLATION_GOAL_FAULTS = 23  # of 25, in every scenario
 # Noise seeds of the fault cases: none of the calibration and the screening (each scenario's own, 1001-1012), the
 # fault-size sweep (777, 778 and + 100, 200, 300) or the fault-free drives (1000 + 17 k) uses them.
 CASE_SEEDS: tuple[int, ...] = (2001, 2002, 2003)
+SHAPES = ("step", "ramp")  # fault shapes of the cases (a ramp reaches its size after SuiteConfig.ramp_s)
 
 
 class QualityError(ValueError):
@@ -75,7 +76,7 @@ class SuiteConfig:
     ecu: tuple[tuple[str, float | int | str], ...] = ()  # ECU settings other than the defaults (Ecu's overrides)
 
     def __post_init__(self) -> None:
-        bad = [s for s in self.shapes if s not in ("step", "ramp")]
+        bad = [s for s in self.shapes if s not in SHAPES]
         if bad:
             raise QualityError(f"unknown fault shape(s) {bad}; use step, ramp")
         unknown = [f for f in self.faults if f not in FAULT_IDS]
@@ -239,6 +240,18 @@ def replay_case(cfg: SuiteConfig, drive: SimResult, onset: float, db: RomoDataba
     return replay(cfg.table, build_frames(drive, db), t_start=replay_start(cfg, onset), **ecu_settings(cfg))
 
 
+def case_spec(cfg: SuiteConfig, fault: str, onset: float, size: float, shape: str, multiplier: float
+              ) -> tuple[FaultSpec, float]:
+    """The fault of one case (`size` x `multiplier`, a step or a ramp over cfg.ramp_s) and its reference time: the
+    onset for a step, the time a ramp reaches the required size."""
+    if shape == "step":
+        return FaultSpec(fault, onset, size * multiplier), onset
+    if shape == "ramp":
+        return (FaultSpec(fault, onset, size * multiplier, shape="ramp", ramp=cfg.ramp_s),
+                onset + cfg.ramp_s / multiplier)
+    raise QualityError(f"unknown fault shape {shape!r}; use {', '.join(SHAPES)}")
+
+
 def run_suite(cfg: SuiteConfig, progress: Callable[[str], None] | None = None) -> SuiteResult:
     """Run every case and the fault-free drives of `cfg`; `progress(text)` after each unit of work."""
     table = table_info(cfg.table)
@@ -256,12 +269,7 @@ def run_suite(cfg: SuiteConfig, progress: Callable[[str], None] | None = None) -
                 for shape in cfg.shapes:
                     for mult in cfg.multipliers:
                         mag = sizes[fid] * mult
-                        if shape == "step":
-                            spec = FaultSpec(fid, onset, mag)
-                            t_ref = onset
-                        else:
-                            spec = FaultSpec(fid, onset, mag, shape="ramp", ramp=cfg.ramp_s)
-                            t_ref = onset + cfg.ramp_s / mult  # the ramp reaches the required size
+                        spec, t_ref = case_spec(cfg, fid, onset, sizes[fid], shape, mult)
                         res = replay_case(cfg, faulty_drive(base, spec), onset, db)
                         det, delay, outcome, iso_delay, share, final, pre = evaluate_case(
                             res, spec, t_ref, table.iso_class[j])

@@ -24,9 +24,11 @@ from fdi_host.can.traffic import build_frames
 from fdi_host.ecu.bindings import EcuResult, Evidence, TableInfo, table_info
 from fdi_host.ecu.offline import replay_explained
 from fdi_host.quality.suite import (
+    SHAPES,
     QualityError,
     SuiteConfig,
     case_onset,
+    case_spec,
     ecu_settings,
     load_fault_sizes,
     replay_start,
@@ -78,12 +80,11 @@ def trace_case(table: str, fault: str, scenario: str, seed: int, multiplier: flo
     size = load_fault_sizes(cfg.sizes_file).get(fault)
     if size is None:
         raise QualityError(f"no required size for {fault} in {cfg.sizes_file} [requirement]")
+    if shape not in SHAPES:
+        raise QualityError(f"unknown fault shape {shape!r}; use {', '.join(SHAPES)}")
     base = simulate(load_scenario(scenario), [], seed=seed)
     onset = case_onset(cfg, base)
-    if shape not in ("step", "ramp"):
-        raise QualityError(f"unknown fault shape {shape!r}; use step, ramp")
-    spec = (FaultSpec(fault, onset, size * multiplier) if shape == "step"
-            else FaultSpec(fault, onset, size * multiplier, shape="ramp", ramp=cfg.ramp_s))
+    spec, _ = case_spec(cfg, fault, onset, size, shape, multiplier)
     drive = faulty_drive(base, spec)
     frames = build_frames(drive, RomoDatabase())
     steps = [s for s in replay_explained(table, frames, t_start=replay_start(cfg, onset), **ecu_settings(cfg))
