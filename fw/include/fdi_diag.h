@@ -41,8 +41,15 @@
  *     constant: where an alarmed test's sensitivity passes near zero its bound spikes). A fault j of test i's
  *     signature that its generator lists no sensitivity for has a steady-state sensitivity of
  *     exactly zero (fdi_gen.h: it reaches r_i only through a filtered derivative, e.g. a vx offset in
- *     a_x = d vx / dt - psidot vy): test i gives it no bound, because a drift of j (a steady rate) explains its
- *     settled alarm as well as a constant size of a fault of its sensitivities does. A settled quiet test q
+ *     a_x = d vx / dt - psidot vy): its size gets no bound from test i, because a drift of j (a steady rate)
+ *     explains the settled alarm as well as a constant size of a fault of its sensitivities does. Where the
+ *     generator lists j's rate gain g_ij (gen->rate_mask), the alarm bounds how fast j moves instead: under j
+ *     alone r_i = g_ij d/dt (f_j through the filters) + noise, whatever the shape of f_j (a step's decaying
+ *     kick, a drift's steady value), so at every step of the alarm (from its first, settled or not) f_j moves
+ *     by at least rho_j dt, rho_j = (|r_i| - noise_allowance sigma_i) / |g_ij| signed as r_i / g_ij, and the
+ *     moves add up over the episode (opposite ones cancel): F_j >= |sum of rho_j dt| for a fault absent before
+ *     the episode (e.g. a vx sensor drift that explains an a_x test's steady alarm has moved by 0.4 m/s after
+ *     1 s of an alarm at 0.5 m/s^2, and the tyre tests that see vx would show it). A settled quiet test q
  *     clears j when |s_qj| F_j >= sensitivity_margin * gate_q * sigma_q: at that size it would have crossed its
  *     gate with margin. Several settled quiet tests clear j together where none does alone: with the
  *     sensitivities taken sensitivity_margin times smaller, test q would show a response its residual lacks by
@@ -85,7 +92,7 @@
  * with callgrind and on Cortex-M4F under qemu -icount: fault-free, in an episode with one class left, in one with
  * several (undecided), largest step).
  * Memory: sizeof(fdi_diag_t) ~ 184 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28) +
- * 12 * FDI_DIAG_MAX_FILTERS + 5 * FDI_DIAG_MAX_SENS + 6 * FDI_TABLE_MAX_FAULTS + 2 * FDI_GEN_MAX_SLOTS +
+ * 12 * FDI_DIAG_MAX_FILTERS + 5 * FDI_DIAG_MAX_SENS + 10 * FDI_TABLE_MAX_FAULTS + 2 * FDI_GEN_MAX_SLOTS +
  * 4 * FDI_DIAG_MAX_SENS_EVERY bytes (bound
  * asserted below; scripts/bench_fw.sh prints the value), caller-owned (static or stack); the library itself has no
  * .data/.bss.
@@ -202,6 +209,8 @@ typedef struct
     uint16_t alarm_run[FDI_DIAG_MAX_TESTS]; /* consecutive steps in alarm (saturating) */
     uint32_t clears[FDI_DIAG_MAX_TESTS];    /* faults each settled quiet test clears on line (last decision) */
     float implied[FDI_TABLE_MAX_FAULTS];    /* fault sizes the recent alarms imply (to first order) */
+    float drift[FDI_TABLE_MAX_FAULTS];      /* signed drift each fault's rate bounds add up to in the episode */
+    uint32_t rate_tests; /* tests whose generator lists rate gains */
     uint16_t cleared_run[FDI_TABLE_MAX_FAULTS]; /* consecutive steps the on-line rule cleared each fault */
     float r_fast[FDI_DIAG_MAX_TESTS];       /* each residual's average over 0.1 s ... */
     float r_slow[FDI_DIAG_MAX_TESTS];       /* ... and over 0.3 s (whether it has settled) */
@@ -220,7 +229,7 @@ FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (184U + (sizeof(void *) * 2U) +
                                          (FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28U)) +
                                          (sizeof(fdi_svf_t) * FDI_DIAG_MAX_FILTERS) +
                                          ((sizeof(float) + 1U) * FDI_DIAG_MAX_SENS) +
-                                         ((sizeof(float) + sizeof(uint16_t)) * FDI_TABLE_MAX_FAULTS) +
+                                         (((2U * sizeof(float)) + sizeof(uint16_t)) * FDI_TABLE_MAX_FAULTS) +
                                          (sizeof(uint16_t) * FDI_GEN_MAX_SLOTS) +
                                          (sizeof(uint32_t) * FDI_DIAG_MAX_SENS_EVERY)),
                   fdi_sa_diag_size);
@@ -272,7 +281,8 @@ typedef struct
                                                    test, not latched) */
     uint32_t latched;                           /* the class isolated first in the episode (exonerated no more),
                                                    FDI_DIAG_CONTRADICTED, or 0 */
-    float implied[FDI_TABLE_MAX_FAULTS];        /* F_j: the size the recent settled alarms imply (a lower bound
+    float implied[FDI_TABLE_MAX_FAULTS];        /* F_j: the size the recent settled alarms imply, or how far
+                                                   the alarms through a rate gain say j has moved (a lower bound
                                                    to first order: where a sensitivity passes near zero it can
                                                    exceed the true size; 0: no bound yet) */
     uint16_t cleared_run[FDI_TABLE_MAX_FAULTS]; /* consecutive steps the on-line rule has cleared fault j (it leaves

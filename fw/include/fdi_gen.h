@@ -134,6 +134,12 @@ typedef struct
     uint8_t n_obs;                 /* observer states it uses: 0 or 1 */
     const fdi_gen_set_t *set;      /* the set of a generated generator; NULL for a hand-written one */
     uint8_t slot;                  /* its slot in the set (< set->n_slots); 0 for a hand-written one */
+    uint32_t rate_mask;            /* faults outside sens_mask that reach r only through a derivative, with a
+                                      constant rate gain: a drift of rate rho_j gives the steady residual
+                                      rate_gain[k] * rho_j (k: j's place among the bits of rate_mask, ascending);
+                                      the diagnoser bounds how far such a fault has moved by it (fdi_diag.h) */
+    const float *rate_gain;        /* the rate gains d r / d (d f_j / dt), finite and non-zero; non-NULL when
+                                      rate_mask is non-zero */
 } fdi_gen_desc_t;
 
 /* A hand-written generator's instance: a view on the caller's storage (fdi_gen_init). */
@@ -199,9 +205,10 @@ struct fdi_gen_set_s
 /* Design the shared parameters. BAD_ARG / NOT_FINITE on a bad config (see fdi_svf.h, fdi_obs.h). */
 fdi_status_t fdi_gen_param_init(fdi_gen_param_t *par, const fdi_gen_config_t *cfg);
 
-/* A usable descriptor: name non-NULL, non-zero input mask, n_obs <= 1, and either a hand-written generator (step
-   non-NULL, no set, n_filters <= FDI_GEN_MAX_FILTERS) or a slot of a usable set (step NULL, n_filters 0,
-   slot < set->n_slots). FDI_OK or FDI_BAD_ARG. */
+/* A usable descriptor: name non-NULL, non-zero input mask, n_obs <= 1, rate_mask disjoint from sens_mask with a
+   finite non-zero gain per bit, and either a hand-written generator (step non-NULL, no set, n_filters <=
+   FDI_GEN_MAX_FILTERS) or a slot of a usable set (step NULL, n_filters 0, slot < set->n_slots). FDI_OK or
+   FDI_BAD_ARG. */
 fdi_status_t fdi_gen_desc_check(const fdi_gen_desc_t *desc);
 
 /* A usable set: name and step non-NULL, 1..FDI_GEN_MAX_SLOTS slots, every bank filter fed by a signal of the

@@ -40,8 +40,8 @@
  *    fault (its filters' and observer's response, for the sensitivity rule; the window in which test_size was
  *    measured, for the size rule).
  *  - tests[i].input_mask must contain every signal the generator reads (gen->input_mask; it may contain
- *    more), and tests[i].gen->sens_mask must lie within tests[i].fault_mask. The generated generators of a table
- *    are slots of one generator set (fdi_gen.h), each used by one test at most.
+ *    more), and tests[i].gen->sens_mask and rate_mask must lie within tests[i].fault_mask. The generated
+ *    generators of a table are slots of one generator set (fdi_gen.h), each used by one test at most.
  *  - Residual evaluation: alarm when r^2 > gate^2 * variance (|r| > gate * sigma); variance is the
  *    fault-free residual variance of the generator at the design point, in (units of r)^2, calibrated inside
  *    the generator's operating domain (fdi_gen_in_domain()); outside it the diagnoser reports the test "not
@@ -134,8 +134,9 @@ FDI_STATIC_ASSERT((sizeof(void *) != 4U) || (sizeof(fdi_table_t) == 60U), fdi_sa
 /*
  * Validate a table: version, counts, non-NULL arrays and strings, no bits beyond n_signals / n_faults /
  * n_tests, usable generator descriptors (fdi_gen_desc_check) whose signals lie within the test's input mask
- * and whose sensitivities within its fault mask, generated generators from one set with each slot at most once
- * and the set's bank within the vehicle's signals, finite positive gate and variance, response_steps >= 1,
+ * and whose sensitivities and rate gains within its fault mask, generated generators from one set with each slot
+ * at most once and the set's bank within the vehicle's signals, finite positive gate and variance,
+ * response_steps >= 1,
  * signature matrix equal to the transposed fault masks, classes equal to the sets of faults with identical
  * signatures, finite non-negative test sizes that are 0 outside the signatures, margins finite and >= 1, an
  * envelope (if any) of 1..FDI_TABLE_MAX_ENVELOPE distinct signals of the frame with finite positive limits and

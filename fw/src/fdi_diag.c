@@ -1,6 +1,7 @@
 /* fdi_diag.c - the diagnoser: generators, evaluators, warm-up and isolation per table (see fdi_diag.h). */
 #include "fdi_diag.h"
 
+#include <float.h>
 #include <math.h>
 #include <stddef.h>
 
@@ -276,6 +277,19 @@ static uint32_t size_rule_tests(const fdi_table_t *t)
     return out;
 }
 
+/* The tests whose generator lists rate gains (raise_drift). */
+static uint32_t rate_gain_tests(const fdi_table_t *t)
+{
+    uint32_t out = 0U;
+    uint32_t i;
+    for (i = 0U; i < (uint32_t)t->n_tests; ++i)
+    {
+        const fdi_gen_desc_t *g = t->tests[i].gen;
+        out |= ((g != NULL) && (g->rate_mask != 0U)) ? ((uint32_t)1U << i) : 0U;
+    }
+    return out;
+}
+
 /* The faults whose on-line exoneration can still change the candidates of the episode: those that explain every
    accused test and are not latched (none once the episode is contradicted). The accused tests only grow during an
    episode, so a fault outside this set stays outside until the episode ends. */
@@ -378,6 +392,7 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
         for (i = 0U; i < FDI_TABLE_MAX_FAULTS; ++i)
         {
             self->implied[i] = 0.0f;
+            self->drift[i] = 0.0f;
             self->cleared_run[i] = 0U;
         }
         if (st == FDI_OK)
@@ -415,6 +430,7 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             self->iso_cleared = 0U;
             self->bank_live = 0U;
             self->size_tests = size_rule_tests(t);
+            self->rate_tests = rate_gain_tests(t);
             self->undecided = undecided_faults(self);
             self->iso.candidates = 0U;
             self->iso.class_mask = 0U;
@@ -679,8 +695,9 @@ static float larger(float a, float b)
 /* Test i is in alarm and has been for its response time, with fresh sensitivities: once its residual has settled,
    its average and its sensitivities bound the size of each undecided fault of its sens_mask from below; the
    episode keeps the largest bound (see fdi_diag.h). A fault of its signature without a sensitivity (its
-   steady-state sensitivity is zero: it reaches the residual only through a filtered derivative) gets no bound: a
-   drift of it explains a settled residual. */
+   steady-state sensitivity is zero: it reaches the residual only through a filtered derivative) gets no bound
+   here: a drift of it explains a settled residual (raise_drift bounds how far it has moved instead, where the
+   generator lists its rate gain). */
 static void raise_implied(fdi_diag_t *self, uint32_t i, uint32_t undecided)
 {
     const fdi_gen_desc_t *g = self->table->tests[i].gen;
@@ -709,6 +726,60 @@ static void raise_implied(fdi_diag_t *self, uint32_t i, uint32_t undecided)
                     self->implied[j] = f;
                 }
             }
+        }
+    }
+}
+
+/* The tests of `tests` (in alarm, with rate gains) bound how fast each undecided fault of their rate_mask has
+   moved: under fault j alone, test i's residual is r_i = g_ij d/dt (f_j through the filters) + noise, whatever the
+   shape of f_j (a step gives a decaying kick, a drift a steady value), so at this step the filtered f_j moves at
+   least by rho_j dt with rho_j = (|r_i| - noise_allowance sigma_i) / |g_ij|, signed as r_i / g_ij (the largest
+   bound of the step). Added up over the alarmed steps of the episode, |drift_j| is a lower bound of how far the
+   filtered f_j has moved since the episode began (moves of opposite sign cancel), and, for a fault absent before
+   the episode, a size the alarms imply (see fdi_diag.h). */
+static void raise_drift(fdi_diag_t *self, uint32_t tests, uint32_t undecided)
+{
+    float rate[FDI_TABLE_MAX_FAULTS]; /* read and written only at the faults of `bounded` */
+    uint32_t bounded = 0U;
+    uint32_t i;
+    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+    {
+        const fdi_gen_desc_t *g = self->table->tests[i].gen;
+        if (((tests & ((uint32_t)1U << i)) != 0U) && (g != NULL) && ((g->rate_mask & undecided) != 0U))
+        {
+            const float r = self->residual[i];
+            const float above = fabsf(r) - (self->noise_allowance * test_sigma(self, i));
+            const float excess = (r < 0.0f) ? -above : above;
+            uint32_t left = (above > 0.0f) ? g->rate_mask : 0U; /* gains ascend by fault */
+            uint32_t k = 0U;
+            uint32_t j;
+            for (j = 0U; (left != 0U) && (j < (uint32_t)self->n_faults); ++j)
+            {
+                const uint32_t bit = (uint32_t)1U << j;
+                if ((left & bit) != 0U)
+                {
+                    const float rho = excess / g->rate_gain[k]; /* finite / finite non-zero: at most +-Inf */
+                    if (((undecided & bit) != 0U) && (((bounded & bit) == 0U) || (fabsf(rho) > fabsf(rate[j]))))
+                    {
+                        rate[j] = rho;
+                        bounded |= bit;
+                    }
+                    left &= ~bit;
+                    ++k;
+                }
+            }
+        }
+    }
+    for (i = 0U; (bounded != 0U) && (i < (uint32_t)self->n_faults); ++i)
+    {
+        const uint32_t bit = (uint32_t)1U << i;
+        if ((bounded & bit) != 0U)
+        {
+            /* a finite drift plus at most an infinite move: saturate, no NaN */
+            const float moved = self->drift[i] + (rate[i] * self->table->design.dt);
+            self->drift[i] = smaller(larger(moved, -FLT_MAX), FLT_MAX);
+            self->implied[i] = larger(self->implied[i], fabsf(self->drift[i]));
+            bounded &= ~bit;
         }
     }
 }
@@ -807,6 +878,7 @@ static void track_episode(fdi_diag_t *self, uint32_t alarm)
             for (i = 0U; i < FDI_TABLE_MAX_FAULTS; ++i)
             {
                 self->implied[i] = 0.0f;
+                self->drift[i] = 0.0f;
                 self->cleared_run[i] = 0U;
             }
             for (i = 0U; i < FDI_DIAG_MAX_TESTS; ++i)
@@ -848,6 +920,7 @@ static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
     if (undecided != 0U)
     {
         uint32_t settled = 0U;
+        const uint32_t drifting = alarm & self->rate_tests; /* tests with rate gains in alarm */
         uint32_t online = 0U;
         uint32_t left = undecided;
         uint32_t i;
@@ -875,6 +948,10 @@ static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
             {
                 settled |= bit;
             }
+        }
+        if (drifting != 0U)
+        {
+            raise_drift(self, drifting, undecided);
         }
         for (i = 0U; i < (uint32_t)self->n_tests; ++i)
         {

@@ -1,6 +1,7 @@
 /* fdi_gen.c - generator parameters, descriptors, dispatch and the building blocks (see fdi_gen.h). */
 #include "fdi_gen.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stddef.h>
@@ -92,10 +93,36 @@ fdi_status_t fdi_gen_set_check(const fdi_gen_set_t *set)
     return ok ? FDI_OK : FDI_BAD_ARG;
 }
 
+/* The rate gains of a descriptor: none, or disjoint from its sensitivities with a finite non-zero gain per bit. */
+static bool rates_usable(const fdi_gen_desc_t *desc)
+{
+    bool ok = (desc->rate_mask & desc->sens_mask) == 0U;
+    if (ok && (desc->rate_mask != 0U))
+    {
+        ok = desc->rate_gain != NULL;
+        if (ok)
+        {
+            uint32_t left = desc->rate_mask;
+            uint32_t k = 0U;
+            while (ok && (left != 0U))
+            {
+                /* finite and non-zero in one range check (false for NaN); written out rather than with
+                   fdi_float_is_finite, whose one more call here makes gcc -Os stop inlining it into the bank step */
+                const float g = fabsf(desc->rate_gain[k]);
+                ok = (g > 0.0f) && (g <= FLT_MAX);
+                left &= left - 1U;
+                ++k;
+            }
+        }
+    }
+    return ok;
+}
+
 fdi_status_t fdi_gen_desc_check(const fdi_gen_desc_t *desc)
 {
     fdi_status_t st = FDI_BAD_ARG;
-    if ((desc != NULL) && (desc->name != NULL) && (desc->input_mask != 0U) && (desc->n_obs <= 1U))
+    if ((desc != NULL) && (desc->name != NULL) && (desc->input_mask != 0U) && (desc->n_obs <= 1U) &&
+        rates_usable(desc))
     {
         if ((desc->step != NULL) && (desc->set == NULL))
         {

@@ -35,7 +35,7 @@ static bool test_ok(const fdi_test_desc_t *d, uint32_t fault_universe, uint32_t 
     {
         const uint32_t need = d->gen->input_mask;
         ok = (fdi_gen_desc_check(d->gen) == FDI_OK) && ((d->input_mask & need) == need) &&
-             ((d->gen->sens_mask & ~d->fault_mask) == 0U);
+             (((d->gen->sens_mask | d->gen->rate_mask) & ~d->fault_mask) == 0U);
     }
     return ok;
 }

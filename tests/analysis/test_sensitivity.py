@@ -1,6 +1,7 @@
 """Fault sensitivity of the residual generators (fdi_analysis.residuals.sensitivity): the analytic d r / d f
 against a hand derivation (tank observer), against central differences of the residual computed with the faults
-kept (what the screening uses), and against the residual's actual response to step faults in simulated drives."""
+kept (what the screening uses), and against the residual's actual response to step faults in simulated drives;
+the rate gain of a fault seen only through a derivative against the residual of a drifting sensor."""
 
 from __future__ import annotations
 
@@ -162,3 +163,36 @@ def test_observer_absorbs_the_torque_of_its_own_wheel(romo: Model) -> None:
     shift = (residual(g, faulty) - residual(g, clean))[window]
     predicted = (sensitivity_series(g, clean)["f11"] * 150.0)[window]
     assert float(np.max(np.abs(np.median(shift)))) < 22.8 and float(np.max(np.abs(np.median(predicted)))) < 22.8
+
+
+# The longitudinal kinematics of the ROMO table (its test MSO1): a_x = d vx / dt - psidot vy, vx from the sensor
+MSO1_KIN = ["K1", "D1", "S1", "S3", "S4", "S5"]
+
+
+@pytest.mark.parametrize("rate", [0.3, -0.5])
+def test_rate_gain_predicts_the_residual_of_a_drift(romo: Model, rate: float) -> None:
+    """A vx sensor offset (f4) reaches the kinematic residual only through d vx / dt: no steady-state sensitivity,
+    the rate gain -1 instead. A drift of the sensor at `rate` m/s^2 (added to vx_m from 8 s on) shifts the
+    settled residual by gain * rate (within 2 %, and nothing before the drift); a step of the same sensor leaves
+    no steady shift (why the size of a drift cannot be bounded from this residual, only its rate)."""
+    g = _generator(romo, MSO1_KIN, "MSO1")
+    assert dict(g.rate_gains) == {"f4": -1.0}
+    assert "f4" not in dict(g.sensitivities) and "f5" in dict(g.sensitivities)
+    t, clean = drive("cornering", duration=14.0, seed=5)
+    drifting = dict(clean) | {"vx_m": clean["vx_m"] + rate * np.clip(t - 8.0, 0.0, None)}
+    shift = residual(g, drifting) - residual(g, clean)
+    assert float(np.max(np.abs(shift[t < 7.99]))) == 0.0
+    window = (t > 10.0) & (t < 13.9)
+    assert float(np.median(shift[window])) == pytest.approx(-1.0 * rate, rel=0.02)
+    stepped = dict(clean) | {"vx_m": clean["vx_m"] + 0.6 * (t >= 8.0)}
+    step_shift = residual(g, stepped) - residual(g, clean)
+    assert float(np.max(np.abs(step_shift[window]))) < 0.01 * 0.6
+
+
+def test_observer_and_static_faults_have_no_rate_gain(romo: Model) -> None:
+    """Rate gains are listed only for faults without a steady-state sensitivity, and never for an observer
+    generator (its estimate follows part of a drift: no constant gain)."""
+    g = _generator(romo, MSO2058, "MSO2058")
+    assert g.observer is not None and g.rate_gains == ()
+    kin = _generator(romo, MSO1_KIN, "MSO1")
+    assert not set(dict(kin.rate_gains)) & set(dict(kin.sensitivities))

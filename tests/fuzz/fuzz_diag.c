@@ -83,9 +83,10 @@ static void random_table(table_buf_t *b, const fdi_table_t *design_from, fuzz_in
         b->tests[i].mso_id = (uint16_t)(i + 1U);
         b->tests[i].gen = gen;
         b->tests[i].fault_mask = (m != 0U) ? m : 1U;
-        if ((gen != NULL) && ((gen->sens_mask & ~b->tests[i].fault_mask) != 0U))
+        if ((gen != NULL) && (((gen->sens_mask | gen->rate_mask) & ~b->tests[i].fault_mask) != 0U))
         {
-            b->tests[i].fault_mask |= gen->sens_mask & low_bits(nf); /* else fdi_table_check refuses it */
+            /* else fdi_table_check refuses it */
+            b->tests[i].fault_mask |= (gen->sens_mask | gen->rate_mask) & low_bits(nf);
         }
         b->tests[i].input_mask = ((gen != NULL) ? gen->input_mask : 0U) | (fz_u32(in) & ROMO_SIGM_ALL);
         b->tests[i].gate = 1.0f + (float)(fz_u8(in) % 10U);

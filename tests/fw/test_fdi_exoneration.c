@@ -80,9 +80,9 @@ static fdi_status_t gen2_step(fdi_gen_t *g, const fdi_gen_param_t *par, const fd
     return FDI_OK;
 }
 
-static const fdi_gen_desc_t gen0 = {"t0", gen0_step, NULL, 0x07U, 0x3U, 0U, 0U, NULL, 0U};
-static const fdi_gen_desc_t gen1 = {"t1", gen1_step, NULL, 0x18U, 0x2U, 0U, 0U, NULL, 0U};
-static const fdi_gen_desc_t gen2 = {"t2", gen2_step, NULL, 0x60U, 0x1U, 0U, 0U, NULL, 0U};
+static const fdi_gen_desc_t gen0 = {"t0", gen0_step, NULL, 0x07U, 0x3U, 0U, 0U, NULL, 0U, 0U, NULL};
+static const fdi_gen_desc_t gen1 = {"t1", gen1_step, NULL, 0x18U, 0x2U, 0U, 0U, NULL, 0U, 0U, NULL};
+static const fdi_gen_desc_t gen2 = {"t2", gen2_step, NULL, 0x60U, 0x1U, 0U, 0U, NULL, 0U, 0U, NULL};
 static const fdi_test_desc_t tests[3] = {
     {&gen0, "t0", 1U, 0x3U, 0x07U, 5.0f, 1.0f, RESP},
     {&gen1, "t1", 2U, 0x2U, 0x18U, 5.0f, 1.0f, RESP},
@@ -120,8 +120,8 @@ static fdi_status_t gen0n_step(fdi_gen_t *g, const fdi_gen_param_t *par, const f
     return FDI_OK;
 }
 
-static const fdi_gen_desc_t gen0z = {"t0z", gen0z_step, NULL, 0x07U, 0x1U, 0U, 0U, NULL, 0U};
-static const fdi_gen_desc_t gen0n = {"t0n", gen0n_step, NULL, 0x07U, 0x0U, 0U, 0U, NULL, 0U};
+static const fdi_gen_desc_t gen0z = {"t0z", gen0z_step, NULL, 0x07U, 0x1U, 0U, 0U, NULL, 0U, 0U, NULL};
+static const fdi_gen_desc_t gen0n = {"t0n", gen0n_step, NULL, 0x07U, 0x0U, 0U, 0U, NULL, 0U, 0U, NULL};
 static const fdi_test_desc_t tests_zero_b[3] = {
     {&gen0z, "t0", 1U, 0x3U, 0x07U, 5.0f, 1.0f, RESP},
     {&gen1, "t1", 2U, 0x2U, 0x18U, 5.0f, 1.0f, RESP},
@@ -138,8 +138,20 @@ static const fdi_table_t table_zero_b = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f,
 static const fdi_table_t table_no_sens = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f, 0.7071f, 2.0f}, 7U, 2U, 3U,
                                           signal_names, fault_names, tests_no_sens, signature, iso_class, test_size,
                                           2.0f, 1.5f, NULL};
+/* table_rate_b: test 0 as in table_zero_b, and b's rate gain listed (d r0 / d (db/dt) = -0.5): its settled alarm
+   bounds the rate of a drift of b */
+static const float rate_gain_b[1] = {-0.5f};
+static const fdi_gen_desc_t gen0r = {"t0r", gen0z_step, NULL, 0x07U, 0x1U, 0U, 0U, NULL, 0U, 0x2U, rate_gain_b};
+static const fdi_test_desc_t tests_rate_b[3] = {
+    {&gen0r, "t0", 1U, 0x3U, 0x07U, 5.0f, 1.0f, RESP},
+    {&gen1, "t1", 2U, 0x2U, 0x18U, 5.0f, 1.0f, RESP},
+    {&gen2, "t2", 3U, 0x1U, 0x60U, 5.0f, 1.0f, RESP},
+};
+static const fdi_table_t table_rate_b = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f, 0.7071f, 2.0f}, 7U, 2U, 3U,
+                                         signal_names, fault_names, tests_rate_b, signature, iso_class, test_size,
+                                         2.0f, 1.5f, NULL};
 /* table_two_quiet: test 2 sees b instead of a (r2 = frame[5], d r2 / d b = frame[6]): two quiet tests of b */
-static const fdi_gen_desc_t gen2b = {"t2b", gen2_step, NULL, 0x60U, 0x2U, 0U, 0U, NULL, 0U};
+static const fdi_gen_desc_t gen2b = {"t2b", gen2_step, NULL, 0x60U, 0x2U, 0U, 0U, NULL, 0U, 0U, NULL};
 static const fdi_test_desc_t tests_two_quiet[3] = {
     {&gen0, "t0", 1U, 0x3U, 0x07U, 5.0f, 1.0f, RESP},
     {&gen1, "t1", 2U, 0x2U, 0x18U, 5.0f, 1.0f, RESP},
@@ -394,6 +406,42 @@ static void test_a_settled_alarm_does_not_bound_a_fault_it_sees_only_through_its
     active = &table;
 }
 
+static void test_a_settled_alarm_bounds_the_drift_of_a_fault_it_sees_through_its_rate(void **state)
+{
+    fdi_diag_t d;
+    float before;
+    float after;
+    (void)state;
+    /* test 0 (r0 = 20 sigma) lists b's rate gain -0.5: under b alone, b moves at least at (20 - 3) / 0.5 = 34
+       per second, so every alarmed step moves it by at least 0.34 (dt 0.01) */
+    active = &table_rate_b;
+    warm(&d, FDI_ISO_EXONERATION);
+    /* a weak quiet test 1 (d r1 / d b = 0.001) needs b >= 7,500 to clear it: b stays, and its bound grows */
+    assert_int_equal(run(&d, 100U, 20.0f, 1.0f, 1.0f, 0.0f, 0.001f), 0x3U);
+    before = d.implied[1];
+    assert_int_equal(run(&d, 100U, 20.0f, 1.0f, 1.0f, 0.0f, 0.001f), 0x3U);
+    after = d.implied[1];
+    assert_true(before > 0.0f);
+    assert_float_equal(after - before, 34.0f, 0.01f); /* 100 alarmed steps of 0.34 */
+    assert_true(d.drift[1] < 0.0f);                   /* r0 / gain < 0: the drift runs downwards */
+    /* a strong quiet test 1 (d r1 / d b = 1.0) clears b once it must have moved past 7.5 (23 alarmed steps) and
+       test 1 has settled, confirmed for 10 steps (without the gain, below: {a, b} for good) */
+    warm(&d, FDI_ISO_EXONERATION);
+    assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 1.0f), 0x1U);
+    /* the sign turns (r0 = +20, then -20): the moves cancel, the bound shrinks (b up and back down) */
+    warm(&d, FDI_ISO_EXONERATION);
+    (void)run(&d, 100U, 20.0f, 1.0f, 1.0f, 0.0f, 0.001f);
+    before = fabsf(d.drift[1]);
+    (void)run(&d, 150U, -20.0f, 1.0f, 1.0f, 0.0f, 0.001f);
+    assert_true(fabsf(d.drift[1]) < before);
+    /* without the rate gain (table_zero_b) the same alarm leaves b unbounded and a candidate */
+    active = &table_zero_b;
+    warm(&d, FDI_ISO_EXONERATION);
+    assert_int_equal(run(&d, 300U, 20.0f, 1.0f, 1.0f, 0.0f, 1.0f), 0x3U);
+    assert_true(d.implied[1] <= 0.0f);
+    active = &table;
+}
+
 static void test_the_first_isolation_is_latched(void **state)
 {
     fdi_diag_t d;
@@ -572,6 +620,7 @@ int main(void)
         cmocka_unit_test(test_a_weak_spell_resets_the_confirmation),
         cmocka_unit_test(test_the_first_isolation_is_latched),
         cmocka_unit_test(test_a_settled_alarm_does_not_bound_a_fault_it_sees_only_through_its_rate),
+        cmocka_unit_test(test_a_settled_alarm_bounds_the_drift_of_a_fault_it_sees_through_its_rate),
         cmocka_unit_test(test_quiet_tests_clear_together_what_each_misses),
         cmocka_unit_test(test_sensitivities_in_turn),
         cmocka_unit_test(test_outside_the_envelope_no_test_is_evaluable_and_the_isolation_holds),

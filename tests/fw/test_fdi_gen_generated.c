@@ -203,6 +203,26 @@ static void test_bad_descriptors_and_sets(void **state)
     bad.sens_mask = ~fdi_romo_table.tests[0].fault_mask; /* sensitivities outside the signature */
     assert_int_equal(fdi_table_check(&t), FDI_BAD_TABLE);
     bad = fdi_romo_generators[0];
+    assert_int_not_equal(bad.rate_mask, 0U); /* MSO1: the vx offset's rate gain */
+    bad.rate_mask |= 0x1U;                   /* a rate gain of f1, which has a sensitivity */
+    assert_int_equal(fdi_gen_desc_check(&bad), FDI_BAD_ARG);
+    bad = fdi_romo_generators[0];
+    bad.rate_gain = NULL; /* rate gains without their values */
+    assert_int_equal(fdi_gen_desc_check(&bad), FDI_BAD_ARG);
+    {
+        const float zero_gain[1] = {0.0f};
+        const float nan_gain[1] = {NAN};
+        bad = fdi_romo_generators[0];
+        bad.rate_gain = zero_gain;
+        assert_int_equal(fdi_gen_desc_check(&bad), FDI_BAD_ARG);
+        bad.rate_gain = nan_gain;
+        assert_int_equal(fdi_gen_desc_check(&bad), FDI_BAD_ARG);
+    }
+    bad = fdi_romo_generators[0];
+    bad.rate_mask = 0x40U; /* a rate gain of f7, outside MSO1's signature */
+    assert_int_equal(fdi_gen_desc_check(&bad), FDI_OK);
+    assert_int_equal(fdi_table_check(&t), FDI_BAD_TABLE);
+    bad = fdi_romo_generators[0];
     bad.input_mask |= ROMO_SIGM_ALL & ~fdi_romo_table.tests[0].input_mask; /* reads more than the test's signals */
     assert_int_equal(fdi_table_check(&t), FDI_BAD_TABLE);
     bad = fdi_romo_generators[0];

@@ -85,6 +85,26 @@ def test_a_drifting_velocity_sensor_is_isolated_to_its_own_class(fault: str, sce
     assert "(a ramp over 2 s)" in trace.report(case)
 
 
+def test_an_ax_offset_is_told_from_a_vx_drift_within_a_second() -> None:
+    # f1 (a_x offset): its first alarm, the a_x kinematic test MSO1, is explained by a vx drift (f4) too, which
+    # that test sees only through its rate. Each alarmed step bounds how far such a drift has moved ((|r| - 3 sigma)
+    # / |rate gain| dt), so f4's implied size grows from the first alarm and the quiet tyre tests, which see a vx
+    # offset, clear it: {f1} within 1 s of the detection (it took 1.45 s without the rate bound)
+    case = trace.trace_case("romo", "f1", "straight", 2001)
+    j4 = 3
+    det, _, outcome, iso_delay, _, final, _ = evaluate_case(case.results, case.spec, case.spec.onset,
+                                                            case.table.iso_class[0])
+    assert det and outcome == "exact" and final == ("f1",)
+    assert iso_delay is not None and iso_delay <= 1.0
+    before = list(itertools.takewhile(lambda re_: not re_[0].isolated,
+                                      ((r, e) for r, e in zip(case.results, case.evidence, strict=True)
+                                       if r.detected)))
+    bounds = [e.implied[j4] for _, e in before]
+    assert bounds and bounds[0] > 0.0  # from the first alarmed step
+    assert all(b2 >= b1 for b1, b2 in itertools.pairwise(bounds))  # it only grows while MSO1 alarms alone
+    assert 0.1 < bounds[-1] < 0.5  # at most the drift a 0.5 m/s^2 alarm allows in under a second
+
+
 def test_trace_cli_follows_the_first_shape(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--table", "romo", "--shapes", "ramp", "step", "--trace", "f5:straight:2001",
                  "--out", str(tmp_path)]) == 0

@@ -86,11 +86,11 @@ ${banner}
 FDI_STATIC_ASSERT(${count_macro} <= FDI_GEN_MAX_SLOTS, fdi_sa_${vehicle}_generator_slots);
 
 ${derived}${bank}
-${domains}
+${domains}${rates}
 static void ${vehicle}_gen_step(fdi_gen_io_t *io);
 
 /* name, step (NULL: the set's), domain, signals read, sensitivities (bit j = fault j, ascending), filters, observer
-   states, set, slot */
+   states, set, slot, rate gains (bit j = fault j; the gains ascending by fault) */
 const fdi_gen_desc_t ${base}[${count_macro}] = {
 ${descriptors}
 };
@@ -145,7 +145,15 @@ static bool ${function}_in_domain(const fdi_frame_t *in)
 
 DESCRIPTOR_FMT = Template("""\
     {"${name}", NULL, ${domain}, ${inputs},
-     FDI_GEN_SENS_MASK(0x${sens_mask}U), 0U, ${n_obs}U, &${set}, ${slot}U}, /* ${sens_note} */""")
+     FDI_GEN_SENS_MASK(0x${sens_mask}U), 0U, ${n_obs}U, &${set}, ${slot}U,
+     FDI_GEN_SENS_MASK(0x${rate_mask}U), ${rate_ref}}, /* ${sens_note} */""")
+
+RATES_FMT = Template("""\
+/* Rate gains d r / d (d f / dt) of the faults that reach a residual only through a derivative, where the gain is
+   constant (fdi_analysis.residuals.sensitivity.rate_gains): the steady residual of a drift of rate rho is gain * rho.
+   ${notes} */
+static const float ${vehicle}_rate_gain[${count}] = {${gains}};
+""")
 
 GATED_FMT = Template("""\
     if ((run & 0x${mask}U) != 0U)
@@ -232,6 +240,8 @@ class SlotCode:
     sens_faults: tuple[str, ...]
     sens_mask: int
     n_obs: int
+    rate_gains: tuple[tuple[str, float], ...]  # (fault, gain), ascending by fault
+    rate_mask: int
 
 
 @dataclass(frozen=True)
@@ -545,12 +555,17 @@ def _slot_code(k: int, g: Generator, p: _Pass, name: _Names, names: VehicleNames
     domain = (f"fabsf({name(Node(DOMAIN_SIGNAL, 0, 0).symbol)}) >= {c_float(g.min_speed)}" if g.min_speed > 0.0
               else "")
     sens_faults = tuple(sorted((f for f, _ in g.sensitivities), key=faults.index))
+    unknown = [f for f, _ in g.rate_gains if f not in faults or f in sens_faults]
+    if unknown:
+        raise EmitError(f"{g.name}: rate gains of {unknown}, not faults of the model without a sensitivity")
+    rates = tuple(sorted(g.rate_gains, key=lambda fg: faults.index(fg[0])))
     body = SLOT_FMT.substitute(bit=f"{1 << k:08X}", name=g.name, equations=" ".join(g.equations),
                                lines=_slot_body(k, g, p, name, faults).rstrip("\n"))
     return SlotCode(slot=k, name=g.name, equations=" ".join(g.equations), causality=g.causality(), body=body,
                     domain_condition=domain, domain_note=g.domain(), inputs=names.mask_expr(inputs(g)),
                     sens_faults=sens_faults, sens_mask=sum(1 << faults.index(f) for f in sens_faults),
-                    n_obs=0 if g.observer is None else 1)
+                    n_obs=0 if g.observer is None else 1,
+                    rate_gains=rates, rate_mask=sum(1 << faults.index(f) for f, _ in rates))
 
 
 def generators_file(generators: Sequence[Generator], names: VehicleNames, faults: Sequence[str],
@@ -631,18 +646,29 @@ def render(f: GeneratorsFile) -> tuple[str, str]:
     for c in f.slots:
         if c.domain_condition:
             first.setdefault(c.domain_condition, c)
+    rate_at: dict[int, int] = {}  # slot -> its first gain in <vehicle>_rate_gain
+    for c in f.slots:
+        if c.rate_gains:
+            rate_at[c.slot] = sum(len(d.rate_gains) for d in f.slots if d.slot < c.slot)
     descriptors = "\n".join(DESCRIPTOR_FMT.substitute(
         name=c.name,
         domain=f"{n.vehicle}_gen_{first[c.domain_condition].slot + 1}_in_domain" if c.domain_condition else "NULL",
         inputs=c.inputs, sens_mask=f"{c.sens_mask:08X}", n_obs=c.n_obs, set=n.gen_set, slot=c.slot,
-        sens_note=("sensitivities " + " ".join(c.sens_faults)) if c.sens_faults else "no sensitivities")
+        rate_mask=f"{c.rate_mask:08X}",
+        rate_ref=f"&{n.vehicle}_rate_gain[{rate_at[c.slot]}]" if c.rate_gains else "NULL",
+        sens_note=(("sensitivities " + " ".join(c.sens_faults)) if c.sens_faults else "no sensitivities")
+        + ("; rate gains " + " ".join(f for f, _ in c.rate_gains) if c.rate_gains else ""))
         for c in f.slots)
+    all_rates = [(c, fg) for c in f.slots for fg in c.rate_gains]
+    rates = RATES_FMT.substitute(
+        notes="; ".join(f"{c.name}: {fault}" for c, (fault, _) in all_rates), vehicle=n.vehicle, count=len(all_rates),
+        gains=", ".join(c_float(gain) for _, (_, gain) in all_rates)) if all_rates else ""
     domains = "".join(DOMAIN_FMT.substitute(
         name=", ".join(d.name for d in f.slots if d.domain_condition == cond), note=comment_text(c.domain_note),
         function=f"{n.vehicle}_gen_{c.slot + 1}", condition=cond) + "\n" for cond, c in first.items())
     body = f.shared + "\n" + "\n".join(c.body for c in f.slots)
     source = SOURCE_FMT.substitute(banner=f.banner, base=n.generators, signals=n.signals, vehicle=n.vehicle,
-                                   derived=_derived_text(f), bank=_bank_text(f), domains=domains,
+                                   derived=_derived_text(f), bank=_bank_text(f), domains=domains, rates=rates,
                                    count_macro=n.n_generators,
                                    descriptors=descriptors, set=n.gen_set,
                                    bank_ref=f"{n.vehicle}_bank" if f.bank else "NULL", n_bank=len(f.bank),

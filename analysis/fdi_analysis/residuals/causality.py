@@ -515,7 +515,7 @@ def sequence_values(model: Model, solver: Solver, p: Plan) -> SequenceValues:
         if s.kind == "derivative":
             pair = model.equation(s.equation).differential
             assert pair is not None
-            value[sympy.Symbol(s.var)] = derivative(value[sympy.Symbol(pair[1])], inverses, faults)
+            value[sympy.Symbol(s.var)] = derivative(value[sympy.Symbol(pair[1])], inverses, faults, solver.fault_rates)
             continue
         if s.kind == "loop":
             block = [model.equation(e) for e in s.equations]
@@ -545,7 +545,8 @@ def residual_value(model: Model, solver: Solver, p: Plan, seq: SequenceValues) -
     req = model.equation(p.residual)
     if req.differential is not None:
         dx, x = req.differential
-        return seq.value[sympy.Symbol(dx)] - derivative(seq.value[sympy.Symbol(x)], seq.inverses, solver.fault_symbols)
+        return seq.value[sympy.Symbol(dx)] - derivative(seq.value[sympy.Symbol(x)], seq.inverses, solver.fault_symbols,
+                                                     solver.fault_rates)
     return solver.residual(req).xreplace(known_sub).xreplace(seq.value)
 
 

@@ -90,6 +90,10 @@ class Generator:
     # d r / d f_j of each fault of the signature with a nonzero steady-state sensitivity, over the same Node
     # symbols (and XHAT) as `expr`: what the generator also computes on line (`residuals.sensitivity`)
     sensitivities: tuple[tuple[str, sympy.Expr], ...] = ()
+    # the faults of the signature that reach the residual only through a derivative (no steady-state sensitivity)
+    # with a constant rate gain d r / d (df_j/dt): the steady residual of a drift of rate rho is gain * rho
+    # (`residuals.sensitivity.rate_gains`); the diagnoser bounds how far such a fault has moved with it
+    rate_gains: tuple[tuple[str, float], ...] = ()
     # the residual's derivative-free nonlinear terms, computed from raw samples and filtered as one derived signal
     # (`residuals.whole_terms`); None when it has none
     composite: Composite | None = None

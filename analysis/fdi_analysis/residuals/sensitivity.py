@@ -12,6 +12,18 @@ with the residual cleared of divisions exactly as the generator clears it (same 
 d/dt of a fault taken as 0 (a step of constant size), so a fault that reaches the residual only through a
 filtered derivative has s_j = 0: the residual sees it only while it changes.
 
+Such a fault still has a rate gain: with d/dt f_j kept as the symbol of its rate rho_j, a drift f_j = rho_j t
+gives, once the filters have settled on the ramp (every node of a signal lags alike, and the static terms of f_j
+cancel as they do for a step), the steady residual
+
+    r ~ g_j rho_j                                          rate gain  g_j = -dH/d(rho_j) at f = 0, rho = 0
+
+`rate_gains` lists the constant ones (a number at every operating point, e.g. |g| = 1 for a vx offset in
+a_x = d vx / dt - psidot vy) of the generators without an observer. The residual of any shape of such a fault is g
+times the derivative of the filtered fault, so the diagnoser adds up (|r| - noise) / |g| over the alarmed steps: how
+far the fault must have moved (fdi_diag.h). A gain that varies with the operating point, or an observer's (its
+estimate follows part of the ramp), is not listed: no bound, as before.
+
 An observer generator (state estimate xh, update xh' = F + L e, residual r = e) absorbs part of a fault: with
 a = dF/dx, c = de/dx, J = a + L c (the error pole) and F_f, e_f the faults' direct effect on the update and
 on the residual, the error settles where x~' = J x~ - (F_f + L e_f) f = 0, which gives
@@ -40,7 +52,7 @@ from fdi_analysis.residuals.causality import (
 )
 from fdi_analysis.residuals.generator import Generator
 from fdi_analysis.residuals.signals import nodes_in
-from fdi_analysis.residuals.solvability import Solver
+from fdi_analysis.residuals.solvability import Solver, rate_symbol
 
 J_FLOOR = 0.1  # [1/s]: the observer's error pole taken as at most -J_FLOOR (time constant 10 s)
 
@@ -52,6 +64,11 @@ def _at_level(expr: sympy.Expr, level: int) -> sympy.Expr | None:
     if any(n.level > level for n in nodes):
         return None
     return expr.xreplace({n.symbol: n.at_level(level).symbol for n in nodes})
+
+
+def _zero(faults: tuple[sympy.Symbol, ...]) -> dict[sympy.Symbol, sympy.Expr]:
+    """No fault: every size and every rate zero."""
+    return {**dict.fromkeys(faults, sympy.Integer(0)), **dict.fromkeys(map(rate_symbol, faults), sympy.Integer(0))}
 
 
 def _plan_of(g: Generator) -> Plan:
@@ -68,24 +85,27 @@ class FaultyResidual:
     update: sympy.Expr | None
 
 
-def faulty_residual(model: Model, g: Generator, solver: Solver | None = None) -> FaultyResidual | None:
-    """H(u, f) of `g` (None when a node lies above the generator's filter level). `solver` must keep the faults
+def faulty_residual(model: Model, g: Generator, solver: Solver | None = None,
+                    rates: bool = False) -> FaultyResidual | None:
+    """H(u, f) of `g` (None when a node lies above the generator's filter level); with `rates` also over the
+    faults' rates (`rate_symbol`; else they are 0: steps of constant size). `solver` must keep the faults
     (Solver(model, keep_faults=True))."""
     solver = solver or Solver(model, keep_faults=True)
     p = _plan_of(g)
     faults = tuple(sympy.Symbol(f, real=True) for f in g.faults)
-    zero = dict.fromkeys(faults, sympy.Integer(0))
+    zero = _zero(faults)
     seq = sequence_values(model, solver, p)
     expr = residual_value(model, solver, p, seq)
     if seq.inverses:
         nominal = {k: v.xreplace(zero) for k, v in seq.inverses.items()}
         expr = cleared(expr, seq.inverses, division_degrees(p, expr.xreplace(zero), nominal))
-    lifted = _at_level(expr, g.level)
+    steps = {} if rates else dict.fromkeys(map(rate_symbol, faults), sympy.Integer(0))
+    lifted = _at_level(expr.xreplace(steps), g.level)
     update = None
     if g.observer is not None:
         pair = model.equation(g.observer.equation).differential
         assert pair is not None
-        update = _at_level(seq.value[sympy.Symbol(pair[0])], g.level)
+        update = _at_level(seq.value[sympy.Symbol(pair[0])].xreplace(steps), g.level)
         if update is None:
             return None
     return FaultyResidual(faults, lifted, update) if lifted is not None else None
@@ -98,7 +118,7 @@ def fault_sensitivities(model: Model, g: Generator, solver: Solver | None = None
     h = faulty_residual(model, g, solver)
     if h is None:
         return ()
-    zero = dict.fromkeys(h.faults, sympy.Integer(0))
+    zero = _zero(h.faults)
     out: list[tuple[str, sympy.Expr]] = []
     if h.update is None:
         for f in h.faults:
@@ -118,6 +138,26 @@ def fault_sensitivities(model: Model, g: Generator, solver: Solver | None = None
     return tuple(out)
 
 
+def rate_gains(model: Model, g: Generator, solver: Solver | None = None) -> tuple[tuple[str, float], ...]:
+    """(fault, g_j) for the faults of the signature of `g` without a steady-state sensitivity whose rate gain
+    is a nonzero constant, in the signature's order (see the module doc); () for an observer generator."""
+    if g.observer is not None:
+        return ()
+    h = faulty_residual(model, g, solver, rates=True)
+    if h is None:
+        return ()
+    zero = _zero(h.faults)
+    out: list[tuple[str, float]] = []
+    for f in h.faults:
+        if sympy.diff(h.residual, f).xreplace(zero) != 0:
+            continue  # a steady-state sensitivity: the size is bounded directly
+        gain = sympy.simplify(-sympy.diff(h.residual, rate_symbol(f)).xreplace(zero))
+        if gain != 0 and not gain.free_symbols:
+            out.append((str(f), float(gain)))
+    return tuple(out)
+
+
 def with_sensitivities(model: Model, g: Generator, solver: Solver | None = None) -> Generator:
-    """`g` with its `sensitivities` filled in (`fault_sensitivities`)."""
-    return replace(g, sensitivities=fault_sensitivities(model, g, solver))
+    """`g` with its `sensitivities` and `rate_gains` filled in (`fault_sensitivities`, `rate_gains`)."""
+    solver = solver or Solver(model, keep_faults=True)
+    return replace(g, sensitivities=fault_sensitivities(model, g, solver), rate_gains=rate_gains(model, g, solver))

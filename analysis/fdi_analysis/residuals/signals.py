@@ -69,16 +69,20 @@ def raw(signal: str) -> sympy.Symbol:
 
 
 def derivative(expr: sympy.Expr, inverses: dict[sympy.Symbol, sympy.Expr],
-               constants: frozenset[sympy.Symbol] = frozenset()) -> sympy.Expr:
+               constants: frozenset[sympy.Symbol] = frozenset(),
+               rates: dict[sympy.Symbol, sympy.Symbol] | None = None) -> sympy.Expr:
     """d/dt of an expression of nodes by the chain rule; each node's derivative is a filter output.
     `inverses` maps placeholders v = 1/c (divisions by signals) to c: d/dt v = -v^2 d/dt c; `constants` are
-    symbols with no derivative (the faults, steps of constant size)."""
+    symbols with no derivative (the faults, steps of constant size), except those `rates` maps to a symbol of
+    their rate (a fault's drift: what the residual sees of a fault it reaches only through a derivative)."""
     total: sympy.Expr = sympy.Integer(0)
     for sym in sorted(expr.free_symbols, key=str):
         if sym in constants:
+            if rates is not None and sym in rates:
+                total += sympy.diff(expr, sym) * rates[sym]
             continue
         if sym in inverses:
-            total += sympy.diff(expr, sym) * (-(sym**2) * derivative(inverses[sym], inverses, constants))
+            total += sympy.diff(expr, sym) * (-(sym**2) * derivative(inverses[sym], inverses, constants, rates))
         else:
             total += sympy.diff(expr, sym) * node_of(sym).derivative().symbol
     return total

@@ -49,6 +49,11 @@ class BlockSolution:
     solutions: tuple[Solution, ...]
 
 
+def rate_symbol(fault: sympy.Symbol) -> sympy.Symbol:
+    """The symbol of d/dt of a kept fault (`Solver(keep_faults=True)`)."""
+    return sympy.Symbol(f"{fault}__rate", real=True)
+
+
 class Solver:
     """Cached solutions of the equations of one model (parameters substituted, faults set to zero, or kept as
     symbols with `keep_faults`: the sequence then computes what the unknowns are under given fault sizes)."""
@@ -61,6 +66,10 @@ class Solver:
         self.fault_zero: dict[sympy.Symbol, sympy.Expr] = {
             sympy.Symbol(f.name): (sympy.Symbol(f.name, real=True) if keep_faults else sympy.Integer(0))
             for f in model.faults}
+        # with kept faults, d/dt of a fault is the symbol of its rate (zero for a step; a drift's rate), so that a
+        # residual that sees a fault only through a derivative has a rate gain (`sensitivity.rate_gains`)
+        self.fault_rates: dict[sympy.Symbol, sympy.Symbol] = (
+            {s: rate_symbol(s) for s in self.fault_symbols} if keep_faults else {})
         self._residuals: dict[str, sympy.Expr] = {}
         self._cache: dict[tuple[str, str], Solution | Rejection] = {}
         self._rational: dict[tuple[str, str], bool] = {}

@@ -424,7 +424,7 @@ class Evidence:
     episode_age: int  # steps since the episode's first alarm (0: no episode)
     undecided: int  # fault bitmask: the faults the exoneration can still change
     latched: int  # the class isolated first in the episode (0xFFFFFFFF: contradicted; 0: none yet)
-    implied: tuple[float, ...]  # per fault: the size the settled alarms imply (0: no bound yet; 1e30: unbounded)
+    implied: tuple[float, ...]  # per fault: the size the alarms imply (0: no bound yet)
     cleared_run: tuple[int, ...]  # per fault: steps in a row the rule has cleared it
     cleared: int  # fault bitmask: exonerated at the step (on-line rule confirmed, or reaction sizes)
     clears: tuple[int, ...]  # per test: fault bitmask it clears alone at the implied sizes (its last decision)

@@ -136,7 +136,7 @@ def _size(f: float) -> str:
 
 
 def evidence(trace: CaseTrace, every_s: float = 0.1) -> list[str]:
-    """Every `every_s` while candidates are undecided: for each, the size F the settled alarms imply (Table I
+    """Every `every_s` while candidates are undecided: for each, the size F the alarms imply (Table I
     units) and for how many steps in a row the on-line rule has cleared it, and the quiet tests that clear it alone
     (fdi_diag.h: a quiet test clears f where |d r / d f| F reaches the margin times its gate)."""
     lines: list[str] = []
@@ -178,7 +178,7 @@ def report(trace: CaseTrace) -> str:
     return "\n".join([head, motion, f"tests blind to {trace.spec.fault}: {', '.join(blind) or '-'}",
                       "time after onset, state, candidates, alarmed tests with their ratio |r| / (gate sigma):",
                       *events(trace),
-                      "undecided candidates every 0.1 s: the size F the settled alarms imply, how long the on-line "
+                      "undecided candidates every 0.1 s: the size F the alarms imply, how long the on-line "
                       "rule has cleared it, the quiet tests that clear it alone:",
                       *(evidence(trace) or ["-"])])
 

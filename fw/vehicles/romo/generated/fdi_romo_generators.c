@@ -70,36 +70,52 @@ static bool romo_gen_3_in_domain(const fdi_frame_t *in)
     return fabsf(in->value[ROMO_SIG_VX_M]) >= 2.0f;
 }
 
+/* Rate gains d r / d (d f / dt) of the faults that reach a residual only through a derivative, where the gain is
+   constant (fdi_analysis.residuals.sensitivity.rate_gains): the steady residual of a drift of rate rho is gain * rho.
+   MSO1: f4; MSO2: f5 */
+static const float romo_rate_gain[2] = {-1.0f, -1.0f};
 
 static void romo_gen_step(fdi_gen_io_t *io);
 
 /* name, step (NULL: the set's), domain, signals read, sensitivities (bit j = fault j, ascending), filters, observer
-   states, set, slot */
+   states, set, slot, rate gains (bit j = fault j; the gains ascending by fault) */
 const fdi_gen_desc_t fdi_romo_generators[FDI_ROMO_N_GENERATORS] = {
     {"MSO1", NULL, NULL, ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
-     FDI_GEN_SENS_MASK(0x00000015U), 0U, 0U, &fdi_romo_gen_set, 0U}, /* sensitivities f1 f3 f5 */
+     FDI_GEN_SENS_MASK(0x00000015U), 0U, 0U, &fdi_romo_gen_set, 0U,
+     FDI_GEN_SENS_MASK(0x00000008U), &romo_rate_gain[0]}, /* sensitivities f1 f3 f5; rate gains f4 */
     {"MSO2", NULL, NULL, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
-     FDI_GEN_SENS_MASK(0x0000000EU), 0U, 0U, &fdi_romo_gen_set, 1U}, /* sensitivities f2 f3 f4 */
+     FDI_GEN_SENS_MASK(0x0000000EU), 0U, 0U, &fdi_romo_gen_set, 1U,
+     FDI_GEN_SENS_MASK(0x00000010U), &romo_rate_gain[1]}, /* sensitivities f2 f3 f4; rate gains f5 */
     {"MSO12", NULL, romo_gen_3_in_domain, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M,
-     FDI_GEN_SENS_MASK(0x0022223BU), 0U, 1U, &fdi_romo_gen_set, 2U}, /* sensitivities f1 f2 f4 f5 f6 f10 f14 f18 f22 */
+     FDI_GEN_SENS_MASK(0x0022223BU), 0U, 1U, &fdi_romo_gen_set, 2U,
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f1 f2 f4 f5 f6 f10 f14 f18 f22 */
     {"MSO39", NULL, romo_gen_3_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M,
-     FDI_GEN_SENS_MASK(0x0022223CU), 0U, 0U, &fdi_romo_gen_set, 3U}, /* sensitivities f3 f4 f5 f6 f10 f14 f18 f22 */
+     FDI_GEN_SENS_MASK(0x0022223CU), 0U, 0U, &fdi_romo_gen_set, 3U,
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f3 f4 f5 f6 f10 f14 f18 f22 */
     {"MSO49", NULL, romo_gen_3_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M,
-     FDI_GEN_SENS_MASK(0x0044445CU), 0U, 0U, &fdi_romo_gen_set, 4U}, /* sensitivities f3 f4 f5 f7 f11 f15 f19 f23 */
+     FDI_GEN_SENS_MASK(0x0044445CU), 0U, 0U, &fdi_romo_gen_set, 4U,
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f3 f4 f5 f7 f11 f15 f19 f23 */
     {"MSO1379", NULL, romo_gen_3_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA4_M,
-     FDI_GEN_SENS_MASK(0x017EEFFEU), 0U, 1U, &fdi_romo_gen_set, 5U}, /* sensitivities f2 f3 f4 f5 f6 f7 f8 f9 f10 f11 f12 f14 f15 f16 f18 f19 f20 f21 f22 f23 f25 */
+     FDI_GEN_SENS_MASK(0x017EEFFEU), 0U, 1U, &fdi_romo_gen_set, 5U,
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f2 f3 f4 f5 f6 f7 f8 f9 f10 f11 f12 f14 f15 f16 f18 f19 f20 f21 f22 f23 f25 */
     {"MSO2137", NULL, romo_gen_3_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M,
-     FDI_GEN_SENS_MASK(0x00DD11DCU), 0U, 1U, &fdi_romo_gen_set, 6U}, /* sensitivities f3 f4 f5 f7 f8 f9 f13 f17 f19 f20 f21 f23 f24 */
+     FDI_GEN_SENS_MASK(0x00DD11DCU), 0U, 1U, &fdi_romo_gen_set, 6U,
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f3 f4 f5 f7 f8 f9 f13 f17 f19 f20 f21 f23 f24 */
     {"MSO2142", NULL, romo_gen_3_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M,
-     FDI_GEN_SENS_MASK(0x00CE22FEU), 0U, 1U, &fdi_romo_gen_set, 7U}, /* sensitivities f2 f3 f4 f5 f6 f7 f8 f10 f14 f18 f19 f20 f23 f24 */
+     FDI_GEN_SENS_MASK(0x00CE22FEU), 0U, 1U, &fdi_romo_gen_set, 7U,
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f2 f3 f4 f5 f6 f7 f8 f10 f14 f18 f19 f20 f23 f24 */
     {"MSO2374", NULL, romo_gen_3_in_domain, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA4_M,
-     FDI_GEN_SENS_MASK(0x013A89BFU), 0U, 1U, &fdi_romo_gen_set, 8U}, /* sensitivities f1 f2 f3 f4 f5 f6 f8 f9 f12 f16 f18 f20 f21 f22 f25 */
+     FDI_GEN_SENS_MASK(0x013A89BFU), 0U, 1U, &fdi_romo_gen_set, 8U,
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f1 f2 f3 f4 f5 f6 f8 f9 f12 f16 f18 f20 f21 f22 f25 */
     {"MSO3146", NULL, romo_gen_3_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M,
-     FDI_GEN_SENS_MASK(0x0077557CU), 0U, 1U, &fdi_romo_gen_set, 9U}, /* sensitivities f3 f4 f5 f6 f7 f9 f11 f13 f15 f17 f18 f19 f21 f22 f23 */
+     FDI_GEN_SENS_MASK(0x0077557CU), 0U, 1U, &fdi_romo_gen_set, 9U,
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f3 f4 f5 f6 f7 f9 f11 f13 f15 f17 f18 f19 f21 f22 f23 */
     {"MSO3480", NULL, romo_gen_3_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M,
-     FDI_GEN_SENS_MASK(0x00EEAAEEU), 0U, 1U, &fdi_romo_gen_set, 10U}, /* sensitivities f2 f3 f4 f6 f7 f8 f10 f12 f14 f16 f18 f19 f20 f22 f23 f24 */
+     FDI_GEN_SENS_MASK(0x00EEAAEEU), 0U, 1U, &fdi_romo_gen_set, 10U,
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f2 f3 f4 f6 f7 f8 f10 f12 f14 f16 f18 f19 f20 f22 f23 f24 */
     {"MSO4785", NULL, romo_gen_3_in_domain, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA3_M,
-     FDI_GEN_SENS_MASK(0x00AEEEFFU), 0U, 1U, &fdi_romo_gen_set, 11U}, /* sensitivities f1 f2 f3 f4 f5 f6 f7 f8 f10 f11 f12 f14 f15 f16 f18 f19 f20 f22 f24 */
+     FDI_GEN_SENS_MASK(0x00AEEEFFU), 0U, 1U, &fdi_romo_gen_set, 11U,
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f1 f2 f3 f4 f5 f6 f7 f8 f10 f11 f12 f14 f15 f16 f18 f19 f20 f22 f24 */
 };
 
 const fdi_gen_set_t fdi_romo_gen_set = {"romo", romo_gen_step, romo_bank, 23U, FDI_ROMO_N_GENERATORS,

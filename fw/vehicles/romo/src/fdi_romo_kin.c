@@ -139,16 +139,23 @@ static fdi_status_t y_obs(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_fr
     return observe(g, par, in->value[ROMO_SIG_AY_M] - (vx * w), vy, reset, r); /* K2 + D2: vy' = ay - vx w */
 }
 
-/* Descriptors: name, step, domain (always), signals read, sensitivities (none), filters, observer states, no set. */
+/* Descriptors: name, step, domain (always), signals read, sensitivities (none), filters, observer states, no set,
+   no rate gains. */
 const fdi_gen_desc_t fdi_romo_kin_x_deriv = {
-    "MSO1", x_deriv, NULL, ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M, 0U, 4U, 0U, NULL, 0U};
+    "MSO1", x_deriv, NULL, ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
+    0U, 4U, 0U, NULL, 0U, 0U, NULL};
 const fdi_gen_desc_t fdi_romo_kin_y_deriv = {
-    "MSO2", y_deriv, NULL, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M, 0U, 4U, 0U, NULL, 0U};
+    "MSO2", y_deriv, NULL, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
+    0U, 4U, 0U, NULL, 0U, 0U, NULL};
 const fdi_gen_desc_t fdi_romo_kin_arr3 = {
-    "MSO3", arr3, NULL, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M, 0U, 8U, 0U, NULL, 0U};
+    "MSO3", arr3, NULL, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M,
+    0U, 8U, 0U, NULL, 0U, 0U, NULL};
 const fdi_gen_desc_t fdi_romo_kin_arr4 = {
-    "MSO4", arr4, NULL, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VY_M, 0U, 8U, 0U, NULL, 0U};
+    "MSO4", arr4, NULL, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VY_M,
+    0U, 8U, 0U, NULL, 0U, 0U, NULL};
 const fdi_gen_desc_t fdi_romo_kin_x_obs = {
-    "MSO1", x_obs, NULL, ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M, 0U, 0U, 1U, NULL, 0U};
+    "MSO1", x_obs, NULL, ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
+    0U, 0U, 1U, NULL, 0U, 0U, NULL};
 const fdi_gen_desc_t fdi_romo_kin_y_obs = {
-    "MSO2", y_obs, NULL, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M, 0U, 0U, 1U, NULL, 0U};
+    "MSO2", y_obs, NULL, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
+    0U, 0U, 1U, NULL, 0U, 0U, NULL};
