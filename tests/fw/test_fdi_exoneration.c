@@ -138,8 +138,8 @@ static const fdi_table_t table_zero_b = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f,
 static const fdi_table_t table_no_sens = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f, 0.7071f, 2.0f}, 7U, 2U, 3U,
                                           signal_names, fault_names, tests_no_sens, signature, iso_class, test_size,
                                           2.0f, 1.5f, NULL};
-/* table_rate_b: test 0 as in table_zero_b, and b's rate gain listed (d r0 / d (db/dt) = -0.5): its settled alarm
-   bounds the rate of a drift of b */
+/* table_rate_b: test 0 as in table_zero_b, and b's rate gain listed (d r0 / d (db/dt) = -0.5): each step of its
+   alarm bounds how far b has moved */
 static const float rate_gain_b[1] = {-0.5f};
 static const fdi_gen_desc_t gen0r = {"t0r", gen0z_step, NULL, 0x07U, 0x1U, 0U, 0U, NULL, 0U, 0x2U, rate_gain_b};
 static const fdi_test_desc_t tests_rate_b[3] = {

@@ -76,9 +76,8 @@ class SuiteConfig:
     ecu: tuple[tuple[str, float | int | str], ...] = ()  # ECU settings other than the defaults (Ecu's overrides)
 
     def __post_init__(self) -> None:
-        bad = [s for s in self.shapes if s not in SHAPES]
-        if bad:
-            raise QualityError(f"unknown fault shape(s) {bad}; use step, ramp")
+        for shape in self.shapes:
+            check_shape(shape)
         unknown = [f for f in self.faults if f not in FAULT_IDS]
         if unknown:
             raise QualityError(f"unknown fault(s) {unknown}; faults are f1..f25")
@@ -240,16 +239,21 @@ def replay_case(cfg: SuiteConfig, drive: SimResult, onset: float, db: RomoDataba
     return replay(cfg.table, build_frames(drive, db), t_start=replay_start(cfg, onset), **ecu_settings(cfg))
 
 
+def check_shape(shape: str) -> None:
+    """QualityError unless `shape` is one of SHAPES."""
+    if shape not in SHAPES:
+        raise QualityError(f"unknown fault shape {shape!r}; use {', '.join(SHAPES)}")
+
+
 def case_spec(cfg: SuiteConfig, fault: str, onset: float, size: float, shape: str, multiplier: float
               ) -> tuple[FaultSpec, float]:
     """The fault of one case (`size` x `multiplier`, a step or a ramp over cfg.ramp_s) and its reference time: the
     onset for a step, the time a ramp reaches the required size."""
+    check_shape(shape)
     if shape == "step":
         return FaultSpec(fault, onset, size * multiplier), onset
-    if shape == "ramp":
-        return (FaultSpec(fault, onset, size * multiplier, shape="ramp", ramp=cfg.ramp_s),
-                onset + cfg.ramp_s / multiplier)
-    raise QualityError(f"unknown fault shape {shape!r}; use {', '.join(SHAPES)}")
+    return (FaultSpec(fault, onset, size * multiplier, shape="ramp", ramp=cfg.ramp_s),
+            onset + cfg.ramp_s / multiplier)
 
 
 def run_suite(cfg: SuiteConfig, progress: Callable[[str], None] | None = None) -> SuiteResult:

@@ -24,11 +24,11 @@ from fdi_host.can.traffic import build_frames
 from fdi_host.ecu.bindings import EcuResult, Evidence, TableInfo, table_info
 from fdi_host.ecu.offline import replay_explained
 from fdi_host.quality.suite import (
-    SHAPES,
     QualityError,
     SuiteConfig,
     case_onset,
     case_spec,
+    check_shape,
     ecu_settings,
     load_fault_sizes,
     replay_start,
@@ -80,8 +80,7 @@ def trace_case(table: str, fault: str, scenario: str, seed: int, multiplier: flo
     size = load_fault_sizes(cfg.sizes_file).get(fault)
     if size is None:
         raise QualityError(f"no required size for {fault} in {cfg.sizes_file} [requirement]")
-    if shape not in SHAPES:
-        raise QualityError(f"unknown fault shape {shape!r}; use {', '.join(SHAPES)}")
+    check_shape(shape)  # before the simulation
     base = simulate(load_scenario(scenario), [], seed=seed)
     onset = case_onset(cfg, base)
     spec, _ = case_spec(cfg, fault, onset, size, shape, multiplier)
