@@ -34,7 +34,12 @@ FDI_STATIC_ASSERT(sizeof(fdi_frame_t) == (FDI_FRAME_MAX_SIGNALS * sizeof(float))
 /* The signals of `mask` whose value in *frame is finite (bit layout as the mask). frame == NULL gives 0. */
 uint32_t fdi_frame_finite_mask(const fdi_frame_t *frame, uint32_t mask);
 
-/* Mask of the first n signals (n >= 32: all 32). Cannot fail. */
-uint32_t fdi_frame_low_mask(uint32_t n);
+/* Mask of the first n signals (n >= 32: all 32); also of the first n tests or faults of a table. Cannot fail.
+   Inline: the isolation calls it on its hot path, where a call into another unit would cost instructions at
+   every matching step. */
+static inline uint32_t fdi_frame_low_mask(uint32_t n)
+{
+    return (n >= 32U) ? 0xFFFFFFFFU : (((uint32_t)1U << n) - 1U);
+}
 
 #endif /* FDI_FRAME_H */

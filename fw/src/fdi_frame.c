@@ -40,8 +40,3 @@ uint32_t fdi_frame_finite_mask(const fdi_frame_t *frame, uint32_t mask)
     }
     return m & mask;
 }
-
-uint32_t fdi_frame_low_mask(uint32_t n)
-{
-    return (n >= 32U) ? 0xFFFFFFFFU : (((uint32_t)1U << n) - 1U);
-}

@@ -3,11 +3,6 @@
 
 #include <stddef.h>
 
-static uint32_t iso_low_bits(uint32_t n)
-{
-    return (n >= 32U) ? 0xFFFFFFFFU : (((uint32_t)1U << (n & 31U)) - 1U);
-}
-
 /* Faults of test i's generator with an on-line sensitivity (left to the diagnoser's rule). */
 static uint32_t iso_sens_mask(const fdi_table_t *table, uint32_t i)
 {
@@ -82,7 +77,7 @@ uint32_t fdi_iso_size_cleared(const fdi_table_t *table, uint32_t alarm_mask, uin
 {
     uint32_t cleared = 0U;
     if (iso_table_usable(table) && (alarm_mask != 0U) && ((alarm_mask & quiet) == 0U) &&
-        (((alarm_mask | quiet) & ~iso_low_bits(table->n_tests)) == 0U))
+        (((alarm_mask | quiet) & ~fdi_frame_low_mask(table->n_tests)) == 0U))
     {
         uint32_t j;
         for (j = 0U; j < (uint32_t)table->n_faults; ++j)
@@ -104,8 +99,8 @@ fdi_status_t fdi_iso_match(const fdi_table_t *table, uint32_t alarm_mask, uint32
     {
         st = FDI_BAD_ARG;
     }
-    else if (((alarm_mask & ~iso_low_bits(table->n_tests)) != 0U) ||
-             ((cleared & ~iso_low_bits(table->n_faults)) != 0U))
+    else if (((alarm_mask & ~fdi_frame_low_mask(table->n_tests)) != 0U) ||
+             ((cleared & ~fdi_frame_low_mask(table->n_faults)) != 0U))
     {
         st = FDI_BAD_ARG;
     }
@@ -155,7 +150,7 @@ fdi_status_t fdi_iso_run(const fdi_table_t *table, uint32_t alarm_mask, uint32_t
     {
         st = FDI_BAD_ARG;
     }
-    else if (((alarm_mask & ~evaluable_mask) != 0U) || ((evaluable_mask & ~iso_low_bits(table->n_tests)) != 0U) ||
+    else if (((alarm_mask & ~evaluable_mask) != 0U) || ((evaluable_mask & ~fdi_frame_low_mask(table->n_tests)) != 0U) ||
              ((mode != FDI_ISO_NO_EXONERATION) && (mode != FDI_ISO_EXONERATION)))
     {
         st = FDI_BAD_ARG;
