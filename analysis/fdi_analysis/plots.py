@@ -153,3 +153,29 @@ def plot_practical_isolability(faults: Sequence[str], structural: Mapping[tuple[
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.08), fontsize=7)
     fig.tight_layout()
     return fig
+
+
+def plot_budget_sweep(costs: Sequence[int], detections: Sequence[int], separations: Sequence[int],
+                      meetable_detections: int, meetable_separations: int, complete_cost: int, title: str,
+                      ax: Axes | None = None) -> Figure:
+    """Requirements met (share of those the complete practical selection meets) against the summed cost of the
+    best selection within each budget (`selection.budget.budget_sweep`)."""
+    fig, ax = _figure(ax, (6.0, 4.0))
+    order = np.argsort(np.asarray(costs, dtype=float), kind="stable")
+    x = np.asarray(costs, dtype=float)[order]
+    for values, total, label in ((detections, meetable_detections, "detections"),
+                                 (separations, meetable_separations, "pair separations"),
+                                 ([d + s for d, s in zip(detections, separations, strict=True)],
+                                  meetable_detections + meetable_separations, "all requirements")):
+        if total > 0:
+            ax.step(x, 100.0 * np.asarray(values, dtype=float)[order] / total, where="post", marker="o",
+                    markersize=3, label=f"{label} ({total})")
+    ax.axvline(complete_cost, color="grey", linestyle=":", label=f"complete selection ({complete_cost})")
+    ax.set_xlabel("summed cost of the selected tests [operations per step]")
+    ax.set_ylabel("requirements met [%]")
+    ax.set_ylim(0.0, 102.0)
+    ax.set_title(title, fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    return fig

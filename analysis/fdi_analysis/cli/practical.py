@@ -9,9 +9,11 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from fdi_analysis.cli.common import fail
 from fdi_analysis.export.thresholds import with_selection
 from fdi_analysis.model_loader import load_model
-from fdi_analysis.plots import plot_practical_isolability, save
+from fdi_analysis.plots import plot_budget_sweep, plot_practical_isolability, save
+from fdi_analysis.selection.budget import BudgetSelection, budget_sweep, select_within_budget
 from fdi_analysis.selection.practical import (
     PracticalSelection,
     Screening,
@@ -47,7 +49,24 @@ def register(sub: Any) -> None:
     p.add_argument("-o", "--out", type=Path, default=None, help="report folder")
     p.add_argument("--solver", choices=("auto", "rc2", "highs"), default="auto",
                    help="exact solver (default: rc2 when python-sat is installed, else highs)")
+    p.add_argument("--budget", type=_non_negative, default=None, metavar="OPS",
+                   help="select instead, at a summed cost (operations per step, as listed) of at most OPS, the tests "
+                   "that detect the most, then separate the most (HiGHS, exact), and list the requirements of the "
+                   "complete selection they give up")
+    p.add_argument("--budget-sweep", type=_non_negative, default=0, metavar="N",
+                   help="also select within N budgets evenly spaced up to the cost of the complete selection and "
+                   "write budget_sweep.json, .md and .png to -o: requirements met against cost")
     p.set_defaults(func=run)
+
+
+def _non_negative(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{value} is negative")
+    return value
 
 
 def run(args: argparse.Namespace) -> int:
@@ -60,7 +79,26 @@ def run(args: argparse.Namespace) -> int:
           f"of {args.screening}, FNR >= {scr.gate:g} x {scr.margin:g} (more where a slow generator needs it to alarm "
           f"in time) at {scr.share:.0%} of the operating points")
     sel = select_practical(cands, faults, scr.scenarios, args.solver)
-    print(f"selected {len(sel.tests)} tests, cost {sel.cost} (optimal, {sel.solver}):")
+    if args.budget is not None or args.budget_sweep > 0:
+        print(f"the complete selection: {len(sel.tests)} tests, cost {sel.cost}")
+    if args.budget_sweep > 0:
+        if args.out is None:
+            return fail("fdi-analyze practical", "--budget-sweep writes budget_sweep.json, .md and .png: give -o")
+        write_budget_sweep(args.out, model.name, budget_sweep(
+            cands, faults, scr.scenarios, [round(sel.cost * (k + 1) / args.budget_sweep)
+                                           for k in range(args.budget_sweep)], progress=_print_budget), sel.cost)
+    if args.budget is not None:
+        within = select_within_budget(cands, faults, scr.scenarios, args.budget)
+        print(f"within the budget of {args.budget}: {len(within.tests)} tests, cost {within.cost}, they meet "
+              f"{within.met} of the {within.meetable} requirements the complete selection meets (detections "
+              f"{within.detections}/{within.meetable_detections}, separations "
+              f"{within.separations}/{within.meetable_separations}; optimal, highs)")
+        for line in given_up_lines(within):
+            print(line)
+        sel = PracticalSelection(within.tests, within.cost, f"highs, within a budget of {args.budget}", sel.unmet,
+                                 sel.pairs, sel.scenarios)
+    else:
+        print(f"selected {len(sel.tests)} tests, cost {sel.cost} (optimal, {sel.solver}):")
     by_label = {c.label: c for c in scr.candidates}
     for t in sel.tests:
         c = by_label[t.label]
@@ -78,6 +116,50 @@ def run(args: argparse.Namespace) -> int:
     if args.out is not None:
         write_report(args.out, model.name, faults, sel, scr)
     return 0
+
+
+def _print_budget(b: BudgetSelection) -> None:
+    print(f"  budget {b.budget:>6}: {len(b.tests):>2} tests, cost {b.cost:>5}, requirements met {b.met}/{b.meetable} "
+          f"(detections {b.detections}/{b.meetable_detections}, separations {b.separations}/{b.meetable_separations})",
+          flush=True)
+
+
+def given_up_lines(within: BudgetSelection) -> list[str]:
+    """The requirements of the complete selection that a selection within a budget gives up, per manoeuvre."""
+    if not within.given_up:
+        return []
+    out = [f"{len(within.given_up)} requirements of the complete selection given up within the budget:"]
+    for sc in dict.fromkeys(r.scenario for r in within.given_up):
+        det = [r.fault_a for r in within.given_up if r.scenario == sc and not r.fault_b]
+        pairs = [f"{r.fault_a}/{r.fault_b}" for r in within.given_up if r.scenario == sc and r.fault_b]
+        shown = ", ".join(pairs[:12]) + (f" and {len(pairs) - 12} more pairs" if len(pairs) > 12 else "")
+        out.append(f"  {sc}:" + (f" detect {', '.join(det)};" if det else "") + (f" separate {shown}" if pairs else ""))
+    return out
+
+
+def write_budget_sweep(out: Path, name: str, sweep: Sequence[BudgetSelection], complete_cost: int) -> None:
+    """budget_sweep.json, .md and .png: per budget the best selection's tests, cost and requirements met."""
+    out.mkdir(parents=True, exist_ok=True)
+    doc = {"model": name, "complete_selection_cost": complete_cost,
+           "budgets": [{"budget": b.budget, "cost": b.cost, "tests": [t.label for t in b.tests],
+                        "detections": b.detections, "meetable_detections": b.meetable_detections,
+                        "separations": b.separations, "meetable_separations": b.meetable_separations}
+                       for b in sweep]}
+    (out / "budget_sweep.json").write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+    save(plot_budget_sweep([b.cost for b in sweep], [b.detections for b in sweep], [b.separations for b in sweep],
+                           sweep[0].meetable_detections if sweep else 0, sweep[0].meetable_separations if sweep else 0,
+                           complete_cost, f"{name}: requirements met within a cost budget"),
+         out / "budget_sweep.png")
+    lines = [f"# Selection within a cost budget: {name}", "",
+             f"The complete practical selection costs {complete_cost} operations per step. Per budget, the tests "
+             "that meet the most of its requirements (exact, HiGHS):", "",
+             "| budget | cost | tests | detections met | separations met | all met |", "|---|---|---|---|---|---|"]
+    lines += [f"| {b.budget} | {b.cost} | {len(b.tests)} | {b.detections}/{b.meetable_detections} | "
+              f"{b.separations}/{b.meetable_separations} | {b.met / b.meetable:.1%} |" if b.meetable else
+              f"| {b.budget} | {b.cost} | {len(b.tests)} | 0/0 | 0/0 | - |" for b in sweep]
+    lines += ["", "![requirements met within a cost budget](budget_sweep.png)", ""]
+    (out / "budget_sweep.md").write_text("\n".join(lines), encoding="utf-8")
+    print(f"wrote {out / 'budget_sweep.json'}, budget_sweep.md, budget_sweep.png")
 
 
 def _num(f: str) -> int:

@@ -226,25 +226,40 @@ def _unmet(cands: Sequence[PracticalCandidate], a: str, b: str, s: str) -> Unmet
     return Unmet(s, a, b, UnmetKind.WEAK, len(options), best.label, share, strong.label, fnr, need)
 
 
+@dataclass(frozen=True)
+class Requirement:
+    """One requirement of the module doc that some candidate meets: in `scenario`, detect `fault_a` (fault_b "")
+    or separate the pair; `cover`: the indices of the candidates that meet it."""
+
+    scenario: str
+    fault_a: str
+    fault_b: str
+    cover: tuple[int, ...]
+
+
+def requirements(candidates: Sequence[PracticalCandidate], faults: Sequence[str], scenarios: Sequence[str]
+                 ) -> tuple[list[Requirement], list[Unmet], list[tuple[str, str]]]:
+    """The requirements some candidate meets, those none meets (with the reason), and the structurally isolable
+    pairs they are built from; per manoeuvre, the detections first, then the pairs."""
+    pairs = isolable_pairs(candidates, faults)
+    reqs: list[Requirement] = []
+    unmet: list[Unmet] = []
+    for s in scenarios:
+        for a, b in [(f, "") for f in faults] + pairs:
+            cover = tuple(i for i, t in enumerate(candidates)
+                          if (separates(t, a, b, s) if b else (a, s) in t.detects))
+            if cover:
+                reqs.append(Requirement(s, a, b, cover))
+            else:
+                unmet.append(_unmet(candidates, a, b, s))
+    return reqs, unmet, pairs
+
+
 def select_practical(candidates: Sequence[PracticalCandidate], faults: Sequence[str],
                      scenarios: Sequence[str], solver: str = "auto") -> PracticalSelection:
     """The cheapest selection meeting every requirement some candidate meets (see the module doc)."""
-    pairs = isolable_pairs(candidates, faults)
-    rows: list[list[int]] = []
-    unmet: list[Unmet] = []
-    for s in scenarios:
-        for f in faults:
-            cover = [i for i, t in enumerate(candidates) if (f, s) in t.detects]
-            if cover:
-                rows.append(cover)
-            else:
-                unmet.append(_unmet(candidates, f, "", s))
-        for a, b in pairs:
-            cover = [i for i, t in enumerate(candidates) if separates(t, a, b, s)]
-            if cover:
-                rows.append(cover)
-            else:
-                unmet.append(_unmet(candidates, a, b, s))
+    reqs, unmet, pairs = requirements(candidates, faults, scenarios)
+    rows = [r.cover for r in reqs]
     if solver not in ("auto", "rc2", "highs"):
         raise ValueError(f"solver {solver!r}: use auto, rc2 or highs")
     costs = [max(1, t.cost) for t in candidates]
