@@ -97,7 +97,7 @@ def test_sweep_is_monotone_and_matches_single_selections() -> None:
 
 
 def _screening(tmp_path: Path) -> Path:
-    """A screening file for the three-tank model's faults: three tests, the cheap one blind to fS1."""
+    """A screening file for the three-tank model's faults: three tests, only MSO2 (the dearest) sees fC12, fC23, fC3."""
     model_faults = ("fP", "fL1", "fL2", "fL3", "fC12", "fC23", "fC3", "fS1", "fS2", "fS3")
     share = {"a": 0.9}
     fnr = {"a": 20.0}

@@ -132,8 +132,8 @@ def given_up_lines(within: BudgetSelection) -> list[str]:
     for sc in dict.fromkeys(r.scenario for r in within.given_up):
         det = [r.fault_a for r in within.given_up if r.scenario == sc and not r.fault_b]
         pairs = [f"{r.fault_a}/{r.fault_b}" for r in within.given_up if r.scenario == sc and r.fault_b]
-        shown = ", ".join(pairs[:12]) + (f" and {len(pairs) - 12} more pairs" if len(pairs) > 12 else "")
-        out.append(f"  {sc}:" + (f" detect {', '.join(det)};" if det else "") + (f" separate {shown}" if pairs else ""))
+        out.append(f"  {sc}:" + (f" detect {', '.join(det)};" if det else "") +
+                   (f" separate {_some_pairs(pairs)}" if pairs else ""))
     return out
 
 
@@ -184,9 +184,14 @@ def unmet_lines(sel: PracticalSelection) -> list[str]:
             if det:
                 out.append(f"    detect {', '.join(_unmet_item(u) for u in det)}")
             if pairs:
-                shown = ", ".join(_unmet_item(u) for u in pairs[:12])
-                out.append(f"    separate {shown}{f' and {len(pairs) - 12} more pairs' if len(pairs) > 12 else ''}")
+                out.append(f"    separate {_some_pairs([_unmet_item(u) for u in pairs])}")
     return out
+
+
+def _some_pairs(items: Sequence[str], shown: int = 12) -> str:
+    """The first `shown` items, and how many more there are."""
+    more = f" and {len(items) - shown} more pairs" if len(items) > shown else ""
+    return ", ".join(items[:shown]) + more
 
 
 def _unmet_item(u: Unmet) -> str:
