@@ -86,13 +86,14 @@
  * Cost per step: the bank (~20 flops per filter) + the set's step (the shared terms once, each evaluated test's own
  * terms, the sensitivities the on-line rule reads during an episode at their turn, all of them with
  * cfg->sensitivities) + the hand-written generators + ~25 operations per test for evaluation + n_faults iterations
- * of isolation (while a fault is undecided, ~5 more per sensitivity of a settled quiet test for the joint rule and
- * the reaction-size rule) + the finiteness of the signals (fdi_frame_finite_mask). Measured by
+ * of isolation (while a fault is undecided, ~30 more per undecided fault of each settled quiet or alarmed test's
+ * sensitivities for the implied sizes and the clearing rules, which visit only those faults, plus the reaction-size
+ * rule) + the finiteness of the signals (fdi_frame_finite_mask). Measured by
  * scripts/bench_fw.sh (instructions per step of the vehicle tables it benchmarks over a simulated drive on x86-64
  * with callgrind and on Cortex-M4F under qemu -icount: fault-free, in an episode with one class left, in one with
  * several (undecided), largest step).
  * Memory: sizeof(fdi_diag_t) ~ 184 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28) +
- * 12 * FDI_DIAG_MAX_FILTERS + 5 * FDI_DIAG_MAX_SENS + 10 * FDI_TABLE_MAX_FAULTS + 2 * FDI_GEN_MAX_SLOTS +
+ * 12 * FDI_DIAG_MAX_FILTERS + 4 * FDI_DIAG_MAX_SENS + 10 * FDI_TABLE_MAX_FAULTS + 2 * FDI_GEN_MAX_SLOTS +
  * 4 * FDI_DIAG_MAX_SENS_EVERY bytes (bound
  * asserted below; scripts/bench_fw.sh prints the value), caller-owned (static or stack); the library itself has no
  * .data/.bss.
@@ -221,14 +222,13 @@ typedef struct
     uint32_t undecided; /* faults that explain every accused test and are not latched (on-line exoneration) */
     uint8_t sens_offset[FDI_DIAG_MAX_TESTS + 1U]; /* test i: sens[sens_offset[i] .. sens_offset[i + 1] - 1] */
     float sens[FDI_DIAG_MAX_SENS];
-    uint8_t sens_fault[FDI_DIAG_MAX_SENS]; /* the fault of sens[k] */
 } fdi_diag_t; /* opaque by convention */
 
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
 FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (184U + (sizeof(void *) * 2U) +
                                          (FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28U)) +
                                          (sizeof(fdi_svf_t) * FDI_DIAG_MAX_FILTERS) +
-                                         ((sizeof(float) + 1U) * FDI_DIAG_MAX_SENS) +
+                                         (sizeof(float) * FDI_DIAG_MAX_SENS) +
                                          (((2U * sizeof(float)) + sizeof(uint16_t)) * FDI_TABLE_MAX_FAULTS) +
                                          (sizeof(uint16_t) * FDI_GEN_MAX_SLOTS) +
                                          (sizeof(uint32_t) * FDI_DIAG_MAX_SENS_EVERY)),

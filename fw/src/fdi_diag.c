@@ -40,6 +40,26 @@
    a quarter of the tests' sensitivity code per step; the rule's decisions are confirmed over CLEAR_CONFIRM_S). */
 #define SENS_EVERY 4U
 
+/* The position of the lowest set bit of x != 0 (de Bruijn: x & -x times the sequence 0x077CB531 has a distinct top
+   5 bits for each of the 32 powers of two). The isolation's loops over fault masks visit only their set bits with
+   it: the undecided faults of an episode are a few of 25. */
+static uint32_t lowest_bit(uint32_t x)
+{
+    static const uint8_t position[32] = {0U,  1U,  28U, 2U,  29U, 14U, 24U, 3U,  30U, 22U, 20U,
+                                         15U, 25U, 17U, 4U,  8U,  31U, 27U, 13U, 23U, 21U, 19U,
+                                         16U, 7U,  26U, 12U, 18U, 6U,  11U, 5U,  10U, 9U};
+    return (uint32_t)position[((x & (~x + 1U)) * 0x077CB531U) >> 27U];
+}
+
+/* The number of set bits of x (the Cortex-M4 has no instruction for it: 12 operations). */
+static uint32_t bit_count(uint32_t x)
+{
+    uint32_t c = x - ((x >> 1U) & 0x55555555U);
+    c = (c & 0x33333333U) + ((c >> 2U) & 0x33333333U);
+    c = (c + (c >> 4U)) & 0x0F0F0F0FU;
+    return (c * 0x01010101U) >> 24U;
+}
+
 /* Settling time of the design point in steps (see fdi_diag.h); 0 if it is not representable. */
 static uint32_t settle_steps(const fdi_table_design_t *d)
 {
@@ -59,25 +79,17 @@ static uint32_t settle_steps(const fdi_table_design_t *d)
     return steps;
 }
 
-/* Sensitivity offsets of the table's tests and the fault of every entry (fault[k]: the fault of sens[k]); false
-   when they exceed FDI_DIAG_MAX_SENS. */
-static bool sens_layout(const fdi_table_t *t, uint8_t *offset, uint8_t *fault)
+/* Sensitivity offsets of the table's tests (test i's entries are the faults of its sens_mask in ascending order:
+   sens_at); false when they exceed FDI_DIAG_MAX_SENS. */
+static bool sens_layout(const fdi_table_t *t, uint8_t *offset)
 {
     uint32_t total = 0U;
     uint32_t i;
     for (i = 0U; i < (uint32_t)t->n_tests; ++i)
     {
         const uint32_t mask = (t->tests[i].gen != NULL) ? t->tests[i].gen->sens_mask : 0U;
-        uint32_t j;
         offset[i] = (uint8_t)((total < FDI_DIAG_MAX_SENS) ? total : FDI_DIAG_MAX_SENS);
-        for (j = 0U; j < (uint32_t)t->n_faults; ++j)
-        {
-            if (((mask & ((uint32_t)1U << j)) != 0U) && (total < FDI_DIAG_MAX_SENS))
-            {
-                fault[total] = (uint8_t)j;
-            }
-            total += ((mask & ((uint32_t)1U << j)) != 0U) ? 1U : 0U;
-        }
+        total += bit_count(mask & fdi_frame_low_mask(t->n_faults));
     }
     for (i = (uint32_t)t->n_tests; i <= FDI_DIAG_MAX_TESTS; ++i)
     {
@@ -359,7 +371,7 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             gcfg.param[i] = cfg->gen_param[i];
         }
         st = fdi_gen_param_init(&self->par, &gcfg);
-        if ((st == FDI_OK) && !sens_layout(t, self->sens_offset, self->sens_fault) &&
+        if ((st == FDI_OK) && !sens_layout(t, self->sens_offset) &&
             (cfg->sensitivities || (cfg->mode == FDI_ISO_EXONERATION)))
         {
             st = FDI_BAD_ARG;
@@ -692,6 +704,13 @@ static float larger(float a, float b)
     return (a > b) ? a : b;
 }
 
+/* Where sensitivity s_ij of test i is in self->sens, for a fault j of its sens_mask: the entries of test i are the
+   faults of its sens_mask in ascending order (sens_layout), so j's is after those of the faults below it. */
+static uint32_t sens_at(const fdi_diag_t *self, uint32_t i, uint32_t sens_mask, uint32_t j)
+{
+    return (uint32_t)self->sens_offset[i] + bit_count(sens_mask & (((uint32_t)1U << j) - 1U));
+}
+
 /* Test i is in alarm and has been for its response time, with fresh sensitivities: once its residual has settled,
    its average and its sensitivities bound the size of each undecided fault of its sens_mask from below; the
    episode keeps the largest bound (see fdi_diag.h). A fault of its signature without a sensitivity (its
@@ -711,14 +730,13 @@ static void raise_implied(fdi_diag_t *self, uint32_t i, uint32_t undecided)
     const float excess = least - (self->noise_allowance * sigma);
     if ((g != NULL) && (g->sens_mask != 0U) && settled && (excess > 0.0f))
     {
-        uint32_t left = g->sens_mask & undecided; /* the entries ascend by fault: stop after the last one wanted */
-        uint32_t k;
-        for (k = (uint32_t)self->sens_offset[i]; (left != 0U) && (k < (uint32_t)self->sens_offset[i + 1U]); ++k)
+        uint32_t left = g->sens_mask & undecided;
+        while (left != 0U)
         {
-            const uint32_t j = (uint32_t)self->sens_fault[k];
-            const float s = fabsf(self->sens[k]);
-            left &= ~((uint32_t)1U << j);
-            if (((undecided & ((uint32_t)1U << j)) != 0U) && (s > 0.0f))
+            const uint32_t j = lowest_bit(left);
+            const uint32_t k = sens_at(self, i, g->sens_mask, j);
+            const float s = (k < (uint32_t)self->sens_offset[i + 1U]) ? fabsf(self->sens[k]) : 0.0f;
+            if (s > 0.0f)
             {
                 const float f = excess / s;
                 if (fdi_float_is_finite(f) && (f > self->implied[j]))
@@ -726,6 +744,7 @@ static void raise_implied(fdi_diag_t *self, uint32_t i, uint32_t undecided)
                     self->implied[j] = f;
                 }
             }
+            left &= left - 1U;
         }
     }
 }
@@ -752,35 +771,29 @@ static void raise_drift(fdi_diag_t *self, uint32_t tests, uint32_t undecided)
             const float excess = (r < 0.0f) ? -above : above;
             uint32_t left = (above > 0.0f) ? g->rate_mask : 0U; /* gains ascend by fault */
             uint32_t k = 0U;
-            uint32_t j;
-            for (j = 0U; (left != 0U) && (j < (uint32_t)self->n_faults); ++j)
+            while (left != 0U)
             {
+                const uint32_t j = lowest_bit(left);
                 const uint32_t bit = (uint32_t)1U << j;
-                if ((left & bit) != 0U)
+                const float rho = excess / g->rate_gain[k]; /* finite / finite non-zero: at most +-Inf */
+                if (((undecided & bit) != 0U) && (((bounded & bit) == 0U) || (fabsf(rho) > fabsf(rate[j]))))
                 {
-                    const float rho = excess / g->rate_gain[k]; /* finite / finite non-zero: at most +-Inf */
-                    if (((undecided & bit) != 0U) && (((bounded & bit) == 0U) || (fabsf(rho) > fabsf(rate[j]))))
-                    {
-                        rate[j] = rho;
-                        bounded |= bit;
-                    }
-                    left &= ~bit;
-                    ++k;
+                    rate[j] = rho;
+                    bounded |= bit;
                 }
+                left &= left - 1U;
+                ++k;
             }
         }
     }
-    for (i = 0U; (bounded != 0U) && (i < (uint32_t)self->n_faults); ++i)
+    while (bounded != 0U)
     {
-        const uint32_t bit = (uint32_t)1U << i;
-        if ((bounded & bit) != 0U)
-        {
-            /* a finite drift plus at most an infinite move: saturate, no NaN */
-            const float moved = self->drift[i] + (rate[i] * self->table->design.dt);
-            self->drift[i] = smaller(larger(moved, -FLT_MAX), FLT_MAX);
-            self->implied[i] = larger(self->implied[i], fabsf(self->drift[i]));
-            bounded &= ~bit;
-        }
+        const uint32_t j = lowest_bit(bounded);
+        /* a finite drift plus at most an infinite move: saturate, no NaN */
+        const float moved = self->drift[j] + (rate[j] * self->table->design.dt);
+        self->drift[j] = smaller(larger(moved, -FLT_MAX), FLT_MAX);
+        self->implied[j] = larger(self->implied[j], fabsf(self->drift[j]));
+        bounded &= bounded - 1U;
     }
 }
 
@@ -793,16 +806,16 @@ static uint32_t quiet_clears(const fdi_diag_t *self, uint32_t i, uint32_t undeci
     if (d->gen != NULL)
     {
         const float need = self->table->sensitivity_margin * d->gate * test_sigma(self, i);
-        uint32_t left = d->gen->sens_mask & undecided; /* the entries ascend by fault: stop after the last one wanted */
-        uint32_t k;
-        for (k = (uint32_t)self->sens_offset[i]; (left != 0U) && (k < (uint32_t)self->sens_offset[i + 1U]); ++k)
+        uint32_t left = d->gen->sens_mask & undecided;
+        while (left != 0U)
         {
-            const uint32_t j = (uint32_t)self->sens_fault[k];
-            left &= ~((uint32_t)1U << j);
-            if (((undecided & ((uint32_t)1U << j)) != 0U) && ((fabsf(self->sens[k]) * self->implied[j]) >= need))
+            const uint32_t j = lowest_bit(left);
+            const uint32_t k = sens_at(self, i, d->gen->sens_mask, j);
+            if ((k < (uint32_t)self->sens_offset[i + 1U]) && ((fabsf(self->sens[k]) * self->implied[j]) >= need))
             {
                 out |= (uint32_t)1U << j;
             }
+            left &= left - 1U;
         }
     }
     return out;
@@ -821,10 +834,10 @@ static uint32_t joint_clears(const fdi_diag_t *self, uint32_t settled, uint32_t 
         const float per_margin = 1.0f / self->table->sensitivity_margin;
         uint32_t left = faults;
         uint32_t i;
-        for (i = 0U; (left != 0U) && (i < (uint32_t)self->n_faults); ++i)
+        while (left != 0U)
         {
-            missing[i] = 0.0f;
-            left &= ~((uint32_t)1U << i);
+            missing[lowest_bit(left)] = 0.0f;
+            left &= left - 1U;
         }
         for (i = 0U; i < (uint32_t)self->n_tests; ++i)
         {
@@ -833,14 +846,12 @@ static uint32_t joint_clears(const fdi_diag_t *self, uint32_t settled, uint32_t 
             {
                 const float per_gate = 1.0f / (d->gate * test_sigma(self, i));
                 const float seen = larger(fabsf(self->residual[i]), fabsf(self->r_fast[i]));
-                uint32_t wanted = d->gen->sens_mask & faults; /* the entries ascend by fault: stop after the last */
-                uint32_t k;
-                for (k = (uint32_t)self->sens_offset[i]; (wanted != 0U) && (k < (uint32_t)self->sens_offset[i + 1U]);
-                     ++k)
+                uint32_t wanted = d->gen->sens_mask & faults;
+                while (wanted != 0U)
                 {
-                    const uint32_t j = (uint32_t)self->sens_fault[k];
-                    wanted &= ~((uint32_t)1U << j);
-                    if ((faults & ((uint32_t)1U << j)) != 0U)
+                    const uint32_t j = lowest_bit(wanted);
+                    const uint32_t k = sens_at(self, i, d->gen->sens_mask, j);
+                    if (k < (uint32_t)self->sens_offset[i + 1U])
                     {
                         /* capped: a huge implied size stays finite here */
                         const float expect = fabsf(self->sens[k]) * self->implied[j] * per_margin;
@@ -850,18 +861,19 @@ static uint32_t joint_clears(const fdi_diag_t *self, uint32_t settled, uint32_t 
                             missing[j] += lack * lack;
                         }
                     }
+                    wanted &= wanted - 1U;
                 }
             }
         }
         left = faults;
-        for (i = 0U; (left != 0U) && (i < (uint32_t)self->n_faults); ++i)
+        while (left != 0U)
         {
-            const uint32_t bit = (uint32_t)1U << i;
-            out |= (((faults & bit) != 0U) && (missing[i] >= 1.0f)) ? bit : 0U;
-            left &= ~bit;
+            const uint32_t j = lowest_bit(left);
+            out |= (missing[j] >= 1.0f) ? ((uint32_t)1U << j) : 0U;
+            left &= left - 1U;
         }
     }
-    return out & faults;
+    return out;
 }
 
 /* Episode start/end and age (see "Isolation episodes" in fdi_diag.h). */
@@ -926,14 +938,10 @@ static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
         uint32_t i;
         /* the implied sizes and confirmation runs of the undecided faults only: no other is read again in the
            episode (undecided_faults), and track_episode resets them all at the next */
-        for (i = 0U; (left != 0U) && (i < (uint32_t)self->n_faults); ++i)
+        while (left != 0U)
         {
-            const uint32_t fbit = (uint32_t)1U << i;
-            if ((left & fbit) != 0U)
-            {
-                self->implied[i] *= self->implied_keep;
-                left &= ~fbit;
-            }
+            self->implied[lowest_bit(left)] *= self->implied_keep;
+            left &= left - 1U;
         }
         for (i = 0U; i < (uint32_t)self->n_tests; ++i)
         {
@@ -973,15 +981,13 @@ static uint32_t exonerated(fdi_diag_t *self, uint32_t alarm)
         /* the joint rule reads the tests' latest sensitivities: only those computed in this episode */
         online |= joint_clears(self, settled & self->sens_known, undecided & ~online);
         left = undecided;
-        for (i = 0U; (left != 0U) && (i < (uint32_t)self->n_faults); ++i)
+        while (left != 0U)
         {
-            const uint32_t fbit = (uint32_t)1U << i;
-            if ((left & fbit) != 0U)
-            {
-                self->cleared_run[i] = ((online & fbit) != 0U) ? sat_inc(self->cleared_run[i]) : 0U;
-                cleared |= (self->cleared_run[i] >= self->clear_confirm) ? fbit : 0U;
-                left &= ~fbit;
-            }
+            const uint32_t j = lowest_bit(left);
+            const uint32_t fbit = (uint32_t)1U << j;
+            self->cleared_run[j] = ((online & fbit) != 0U) ? sat_inc(self->cleared_run[j]) : 0U;
+            cleared |= (self->cleared_run[j] >= self->clear_confirm) ? fbit : 0U;
+            left &= left - 1U;
         }
         /* only the tests of size_tests can clear by reaction sizes (fdi_iso_size_cleared gives 0 for the others); the
            rule reads nothing but the table and the two masks, so its result is kept until they change */

@@ -23,6 +23,9 @@ EXAMPLES = """examples:
   fdi-quality --table romo --trace f6:straight:2001 --out out/trace   # one case step by step: alarms, candidates,
                                                                       # the exoneration's evidence, ratios plot
                                                                       # (trace-f6-straight-2001.png)
+  fdi-quality --table romo --trace f6:slalom:2001 --linearity --out out/trace   # and how far each test's response
+                                                      # departs from what its sensitivity predicts (rho), with a
+                                                      # plot (linearity-f6-slalom-2001.png)
   fdi-quality --table romo --ecu noise_allowance=2 --out out/quality-na2   # a study with another ECU setting
 """
 
@@ -80,8 +83,13 @@ def main(argv: list[str] | None = None) -> int:
                    help="instead of the suite: one case at its required size (x the first multiplier; a step, or the "
                         "first of --shapes), its alarms and candidates step by step (and a plot of the ratios in "
                         "--out)")
+    p.add_argument("--linearity", action="store_true",
+                   help="with --trace: each test's response to the fault against the response its sensitivity "
+                        "predicts (the linearisation the on-line exoneration relies on), and a plot in --out")
     p.add_argument("-o", "--out", type=Path, default=None, help="folder for quality.json and quality.md")
     args = p.parse_args(argv)
+    if args.linearity and args.trace is None:
+        p.error("--linearity needs --trace FAULT:SCENARIO:SEED")
     try:
         args.ecu = parse_ecu_settings(args.table, args.ecu)
     except ValueError as exc:
@@ -136,6 +144,16 @@ def _trace(args: argparse.Namespace) -> int:
             png = args.out / f"trace-{fault}-{scenario}-{seed}{'' if shape == 'step' else '-' + shape}.png"
             trace.plot(case, png)
             print(f"wrote {png}")
+        if args.linearity:
+            from fdi_host.quality import linearity
+
+            lin = linearity.check_case(args.table, fault, scenario, seed, mult,
+                                       SuiteConfig(table=args.table, sizes_file=args.sizes, ecu=args.ecu), shape)
+            print(linearity.report(lin))
+            if args.out is not None:
+                png = args.out / f"linearity-{fault}-{scenario}-{seed}{'' if shape == 'step' else '-' + shape}.png"
+                linearity.plot(lin, png)
+                print(f"wrote {png}")
     except (QualityError, OSError) as exc:
         return fail("fdi-quality", exc)
     return 0
