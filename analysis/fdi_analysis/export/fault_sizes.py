@@ -94,8 +94,9 @@ EXONERATION_MARGIN = 2.0
 # nonlinearity the alarmed tests do not (the derivative overpredicts a saturating fault's effect by up to 1.6x,
 # tests/analysis/test_sensitivity.py; where both see it through the same slip law the errors cancel); the implied
 # size is a lower bound already (its noise allowance). On a drive, `fdi-quality --trace CASE --linearity` measures
-# how far a test's response departs from s F (in the slalom, a steering offset's tyre tests: 0.5 to 2.1 times), so
-# the margin is validated per table by the quality suite, not derived.
+# how far a test's response departs from s F (in the slalom, a steering offset's tyre tests: 0.5 to 2.1 times), and
+# `fdi-quality --linearity` surveys it over every case (README); the margin does not cover every departure, so it is
+# validated per table by the quality suite, not derived.
 SENSITIVITY_MARGIN = 1.5
 # A test reacts to a fault of a stated size when it raises a raw alarm within this time of a step (the sweep's
 # window): the response time of a quiet test under the reaction-size rule.

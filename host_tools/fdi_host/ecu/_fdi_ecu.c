@@ -145,6 +145,24 @@ long long fdi_py_table_int(const fdi_table_t *t, int what, int i)
     return v;
 }
 
+/* Reals of a table: 0 sensitivity_margin, 1 gate of test i, 2 variance of test i; -1 on bad arguments. */
+double fdi_py_table_real(const fdi_table_t *t, int what, int i)
+{
+    double v = -1.0;
+    if (t != NULL)
+    {
+        const int test_ok = (i >= 0) && (i < (int)t->n_tests);
+        switch (what)
+        {
+        case 0: v = (double)t->sensitivity_margin; break;
+        case 1: v = test_ok ? (double)t->tests[i].gate : -1.0; break;
+        case 2: v = test_ok ? (double)t->tests[i].variance : -1.0; break;
+        default: break;
+        }
+    }
+    return v;
+}
+
 /* Strings of a table: 0 fault name i, 1 interpretation of test i, 2 signal name i, 3 generator name of test i
    ("" without); NULL on bad arguments. */
 const char *fdi_py_table_str(const fdi_table_t *t, int what, int i)

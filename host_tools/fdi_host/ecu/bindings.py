@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import ctypes
 import importlib.util
+import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
@@ -190,6 +191,7 @@ def _lib() -> _Lib:
         "fdi_py_bus": (vp, [ctypes.c_char_p]),
         "fdi_py_table_int": (ctypes.c_longlong, [vp, ctypes.c_int, ctypes.c_int]),
         "fdi_py_table_str": (ctypes.c_char_p, [vp, ctypes.c_int, ctypes.c_int]),
+        "fdi_py_table_real": (ctypes.c_double, [vp, ctypes.c_int, ctypes.c_int]),
         "fdi_py_bus_int": (ctypes.c_longlong, [vp, ctypes.c_int, ctypes.c_int]),
         "fdi_py_bus_str": (ctypes.c_char_p, [vp, ctypes.c_int]),
         "fdi_py_param_index": (ctypes.c_int, [ctypes.c_char_p]),
@@ -232,6 +234,9 @@ class TableInfo:
     dt: float  # design sample time = diagnosis step [s]
     signal_names: tuple[str, ...] = ()  # the frame's signals by index
     sens_masks: tuple[int, ...] = ()  # per test: faults whose sensitivity its generator outputs (ascending)
+    sensitivity_margin: float = 1.0  # the on-line rule's margin (fdi_table_t.sensitivity_margin)
+    gates: tuple[float, ...] = ()  # per test: its gate in standard deviations
+    sigmas: tuple[float, ...] = ()  # per test: its fault-free residual's standard deviation
 
     @property
     def n_tests(self) -> int:
@@ -276,6 +281,9 @@ def table_info(name: str) -> TableInfo:
         test_fault_masks=ints(4, nt), test_input_masks=ints(5, nt),
         has_generator=tuple(k != 0 for k in ints(3, nt)), iso_class=ints(6, nf),
         dt=int(dll.fdi_py_table_int(t, 8, 0)) * 1e-6, signal_names=strs(2, ns), sens_masks=ints(10, nt),
+        sensitivity_margin=float(dll.fdi_py_table_real(t, 0, 0)),
+        gates=tuple(float(dll.fdi_py_table_real(t, 1, i)) for i in range(nt)),
+        sigmas=tuple(math.sqrt(float(dll.fdi_py_table_real(t, 2, i))) for i in range(nt)),
     )
 
 

@@ -26,6 +26,9 @@ EXAMPLES = """examples:
   fdi-quality --table romo --trace f6:slalom:2001 --linearity --out out/trace   # and how far each test's response
                                                       # departs from what its sensitivity predicts (rho), with a
                                                       # plot (linearity-f6-slalom-2001.png)
+  fdi-quality --table romo --linearity --seeds 2001 --out out/linearity   # the same over every fault x scenario:
+                                                      # where the tests' rho differ by more than the rule's margin
+                                                      # (linearity.json, linearity.md, linearity.png)
   fdi-quality --table romo --ecu noise_allowance=2 --out out/quality-na2   # a study with another ECU setting
 """
 
@@ -85,30 +88,22 @@ def main(argv: list[str] | None = None) -> int:
                         "--out)")
     p.add_argument("--linearity", action="store_true",
                    help="with --trace: each test's response to the fault against the response its sensitivity "
-                        "predicts (the linearisation the on-line exoneration relies on), and a plot in --out")
-    p.add_argument("-o", "--out", type=Path, default=None, help="folder for quality.json and quality.md")
+                        "predicts (the linearisation the on-line exoneration relies on), and a plot in --out; "
+                        "without: the same over the suite's cases (faults x scenarios x seeds), where the tests' "
+                        "departures exceed the rule's margin (linearity.json, .md and .png in --out)")
+    p.add_argument("-o", "--out", type=Path, default=None,
+                   help="folder for quality.json and quality.md (with --trace or --linearity: their files)")
     args = p.parse_args(argv)
-    if args.linearity and args.trace is None:
-        p.error("--linearity needs --trace FAULT:SCENARIO:SEED")
     try:
         args.ecu = parse_ecu_settings(args.table, args.ecu)
     except ValueError as exc:
         return fail("fdi-quality", exc)
     if args.trace is not None:
         return _trace(args)
-    base = quick_config(args.table) if args.quick else SuiteConfig(table=args.table)
     try:
-        cfg = SuiteConfig(
-            table=args.table,
-            scenarios=tuple(args.scenarios) if args.scenarios else base.scenarios,
-            seeds=tuple(args.seeds) if args.seeds else base.seeds,
-            multipliers=tuple(args.multipliers) if args.multipliers else base.multipliers,
-            shapes=tuple(args.shapes) if args.shapes else base.shapes,
-            faults=tuple(args.faults) if args.faults else (),
-            fault_free_minutes=base.fault_free_minutes if args.fault_free_minutes is None else args.fault_free_minutes,
-            sizes_file=args.sizes,
-            ecu=args.ecu,
-        )
+        cfg = _config(args)
+        if args.linearity:
+            return _survey(cfg, args.out)
         with tqdm(desc="quality", unit="run", file=sys.stderr) as bar:
             def progress(text: str) -> None:
                 bar.set_postfix_str(text[:60])
@@ -126,6 +121,41 @@ def main(argv: list[str] | None = None) -> int:
         write_json(result, args.out / "quality.json")
         write_markdown(result, args.out / "quality.md")
         print(f"wrote {args.out / 'quality.json'} and {args.out / 'quality.md'}")
+    return 0
+
+
+def _config(args: argparse.Namespace) -> SuiteConfig:
+    """The suite's configuration from the command line (--quick's defaults, then what is given)."""
+    base = quick_config(args.table) if args.quick else SuiteConfig(table=args.table)
+    return SuiteConfig(
+        table=args.table,
+        scenarios=tuple(args.scenarios) if args.scenarios else base.scenarios,
+        seeds=tuple(args.seeds) if args.seeds else base.seeds,
+        multipliers=tuple(args.multipliers) if args.multipliers else base.multipliers,
+        shapes=tuple(args.shapes) if args.shapes else base.shapes,
+        faults=tuple(args.faults) if args.faults else (),
+        fault_free_minutes=base.fault_free_minutes if args.fault_free_minutes is None else args.fault_free_minutes,
+        sizes_file=args.sizes,
+        ecu=args.ecu,
+    )
+
+
+def _survey(cfg: SuiteConfig, out: Path | None) -> int:
+    from fdi_host.quality import linearity_survey
+
+    with tqdm(desc="linearity", unit="case", file=sys.stderr) as bar:
+        def progress(text: str) -> None:
+            bar.set_postfix_str(text[:60])
+            bar.update(1)
+
+        survey = linearity_survey.run_survey(cfg, progress)
+    print(linearity_survey.markdown(survey))
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        linearity_survey.write_json(survey, out / "linearity.json")
+        (out / "linearity.md").write_text(linearity_survey.markdown(survey) + "\n")
+        linearity_survey.plot(survey, out / "linearity.png")
+        print(f"wrote {out / 'linearity.json'}, {out / 'linearity.md'} and {out / 'linearity.png'}")
     return 0
 
 

@@ -56,10 +56,26 @@ class TestResponse:
     response: FloatArray  # residual of the faulty drive minus that of the fault-free drive
     predicted: FloatArray  # s F: the sensitivity of the faulty drive times the fault's value
     floor: float  # rms of the fault-free residual over the window: where s F stands out of it
+    gate: float = 0.0  # the test's gate [sigma]
+    sigma: float = 0.0  # the test's fault-free standard deviation (the table's)
+    margin: float = 1.0  # the table's sensitivity margin
+
+    @property
+    def gate_sigma(self) -> float:
+        """gate * sigma: the residual alarms beyond it."""
+        return self.gate * self.sigma
+
+    @property
+    def level(self) -> float:
+        """gate * sigma / sensitivity margin: from here on the rule may use s F (alarmed or quiet)."""
+        return self.gate_sigma / self.margin
 
     def counted(self) -> NDArray[np.bool_]:
-        """The steps of the summary: settled (SETTLE_S after the onset) and s F standing out of the floor."""
-        return (self.t >= SETTLE_S) & (np.abs(self.predicted) > STANDS_OUT * self.floor)
+        """The steps of the summary: settled (SETTLE_S after the onset), s F standing out of the floor and reaching
+        the level where the rule may use it (below it a quiet test clears the fault only at an implied size more
+        than sensitivity_margin times the fault's own)."""
+        pred = np.abs(self.predicted)
+        return (self.t >= SETTLE_S) & (pred > STANDS_OUT * self.floor) & (pred >= self.level)
 
     def ratios(self) -> FloatArray:
         """rho = response / (s F) at the counted steps."""
@@ -115,7 +131,8 @@ def check_case(table: str, fault: str, scenario: str, seed: int, multiplier: flo
         r_free = np.array([b.residuals[i] for _, b in pairs])
         s = np.array([a.sensitivities[i][k] for a, _ in pairs])
         tests.append(TestResponse(info.test_names[i].split(":")[0], t - onset, r_faulty - r_free, s * value,
-                                  float(np.sqrt(np.mean(r_free ** 2)))))
+                                  float(np.sqrt(np.mean(r_free ** 2))), info.gates[i], info.sigmas[i],
+                                  info.sensitivity_margin))
     return Linearity(info, spec, scenario, seed, tuple(tests))
 
 
@@ -129,14 +146,15 @@ def report(lin: Linearity, every_s: float = 0.5) -> str:
             f"{lin.seed}: the response of each test with a sensitivity to {lin.spec.fault} (faulty minus fault-free "
             f"residual, same noise) against s F (its sensitivity on the faulty drive times the fault); rho = "
             f"response / (s F) from {SETTLE_S:g} s after the onset where s F exceeds {STANDS_OUT:g} x the "
-            f"fault-free rms")
+            f"fault-free rms and reaches gate x sigma / sensitivity margin (where the rule may use it)")
     lines = [head]
     if not lin.tests:
         return "\n".join([*lines, f"  no test of the table has a sensitivity to {lin.spec.fault}"])
     for tr in lin.tests:
         rho = tr.ratios()
         summary = (f"rho median {np.median(rho):.2f}, range {rho.min():.2f} to {rho.max():.2f} over {rho.size} steps"
-                   if rho.size else "s F never stands out of the fault-free residual: no rho")
+                   if rho.size else f"s F never reaches {_fmt(tr.level)} (gate x sigma / margin) or stands out of "
+                                    f"the fault-free residual: no rho")
         lines.append(f"  {tr.name}: {summary}")
         marks = np.arange(0.0, float(tr.t[-1]) + 1e-9, every_s)
         idx = sorted({int(np.argmin(np.abs(tr.t - m))) for m in marks})
@@ -159,10 +177,11 @@ def plot(lin: Linearity, path: Path) -> None:
     for ax, tr in zip(axes.flat, lin.tests, strict=False):
         ax.plot(tr.t, tr.response, lw=1.2, label="response (faulty - fault-free)")
         ax.plot(tr.t, tr.predicted, "--", lw=1.2, label="s F (sensitivity x fault)")
-        ax.axhspan(-STANDS_OUT * tr.floor, STANDS_OUT * tr.floor, color="0.9", lw=0)
+        band = max(STANDS_OUT * tr.floor, tr.level)
+        ax.axhspan(-band, band, color="0.9", lw=0)
         rho = tr.ratios()
         ax.set_title(f"{tr.name}: rho {np.median(rho):.2f} ({rho.min():.2f} to {rho.max():.2f})" if rho.size
-                     else f"{tr.name}: s F within the fault-free residual", fontsize=9)
+                     else f"{tr.name}: s F below the level the rule uses", fontsize=9)
         ax.tick_params(labelsize=8)
     for ax in list(axes.flat)[len(lin.tests):]:
         ax.set_visible(False)
@@ -170,7 +189,8 @@ def plot(lin: Linearity, path: Path) -> None:
     for ax in axes[-1]:
         ax.set_xlabel("time after the fault onset [s]")
     fig.suptitle(f"{lin.spec.fault} {lin.spec.magnitude:g}, {lin.scenario}, seed {lin.seed} (table {lin.table.name}): "
-                 f"response against the linearised s F (grey: {STANDS_OUT:g} x fault-free rms)", fontsize=10)
+                 f"response against the linearised s F (grey: below {STANDS_OUT:g} x fault-free rms or gate x sigma / "
+                 f"margin)", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
