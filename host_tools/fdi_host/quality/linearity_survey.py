@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 from fdi_host.ecu.bindings import table_info
 from fdi_host.quality.linearity import SETTLE_S, FloatArray, Linearity, TestResponse, check_case
 from fdi_host.quality.suite import QualityError, SuiteConfig, fault_cases, load_fault_sizes
+from fdi_host.sim.faults import FAULT_IDS
 
 
 @dataclass(frozen=True)
@@ -202,28 +203,30 @@ def write_json(s: Survey, path: Path) -> None:
 
 
 def plot(s: Survey, path: Path) -> None:
-    """Per fault, each test's rho (p5 to p95, median marked), every case pooled; the band is [1/m, m]."""
+    """Per fault (in Table I order), each test's rho (p5 to p95, median marked), every case pooled; the band is
+    [1/m, m]; symmetric log scale, so that a test responding against s F (rho < 0) shows below zero."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    faults = list(dict.fromkeys(r.fault for r in s.pooled))
-    fig, ax = plt.subplots(figsize=(max(8.0, 0.55 * len(faults) + 2.0), 4.2))
+    faults = sorted({r.fault for r in s.pooled if r.steps > 0}, key=FAULT_IDS.index)
+    fig, ax = plt.subplots(figsize=(max(8.0, 0.55 * len(faults) + 2.0), 4.6))
     ax.axhspan(1.0 / s.margin, s.margin, color="0.9", lw=0, label=f"[1/m, m], m = {s.margin:g}")
     ax.axhline(1.0, color="0.6", lw=0.8)
+    ax.axhline(0.0, color="0.3", lw=0.8)
     for x, fault in enumerate(faults):
         rows = [r for r in s.pooled if r.fault == fault and r.steps > 0]
+        width = min(0.8 / len(rows), 0.15)
         for k, r in enumerate(rows):
-            xi = x + (k - (len(rows) - 1) / 2.0) * min(0.8 / max(len(rows), 1), 0.2)
-            lo, hi = max(r.p5, 1e-2), max(r.p95, 1e-2)
-            ax.plot([xi, xi], [lo, hi], color="C0", lw=2.0)
-            ax.plot([xi], [max(r.median, 1e-2)], "o", color="C1", ms=3)
-    ax.set_yscale("log")
+            xi = x + (k - (len(rows) - 1) / 2.0) * width
+            ax.plot([xi, xi], [r.p5, r.p95], color="C0", lw=2.0)
+            ax.plot([xi], [r.median], "o", color="C1", ms=3)
+    ax.set_yscale("symlog", linthresh=0.1)
     ax.set_xticks(range(len(faults)), faults, fontsize=8)
     ax.set_ylabel("rho = response / (s F)")
     ax.set_title(f"table {s.table}: each test's rho per fault (bar p5-p95, dot median; scenarios "
-                 f"{', '.join(s.scenarios)})", fontsize=9)
+                 f"{', '.join(s.scenarios)}; seeds {', '.join(str(x) for x in s.seeds)})", fontsize=9)
     ax.legend(fontsize=8, loc="upper right")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
