@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from tqdm import tqdm
@@ -104,11 +106,7 @@ def main(argv: list[str] | None = None) -> int:
         cfg = _config(args)
         if args.linearity:
             return _survey(cfg, args.out)
-        with tqdm(desc="quality", unit="run", file=sys.stderr) as bar:
-            def progress(text: str) -> None:
-                bar.set_postfix_str(text[:60])
-                bar.update(1)
-
+        with _progress("quality", "run") as progress:
             result = run_suite(cfg, progress)
     except (QualityError, OSError) as exc:
         return fail("fdi-quality", exc)
@@ -122,6 +120,17 @@ def main(argv: list[str] | None = None) -> int:
         write_markdown(result, args.out / "quality.md")
         print(f"wrote {args.out / 'quality.json'} and {args.out / 'quality.md'}")
     return 0
+
+
+@contextmanager
+def _progress(desc: str, unit: str) -> Iterator[Callable[[str], None]]:
+    """A progress bar on stderr; the callable counts one unit of work and shows its text."""
+    with tqdm(desc=desc, unit=unit, file=sys.stderr) as bar:
+        def progress(text: str) -> None:
+            bar.set_postfix_str(text[:60])
+            bar.update(1)
+
+        yield progress
 
 
 def _config(args: argparse.Namespace) -> SuiteConfig:
@@ -143,11 +152,7 @@ def _config(args: argparse.Namespace) -> SuiteConfig:
 def _survey(cfg: SuiteConfig, out: Path | None) -> int:
     from fdi_host.quality import linearity_survey
 
-    with tqdm(desc="linearity", unit="case", file=sys.stderr) as bar:
-        def progress(text: str) -> None:
-            bar.set_postfix_str(text[:60])
-            bar.update(1)
-
+    with _progress("linearity", "case") as progress:
         survey = linearity_survey.run_survey(cfg, progress)
     print(linearity_survey.markdown(survey))
     if out is not None:
