@@ -158,7 +158,7 @@ def _survey(cfg: SuiteConfig, out: Path | None) -> int:
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         linearity_survey.write_json(survey, out / "linearity.json")
-        (out / "linearity.md").write_text(linearity_survey.markdown(survey) + "\n")
+        linearity_survey.write_markdown(survey, out / "linearity.md")
         linearity_survey.plot(survey, out / "linearity.png")
         print(f"wrote {out / 'linearity.json'}, {out / 'linearity.md'} and {out / 'linearity.png'}")
     return 0

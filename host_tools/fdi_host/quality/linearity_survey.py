@@ -183,23 +183,23 @@ def _share(x: float) -> str:
     return "-" if math.isnan(x) else f"{100.0 * x:.0f} %"
 
 
-def _finite(x: float) -> float | str | None:
-    if math.isnan(x):
-        return None
-    return "inf" if math.isinf(x) else x
+def _json_safe(obj: object) -> object:
+    """NaN (no value) as null, an infinite spread as "inf": strict JSON."""
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None if math.isnan(obj) else "inf"
+    if isinstance(obj, dict):
+        return {k: _json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_json_safe(v) for v in obj]
+    return obj
 
 
 def write_json(s: Survey, path: Path) -> None:
-    def clean(obj: object) -> object:
-        if isinstance(obj, float):
-            return _finite(obj)
-        if isinstance(obj, dict):
-            return {k: clean(v) for k, v in obj.items()}
-        if isinstance(obj, list | tuple):
-            return [clean(v) for v in obj]
-        return obj
+    path.write_text(json.dumps(_json_safe(asdict(s)), indent=1, allow_nan=False) + "\n", encoding="utf-8")
 
-    path.write_text(json.dumps(clean(asdict(s)), indent=1) + "\n")
+
+def write_markdown(s: Survey, path: Path) -> None:
+    path.write_text(markdown(s) + "\n", encoding="utf-8")
 
 
 def plot(s: Survey, path: Path) -> None:
