@@ -92,7 +92,7 @@
  * scripts/bench_fw.sh (instructions per step of the vehicle tables it benchmarks over a simulated drive on x86-64
  * with callgrind and on Cortex-M4F under qemu -icount: fault-free, in an episode with one class left, in one with
  * several (undecided), largest step).
- * Memory: sizeof(fdi_diag_t) ~ 184 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28) +
+ * Memory: sizeof(fdi_diag_t) ~ 192 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 33) +
  * 12 * FDI_DIAG_MAX_FILTERS + 4 * FDI_DIAG_MAX_SENS + 10 * FDI_TABLE_MAX_FAULTS + 2 * FDI_GEN_MAX_SLOTS +
  * 4 * FDI_DIAG_MAX_SENS_EVERY bytes (bound
  * asserted below; scripts/bench_fw.sh prints the value), caller-owned (static or stack); the library itself has no
@@ -179,12 +179,15 @@ typedef struct
     uint8_t n_tests;
     bool sensitivities;
     uint8_t sens_every; /* fdi_diag_config_t.sens_every */
+    uint8_t n_domains;  /* runs of consecutive tests whose generators share a domain function (runnable()) */
     uint32_t signals;   /* signals read by some test (finiteness checked once per step) */
     uint32_t accused;   /* tests in alarm at some step of the current episode (0: no episode) */
     uint32_t rearm;     /* tests whose generator must be reset at the next usable step */
     uint32_t alarm;     /* tests in alarm (last step) */
     uint32_t evaluable; /* tests evaluable (last step) */
     uint32_t set_tests; /* tests whose generator is a slot of the set */
+    uint32_t gen_tests; /* tests with a generator */
+    uint32_t inputs;    /* signals read by some test */
     uint32_t sens_tests; /* tests whose generator outputs at least one sensitivity */
     bool slots_in_order; /* every test of the set is its slot (masks of tests are masks of slots) */
     uint32_t size_tests; /* tests with a reaction size for a fault they give no sensitivity of (fdi_iso) */
@@ -203,6 +206,8 @@ typedef struct
     uint8_t filt_base[FDI_DIAG_MAX_TESTS]; /* hand-written test i: its filters at filt[filt_base[i]] */
     uint8_t slot_test[FDI_GEN_MAX_SLOTS];  /* slot k of the set -> its test */
     uint8_t slot_sens[FDI_GEN_MAX_SLOTS];  /* slot k of the set -> its test's first sensitivity in sens[] */
+    uint8_t domain_test[FDI_DIAG_MAX_TESTS];   /* run k: its first test */
+    uint32_t domain_tests[FDI_DIAG_MAX_TESTS]; /* run k: its tests */
     float residual[FDI_DIAG_MAX_TESTS];
     float ratio[FDI_DIAG_MAX_TESTS];
     uint16_t warm[FDI_DIAG_MAX_TESTS];
@@ -225,8 +230,8 @@ typedef struct
 } fdi_diag_t; /* opaque by convention */
 
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
-FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (184U + (sizeof(void *) * 2U) +
-                                         (FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 28U)) +
+FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (192U + (sizeof(void *) * 2U) +
+                                         (FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 33U)) +
                                          (sizeof(fdi_svf_t) * FDI_DIAG_MAX_FILTERS) +
                                          (sizeof(float) * FDI_DIAG_MAX_SENS) +
                                          (((2U * sizeof(float)) + sizeof(uint16_t)) * FDI_TABLE_MAX_FAULTS) +

@@ -400,6 +400,7 @@ static void test_operating_domain(void **state)
                                    .noise_allowance = 3.0f, .sensitivities = false};
     const uint32_t all = ((uint32_t)1U << fdi_romo_table.n_tests) - 1U;
     uint32_t low;
+    uint32_t readers;
     int n;
     (void)state;
     frame(&in, 0.5f);
@@ -449,6 +450,20 @@ static void test_operating_domain(void **state)
     assert_int_equal(fdi_diag_step(&d, &in, ROMO_SIGM_ALL), FDI_OK);
     assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
     assert_int_equal(res.evaluable_mask, all);
+    /* a signal missing: the tests that read it stop, the others of the same domain function run on */
+    readers = 0U;
+    for (n = 0; n < (int)fdi_romo_table.n_tests; ++n)
+    {
+        readers |= ((fdi_romo_table.tests[n].input_mask & ROMO_SIGM_OMEGA1_M) != 0U) ? ((uint32_t)1U << (uint32_t)n) : 0U;
+    }
+    assert_true((readers != 0U) && ((low & ~readers) != 0U)); /* tyre-law tests on both sides */
+    assert_int_equal(fdi_diag_step(&d, &in, ROMO_SIGM_ALL & ~ROMO_SIGM_OMEGA1_M), FDI_OK);
+    assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
+    assert_int_equal(res.evaluable_mask, all & ~readers);
+    frame(&in, 0.5f); /* and below the domain's speed as well: the kinematic tests that do not read it */
+    assert_int_equal(fdi_diag_step(&d, &in, ROMO_SIGM_ALL & ~ROMO_SIGM_OMEGA1_M), FDI_OK);
+    assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
+    assert_int_equal(res.evaluable_mask, all & ~low & ~readers);
 }
 
 /* With sensitivities requested every generated generator computes the same residual, bit for bit, as without,
