@@ -5,6 +5,7 @@
 #include <math.h>
 #include <stddef.h>
 
+#include "fdi_eval_internal.h"
 #include "fdi_float.h"
 #include "fdi_gen_internal.h"
 
@@ -699,20 +700,17 @@ static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r, bool *alarm
         self->residual[i] = r;
         self->ratio[i] = 0.0f;
     }
+    else if (fdi_float_is_finite(r)) /* fdi_eval_step() without its argument checks: self->eval[i] is initialised */
+    {
+        float ratio = 0.0f;
+        evaluable = true;
+        *alarm = fdi_eval_update(&self->eval[i], r, &ratio);
+        self->residual[i] = r;
+        self->ratio[i] = ratio;
+    }
     else
     {
-        fdi_eval_out_t eo = {FDI_TEST_OK, 0.0f};
-        if (fdi_eval_step(&self->eval[i], r, &eo) == FDI_OK)
-        {
-            evaluable = true;
-            *alarm = (eo.status == FDI_TEST_ALARM);
-            self->residual[i] = r;
-            self->ratio[i] = eo.ratio;
-        }
-        else
-        {
-            self->rearm |= bit;
-        }
+        self->rearm |= bit;
     }
     return evaluable;
 }

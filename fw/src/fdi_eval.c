@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stddef.h>
 
+#include "fdi_eval_internal.h"
 #include "fdi_float.h"
 
 static bool eval_positive_finite(float x)
@@ -76,17 +77,6 @@ fdi_status_t fdi_eval_reset(fdi_eval_t *self)
     return st;
 }
 
-static float cusum(float g, float inc, float h2)
-{
-    const float v = g + inc;
-    return (v < 0.0f) ? 0.0f : ((v > h2) ? h2 : v);
-}
-
-static uint16_t count_up(uint16_t n)
-{
-    return (n < UINT16_MAX) ? (uint16_t)(n + 1U) : n;
-}
-
 fdi_status_t fdi_eval_step(fdi_eval_t *self, float r, fdi_eval_out_t *out)
 {
     fdi_status_t st = FDI_OK;
@@ -100,32 +90,8 @@ fdi_status_t fdi_eval_step(fdi_eval_t *self, float r, fdi_eval_out_t *out)
     }
     else
     {
-        const float z = r * self->inv_sigma;
-        const float ratio = z * z * self->inv_gate2; /* may be +Inf for huge r: still an alarm */
-        const float h2 = 2.0f * self->h;
-        bool raw;
-        self->g_pos = cusum(self->g_pos, z - self->k, h2);
-        self->g_neg = cusum(self->g_neg, -z - self->k, h2);
-        raw = (ratio > 1.0f) || (self->g_pos > self->h) || (self->g_neg > self->h);
-        if (!self->alarm)
-        {
-            self->n_raw = raw ? count_up(self->n_raw) : 0U;
-            if (self->n_raw >= self->set_count)
-            {
-                self->alarm = true;
-                self->n_quiet = 0U;
-            }
-        }
-        else
-        {
-            self->n_quiet = raw ? 0U : count_up(self->n_quiet);
-            if (self->n_quiet >= self->clear_count)
-            {
-                self->alarm = false;
-                self->n_raw = 0U;
-            }
-        }
-        out->status = self->alarm ? FDI_TEST_ALARM : FDI_TEST_OK;
+        float ratio = 0.0f;
+        out->status = fdi_eval_update(self, r, &ratio) ? FDI_TEST_ALARM : FDI_TEST_OK;
         out->ratio = ratio;
     }
     return st;

@@ -323,6 +323,7 @@ static void test_slots_run(void **state)
     float r[FDI_GEN_MAX_SLOTS];
     float sens[FDI_DIAG_MAX_SENS];
     const uint32_t all = ((uint32_t)1U << FDI_ROMO_N_GENERATORS) - 1U;
+    uint32_t failed;
     uint32_t i;
     int n;
     (void)state;
@@ -347,7 +348,15 @@ static void test_slots_run(void **state)
     wheel_frame(2.0, &in);
     in.value[ROMO_SIG_OMEGA1_M] = 3.0e38f;
     in.value[ROMO_SIG_AX_M] = -3.0e38f;
-    assert_true(test_set_step(&ts, &p, &in, all, false, r, NULL) != 0U);
+    failed = test_set_step(&ts, &p, &in, all, false, r, NULL);
+    assert_true(failed != 0U);
+    for (i = 0U; i < FDI_ROMO_N_GENERATORS; ++i)
+    {
+        if (!fdi_float_is_finite(r[i])) /* every slot whose residual is not finite says so, observers included */
+        {
+            assert_true((failed & ((uint32_t)1U << i)) != 0U);
+        }
+    }
 }
 
 static void frame(fdi_frame_t *in, float vx)

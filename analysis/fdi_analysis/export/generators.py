@@ -193,7 +193,9 @@ ${predict}
             /* the observer input kept for the next step takes this prediction's gain l (at xp, not again at xh) */
 ${at_new}
             io->r[io->at[${slot}]] = value;
-            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK))
+            /* a non-finite value makes the stored input non-finite too (l * value is NaN or +-Inf for any l), and
+               fdi_gen_obs_store() refuses it: one check covers both */
+            if (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK)
             {
                 io->failed |= 0x${bit}U;
             }

@@ -742,7 +742,9 @@ static void romo_gen_step(fdi_gen_io_t *io)
             const float fx = (b[0].x1 + (-(t39 * (t39 + b[4].x1))));
             const float value = ((-t38) + (-(t27 * (1.0f / (t43)) * t45 * (1.0f / (sqrtf((1.0f + (t44 * (t45 * t45)) + (t44 * (((-(t3 * t40)) + (t4 * t41)) * ((-(t3 * t40)) + (t4 * t41)))))))))));
             io->r[io->at[2]] = value;
-            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK))
+            /* a non-finite value makes the stored input non-finite too (l * value is NaN or +-Inf for any l), and
+               fdi_gen_obs_store() refuses it: one check covers both */
+            if (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK)
             {
                 io->failed |= 0x00000004U;
             }
@@ -949,7 +951,9 @@ static void romo_gen_step(fdi_gen_io_t *io)
             const float fx = ((-t103) + (-5.85f * t184) + (-(t105 * fdi_gen_tanh((2.0f * xh)))));
             const float value = ((-t179) + (-19.5f * t106 * t184) + (-(t145 * t183)));
             io->r[io->at[5]] = value;
-            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK))
+            /* a non-finite value makes the stored input non-finite too (l * value is NaN or +-Inf for any l), and
+               fdi_gen_obs_store() refuses it: one check covers both */
+            if (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK)
             {
                 io->failed |= 0x00000020U;
             }
@@ -1205,7 +1209,9 @@ static void romo_gen_step(fdi_gen_io_t *io)
             const float fx = ((-t185) + (-(t105 * fdi_gen_tanh((2.0f * xh)))) + (-(t235 * t242)));
             const float value = ((-t234) + (-(t215 * t243)) + (-(t217 * t243)) + (-(t187 * t242 * t244)) + (64.49793f * t160 * t187 * t236 * t239 * t240));
             io->r[io->at[6]] = value;
-            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK))
+            /* a non-finite value makes the stored input non-finite too (l * value is NaN or +-Inf for any l), and
+               fdi_gen_obs_store() refuses it: one check covers both */
+            if (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK)
             {
                 io->failed |= 0x00000040U;
             }
@@ -1461,7 +1467,9 @@ static void romo_gen_step(fdi_gen_io_t *io)
             const float fx = ((-t245) + (-5.85f * t288) + (-(t247 * fdi_gen_tanh((2.0f * xh)))));
             const float value = ((-t281) + (-(t271 * t287)) + (-(t273 * t287)) + (-(t288 * t289)) + (64.49793f * t153 * t282 * t285 * t286 * t3));
             io->r[io->at[7]] = value;
-            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK))
+            /* a non-finite value makes the stored input non-finite too (l * value is NaN or +-Inf for any l), and
+               fdi_gen_obs_store() refuses it: one check covers both */
+            if (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK)
             {
                 io->failed |= 0x00000080U;
             }
@@ -1709,7 +1717,9 @@ static void romo_gen_step(fdi_gen_io_t *io)
             const float fx = ((-t103) + (-5.85f * t328) + (-(t105 * fdi_gen_tanh((2.0f * xh)))));
             const float value = ((-t321) + (-(t314 * t327)) + (-(t315 * t328)) + (-(t328 * t329)) + (64.49793f * t106 * t111 * t300 * t325 * t326));
             io->r[io->at[8]] = value;
-            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK))
+            /* a non-finite value makes the stored input non-finite too (l * value is NaN or +-Inf for any l), and
+               fdi_gen_obs_store() refuses it: one check covers both */
+            if (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK)
             {
                 io->failed |= 0x00000100U;
             }
@@ -1941,7 +1951,9 @@ static void romo_gen_step(fdi_gen_io_t *io)
             const float fx = ((-t185) + (-(t105 * fdi_gen_tanh((2.0f * xh)))) + (-(t235 * t357)));
             const float value = ((-t352) + (-(t348 * t356)) + (-(t187 * t244 * t357)));
             io->r[io->at[9]] = value;
-            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK))
+            /* a non-finite value makes the stored input non-finite too (l * value is NaN or +-Inf for any l), and
+               fdi_gen_obs_store() refuses it: one check covers both */
+            if (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK)
             {
                 io->failed |= 0x00000200U;
             }
@@ -2271,7 +2283,9 @@ static void romo_gen_step(fdi_gen_io_t *io)
             const float fx = t358;
             const float value = ((-t465) + (-(t177 * xh)) + (-39.0f * t3 * t473) + (-64.49793f * t4 * t473) + (-39.0f * t109 * t476 * (1.0f / (t477)) * (t126 + t472) * (1.0f / (sqrtf((1.0f + ((t476 * t476) * t478) + (t478 * (((-t414) + (-(t109 * t475))) * ((-t414) + (-(t109 * t475)))))))))) + (-64.49793f * t479 * t484 * t485 * t486 * t79) + (64.49793f * t483 * t484 * t485 * t486 * t80));
             io->r[io->at[10]] = value;
-            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK))
+            /* a non-finite value makes the stored input non-finite too (l * value is NaN or +-Inf for any l), and
+               fdi_gen_obs_store() refuses it: one check covers both */
+            if (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK)
             {
                 io->failed |= 0x00000400U;
             }
@@ -2377,7 +2391,9 @@ static void romo_gen_step(fdi_gen_io_t *io)
             const float fx = ((-t487) + (-(t247 * fdi_gen_tanh((2.0f * xh)))) + (-5.85f * t512 * t517));
             const float value = ((-t511) + (-(t509 * t517)) + (64.49793f * t498 * t512 * t515 * t516 * t80));
             io->r[io->at[11]] = value;
-            if (!fdi_float_is_finite(value) || (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK))
+            /* a non-finite value makes the stored input non-finite too (l * value is NaN or +-Inf for any l), and
+               fdi_gen_obs_store() refuses it: one check covers both */
+            if (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK)
             {
                 io->failed |= 0x00000800U;
             }
