@@ -700,7 +700,7 @@ static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r, bool *alarm
         self->residual[i] = r;
         self->ratio[i] = 0.0f;
     }
-    else if (fdi_float_is_finite(r)) /* fdi_eval_step() without its argument checks: self->eval[i] is initialised */
+    else if (fdi_float_is_finite(r)) /* fdi_eval_step()'s evaluation inline: eval[i] is initialised, r checked here */
     {
         float ratio = 0.0f;
         evaluable = true;
@@ -1233,7 +1233,8 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
             const uint32_t bit = (uint32_t)1U << i;
             bool test_alarm = false;
             const bool test_ok = (ok & bit) != 0U; /* r[i] holds the generator's residual */
-            const bool test_evaluable = ((run & bit) != 0U) && evaluate(self, i, test_ok, test_ok ? r[i] : 0.0f, &test_alarm);
+            const bool test_evaluable =
+                ((run & bit) != 0U) && evaluate(self, i, test_ok, test_ok ? r[i] : 0.0f, &test_alarm);
             const float ri = self->residual[i];
             if (test_evaluable && ((self->evaluable & bit) != 0U))
             {
