@@ -463,7 +463,8 @@ static void test_operating_domain(void **state)
     readers = 0U;
     for (n = 0; n < (int)fdi_romo_table.n_tests; ++n)
     {
-        readers |= ((fdi_romo_table.tests[n].input_mask & ROMO_SIGM_OMEGA1_M) != 0U) ? ((uint32_t)1U << (uint32_t)n) : 0U;
+        const bool reads = (fdi_romo_table.tests[n].input_mask & ROMO_SIGM_OMEGA1_M) != 0U;
+        readers |= reads ? ((uint32_t)1U << (uint32_t)n) : 0U;
     }
     assert_true((readers != 0U) && ((low & ~readers) != 0U)); /* tyre-law tests on both sides */
     assert_int_equal(fdi_diag_step(&d, &in, ROMO_SIGM_ALL & ~ROMO_SIGM_OMEGA1_M), FDI_OK);
