@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Set up everything the project needs on a fresh Debian machine: Debian packages (only the missing ones)
-# and a Python venv under .venv with the project installed in editable mode (this builds the C extension).
-# Safe to run again: it only does what is still missing.
+# and a Python venv under .venv with the project installed in editable mode (this builds the C extension), its
+# dependencies at the versions of constraints.txt (the ones CI and the committed generated files are verified with).
+# Safe to run again: it only does what is still missing (a changed pyproject.toml or constraints.txt reinstalls).
 set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$top"
@@ -22,15 +23,16 @@ if [ "${#missing[@]}" -gt 0 ]; then
 fi
 
 py="${PYTHON:-python3}"
-stamp=".venv/.installed-$(cat pyproject.toml $(ls setup.py 2>/dev/null) | sha1sum | cut -c1-12)"
+stamp=".venv/.installed-$(cat pyproject.toml constraints.txt $(ls setup.py 2>/dev/null) | sha1sum | cut -c1-12)"
 if [ ! -x .venv/bin/python ]; then
   echo "bootstrap: creating .venv"
   "$py" -m venv .venv
 fi
 if [ ! -f "$stamp" ]; then
   echo "bootstrap: installing the project and its dev dependencies into .venv"
-  .venv/bin/python -m pip install -q --upgrade pip "setuptools>=68" wheel
-  .venv/bin/python -m pip install -q -e ".[dev]"
+  .venv/bin/python -m pip install -q -c constraints.txt --upgrade pip setuptools wheel
+  # without build isolation: the build uses the pinned setuptools and wheel just installed
+  .venv/bin/python -m pip install -q -c constraints.txt --no-build-isolation -e ".[dev]"
   rm -f .venv/.installed-*
   touch "$stamp"
 fi

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The wheel outside the checkout: build it from a copy of the checkout, install it into a clean venv in a
-# temporary folder, and run the command lines there with their defaults (shipped models, scenarios and DBC,
-# the compiled ECU bindings); the shipped files are compared byte for byte with their sources. ~1-2 min
-# (two C extensions; the dependencies come from pip's cache after the first run).
+# temporary folder (its dependencies at the versions of constraints.txt), and run the command lines there with
+# their defaults (shipped models, scenarios and DBC, the compiled ECU bindings); the shipped files are compared byte
+# for byte with their sources. ~1-2 min (two C extensions; the dependencies come from pip's cache after the first
+# run). The newest versions the registry serves are tried by scripts/update_constraints.sh.
 set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 py="${PYTHON:-python3}"
@@ -18,7 +19,7 @@ wheel="$(ls "$work"/dist/romo_fdi-*.whl)"
 echo "built $(basename "$wheel") ($(du -k "$wheel" | cut -f1) kB)"
 
 "$py" -m venv "$work/venv"
-"$work/venv/bin/python" -m pip install -q "$wheel"
+"$work/venv/bin/python" -m pip install -q -c "$top/constraints.txt" "$wheel"
 bin="$work/venv/bin"
 mkdir "$work/run" && cd "$work/run"
 

@@ -4,6 +4,7 @@ source, ``--version`` on every command line, and exit codes 1 (runtime) / 2 (usa
 
 from __future__ import annotations
 
+import importlib.metadata
 import json
 import os
 import re
@@ -61,6 +62,40 @@ def test_license_metadata_and_optional_python_sat() -> None:
     assert any(r.startswith("python-sat") and 'extra == "sat"' in r for r in doc["requires"])
     assert any(r.startswith("dask[distributed]") and 'extra == "fleet"' in r for r in doc["requires"])
     assert any(r.startswith("dask[distributed]") and 'extra == "dev"' in r for r in doc["requires"])
+
+
+def _dist(name: str) -> str:
+    """A distribution's name in normalised form (PEP 503)."""
+    return re.sub(r"[-_.]+", "-", name).lower()
+
+
+def _pins() -> dict[str, str]:
+    """constraints.txt: distribution -> pinned version (every line `name==version`)."""
+    pins: dict[str, str] = {}
+    for n, line in enumerate((REPO / "constraints.txt").read_text(encoding="utf-8").splitlines(), 1):
+        if line.startswith("#") or not line.strip():
+            continue
+        m = re.fullmatch(r"([A-Za-z0-9][A-Za-z0-9._-]*)==(\S+)", line.strip())
+        assert m, f"constraints.txt:{n}: not name==version: {line!r}"
+        assert _dist(m[1]) not in pins, f"constraints.txt:{n}: {m[1]} pinned twice"
+        pins[_dist(m[1])] = m[2]
+    return pins
+
+
+def test_every_dependency_is_pinned_and_installed_at_its_pin() -> None:
+    """The committed generated C and CI's results hold for one set of versions: every dependency that
+    pyproject.toml declares (build, run, extras) is pinned in constraints.txt, and the environment running these
+    tests has the pinned version of every pinned distribution it holds (scripts/bootstrap.sh installs them so)."""
+    pins = _pins()
+    declared = [*PYPROJECT["build-system"]["requires"], *PYPROJECT["project"]["dependencies"],
+                *(r for extra in PYPROJECT["project"]["optional-dependencies"].values() for r in extra)]
+    names = {_dist(re.split(r"[\s\[<>=!~;]", r, maxsplit=1)[0]) for r in declared}
+    assert not sorted(names - set(pins)), f"declared in pyproject.toml, not pinned in constraints.txt: " \
+        f"{sorted(names - set(pins))}"
+    installed = {_dist(d.metadata["Name"]): d.version for d in importlib.metadata.distributions()}
+    moved = {n: (v, installed[n]) for n, v in pins.items() if n in installed and installed[n] != v}
+    assert not moved, f"installed versions differ from constraints.txt (pinned, installed): {moved}; " \
+        "run bash scripts/bootstrap.sh"
 
 
 def test_shipped_files_have_one_source_in_the_repository() -> None:
