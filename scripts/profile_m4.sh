@@ -3,9 +3,10 @@
 # warm-up, fault-free, an episode with one class left, an undecided one) and per function, from qemu's instruction
 # trace of a profile build of the bare-metal bench (fw/bench/m4/bench_m4.c with -DBENCH_PROFILE, -g) analysed by
 # fw/bench/m4/profile.py. Prints numbers; not a test. The trace (~300 MB) is deleted afterwards.
-# Usage: scripts/profile_m4.sh [romo|kin] [off|on] [--lines FUNCTION]
+# Usage: scripts/profile_m4.sh [romo|kin] [off|on] [--lines FUNCTION] [--ops FUNCTION] [--top N]
 #   (default: the generated ROMO table as the ECU runs it: off; --lines also prints where FUNCTION's instructions go
-#   by source line, the code the compiler inlined into it included)
+#   by source line, the code the compiler inlined into it included; --ops its instruction mix: mnemonics, and loads
+#   and stores by what they address, the stack's being spilled values)
 set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$top"

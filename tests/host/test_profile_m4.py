@@ -73,3 +73,33 @@ def test_lines_spread_one_functions_instructions_over_its_source_lines(tmp_path:
     assert out[1].split() == ["10.0", "71.4", "%", "d.c:9"]
     assert out[2].split() == ["4.0", "28.6", "%", "d.c:7"]
     assert out[3].startswith("undecided: fdi_diag_step, 14 instructions")
+
+
+def test_ops_counts_one_functions_instructions_by_kind(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # romo_gen_step's block: a spill store and reload, a constant from the literal pool, an input, two multiplies,
+    # a division, a push; the diagnoser's blocks are all nop
+    gen = ["e92d 4ff0  push.w   {r4, r5, r6, r7, r8, sb, sl, fp, lr}", "ed8d 0a01  vstr     s0, [sp, #4]",
+           "ed9f 7a05  vldr     s14, [pc, #0x14]", "ed90 7a02  vldr     s14, [r0, #8]",
+           "ee27 7a27  vmul.f32 s14, s14, s15", "ee27 7a27  vmul.f32 s14, s14, s15",
+           "ee87 7a27  vdiv.f32 s14, s14, s15", "ed9d 0a01  vldr     s0, [sp, #4]"]
+    log = "".join([block(0x100, 5), block(0x200, 2), block(0x210, 3), block(0x300, 10), block(0x308, 4)])
+    log += "IN: x\n" + "".join(f"0x{0x400 + 4 * k:08x}:  {ins}\n" for k, ins in enumerate(gen)) + "\n"
+    steps = [0x100, 0x200, 0x300, 0x400, 0x308, 0x100, 0x200, 0x300, 0x308, 0x100, 0x210, 0x300, 0x400, 0x400,
+             0x308, 0x100]
+    log += "".join(run(a) for a in steps)
+    trace = tmp_path / "trace.log"
+    trace.write_text(log)
+    prof = profile_m4.profile(trace, FakeSymbols(), "romo_gen_step")
+    assert prof.per["fault-free"]["romo_gen_step"] == 8 and prof.per["undecided"]["romo_gen_step"] == 16
+    profile_m4.print_ops(prof, "romo_gen_step", 10)
+    out = capsys.readouterr().out.splitlines()
+    # fault-free: one execution in two steps; stack accesses: push, vstr [sp], vldr [sp] = 3 of 8
+    assert out[0] == ("fault-free: romo_gen_step, 4 instructions per step by kind; the stack's loads and stores 2 "
+                      "(37.5 %)")
+    rows = {" ".join(r.split()[3:]): float(r.split()[0]) for r in out[1:8]}
+    assert rows == {"vldr (stack)": 0.5, "vmul.f32": 1.0, "vstr (stack)": 0.5, "vldr (literal pool)": 0.5,
+                    "vldr (memory)": 0.5, "vdiv.f32": 0.5, "push.w (stack)": 0.5}
+    assert out[8].startswith("undecided: romo_gen_step, 16 instructions per step by kind")
+    assert profile_m4.op_kind("ldr.w", "r3, [pc, #0x1c]") == "ldr.w (literal pool)"
+    assert profile_m4.op_kind("vpop", "{s16, s17}") == "vpop (stack)"
+    assert profile_m4.op_kind("vmla.f32", "s0, s1, s2") == "vmla.f32"

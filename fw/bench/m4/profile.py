@@ -7,9 +7,13 @@ bench_step_<phase> function up to the next block of the harness (bench_m4.c's ow
 instructions count for the function holding it (the ELF's symbols, arm-none-eabi-nm). Printed: per phase the mean
 instructions per step in total and per function (the largest first), from the same run, so they add up. With
 --lines FUNCTION, also the source lines of that function (and of what the compiler inlined into it) where its
-instructions go, per phase (arm-none-eabi-addr2line of every executed instruction's address).
+instructions go, per phase (arm-none-eabi-addr2line of every executed instruction's address). With --ops FUNCTION,
+its instruction mix per phase: executed instructions by mnemonic, the loads and stores by what they address (the
+stack: spilled values and locals; the literal pool: constants; other memory), so that a long function shows how
+much of it moves values rather than computes them, and how many of its instructions take more than one cycle
+(divisions and square roots: 14 on the Cortex-M4F's FPU).
 
-Usage: python fw/bench/m4/profile.py TRACE.log FIRMWARE.elf [--top N] [--lines FUNCTION]
+Usage: python fw/bench/m4/profile.py TRACE.log FIRMWARE.elf [--top N] [--lines FUNCTION] [--ops FUNCTION]
 """
 
 from __future__ import annotations
@@ -26,7 +30,8 @@ PHASES = {"bench_step_warmup": "warm-up", "bench_step_fault_free": "fault-free",
 # the harness (bench_m4.c and its start-up): a block of these ends the step under way
 HARNESS = {"main", "bench_table_drive", "bench_phase_step", "put", "put_u", "put_phase", "semi_call", "read_drive",
            "ticks_since", "cal_loop", "Reset_Handler", "bench_exit"}
-BLOCK = re.compile(r"^0x([0-9a-f]{8}):\s")
+BLOCK = re.compile(r"^0x([0-9a-f]{8}):\s+(?:[0-9a-f]{4} ){1,2}\s*(\S+)\s*(.*)$")
+MEMORY = ("ldr", "str", "vldr", "vstr", "vldm", "vstm", "vpush", "vpop", "push", "pop")
 EXEC = re.compile(r"^Trace \d+: 0x[0-9a-f]+ \[[0-9a-f]+/([0-9a-f]+)/")
 
 
@@ -60,12 +65,24 @@ class Profile:
         self.steps: Counter[str] = Counter()
         self.blocks: dict[str, Counter[int]] = defaultdict(Counter)  # phase -> block start -> executions
         self.insns: dict[int, list[int]] = {}  # block start -> its instructions' addresses
+        self.ops: dict[int, list[str]] = {}  # block start -> its instructions' kinds (op_kind)
+
+
+def op_kind(mnemonic: str, operands: str) -> str:
+    """An instruction's kind for the mix: its mnemonic, a load or store with what it addresses (the stack, the
+    literal pool of constants, other memory; push and pop are stack accesses by name)."""
+    if not mnemonic.startswith(MEMORY):
+        return mnemonic
+    if mnemonic.startswith(("vpush", "vpop", "push", "pop")) or "[sp" in operands:
+        return f"{mnemonic} (stack)"
+    return f"{mnemonic} (literal pool)" if "[pc" in operands else f"{mnemonic} (memory)"
 
 
 def profile(trace: Path, syms: Symbols, lines_of: str | None = None) -> Profile:
     """Read the trace; block executions are kept for the function lines_of."""
     out = Profile()
     addrs: list[int] = []
+    kinds: list[str] = []
     cur: int | None = None
     names: dict[int, str] = {}
     phase: str | None = None
@@ -74,11 +91,13 @@ def profile(trace: Path, syms: Symbols, lines_of: str | None = None) -> Profile:
             m = BLOCK.match(line)
             if m:
                 addrs.append(int(m.group(1), 16))
+                kinds.append(op_kind(m.group(2), m.group(3)))
                 cur = addrs[0]
                 continue
             if cur is not None:  # the end of a block's listing
                 out.insns[cur] = addrs
-                cur, addrs = None, []
+                out.ops[cur] = kinds
+                cur, addrs, kinds = None, [], []
             m = EXEC.match(line)
             if not m:
                 continue
@@ -132,14 +151,35 @@ def print_lines(prof: Profile, elf: Path, fn: str, top: int) -> None:
             print(f"  {ins / n:8,.1f}  {100 * ins / total:5.1f} %  {loc}")
 
 
+def print_ops(prof: Profile, fn: str, top: int) -> None:
+    """Per phase, fn's executed instructions by kind (op_kind; the most first) and its stack loads and stores."""
+    for phase in PHASES.values():
+        n = prof.steps.get(phase, 0)
+        if n == 0 or not prof.blocks[phase]:
+            continue
+        mix: Counter[str] = Counter()
+        for b, times in prof.blocks[phase].items():
+            for k in prof.ops.get(b, ()):
+                mix[k] += times
+        total = sum(mix.values())
+        stack = sum(v for k, v in mix.items() if k.endswith("(stack)"))
+        print(f"{phase}: {fn}, {total / n:,.0f} instructions per step by kind; the stack's loads and stores "
+              f"{stack / n:,.0f} ({100 * stack / total:.1f} %)")
+        for kind, ins in mix.most_common(top):
+            print(f"  {ins / n:8,.1f}  {100 * ins / total:5.1f} %  {kind}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("trace", type=Path)
     ap.add_argument("elf", type=Path)
     ap.add_argument("--top", type=int, default=12, help="functions listed per phase (default 12)")
     ap.add_argument("--lines", metavar="FUNCTION", help="also where FUNCTION's instructions go, by source line")
+    ap.add_argument("--ops", metavar="FUNCTION", help="also FUNCTION's instruction mix (kinds of instructions)")
     args = ap.parse_args()
-    prof = profile(args.trace, Symbols(args.elf), args.lines)
+    if args.lines and args.ops and args.lines != args.ops:
+        ap.error("--lines and --ops take the same function (one function's blocks are kept)")
+    prof = profile(args.trace, Symbols(args.elf), args.lines or args.ops)
     per, steps = prof.per, prof.steps
     for phase in PHASES.values():
         n = steps.get(phase, 0)
@@ -154,6 +194,8 @@ def main() -> None:
             print(f"  {rest / n:8,.0f}  {100 * rest / total:5.1f} %  (the other functions)")
     if args.lines:
         print_lines(prof, args.elf, args.lines, 2 * args.top)
+    if args.ops:
+        print_ops(prof, args.ops, 2 * args.top)
 
 
 if __name__ == "__main__":
