@@ -28,6 +28,7 @@ from sympy.core.parameters import evaluate
 
 from fdi_analysis.export.c_expr import c_float, to_c
 from fdi_analysis.export.c_names import VehicleNames
+from fdi_analysis.export.c_order import defined_before_use
 from fdi_analysis.export.c_text import comment_text
 from fdi_analysis.residuals.generator import DOMAIN_SIGNAL, XHAT, Generator
 from fdi_analysis.residuals.signals import Node, node_of, readable
@@ -102,8 +103,7 @@ const fdi_gen_set_t ${set} = {"${vehicle}", ${vehicle}_gen_step, ${bank_ref}, ${
 static void ${vehicle}_gen_step(fdi_gen_io_t *io)
 {
 ${prelude}
-${shared}
-${slots}
+${body}
 }
 """)
 
@@ -668,7 +668,8 @@ def render(f: GeneratorsFile) -> tuple[str, str]:
     domains = "".join(DOMAIN_FMT.substitute(
         name=", ".join(d.name for d in f.slots if d.domain_condition == cond), note=comment_text(c.domain_note),
         function=f"{n.vehicle}_gen_{c.slot + 1}", condition=cond) + "\n" for cond, c in first.items())
-    body = f.shared + "\n" + "\n".join(c.body for c in f.slots)
+    # each constant defined just before its first use: shorter lives, fewer values moved to the stack (c_order.py)
+    body = defined_before_use(f.shared + "\n" + "\n".join(c.body for c in f.slots))
     source = SOURCE_FMT.substitute(banner=f.banner, base=n.generators, signals=n.signals, vehicle=n.vehicle,
                                    derived=_derived_text(f), bank=_bank_text(f), domains=domains, rates=rates,
                                    count_macro=n.n_generators,
@@ -677,5 +678,5 @@ def render(f: GeneratorsFile) -> tuple[str, str]:
                                    derive_ref=f"{n.vehicle}_gen_derive" if f.derived else "NULL",
                                    derived_ref=f"{n.vehicle}_derived" if f.derived else "NULL",
                                    n_derived=len(f.derived),
-                                   prelude=_prelude(body), shared=f.shared, slots="\n".join(c.body for c in f.slots))
+                                   prelude=_prelude(body), body=body)
     return header, source

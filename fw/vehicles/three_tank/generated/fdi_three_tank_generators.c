@@ -108,11 +108,11 @@ static void three_tank_gen_step(fdi_gen_io_t *io)
         if ((io->sens_mask & 0x00000001U) != 0U) /* d r / d f: fP fL1 fC12 fS1 fS2 */
         {
             float *const sv = &io->sens[io->sens_at[0]];
-            const float s0 = fabsf(t0);
-            const float s1 = ((-0.000110736175f * (1.0f / (sqrtf(s0)))) + (5.5368087e-05f * (1.0f / (s0 * sqrtf(s0))) * t0 * fdi_gen_sign(t0)));
             sv[0] = 1.0f; /* fP */
             sv[1] = -1.0f; /* fL1 */
             sv[2] = -1.0f; /* fC12 */
+            const float s0 = fabsf(t0);
+            const float s1 = ((-0.000110736175f * (1.0f / (sqrtf(s0)))) + (5.5368087e-05f * (1.0f / (s0 * sqrtf(s0))) * t0 * fdi_gen_sign(t0)));
             sv[3] = (-s1); /* fS1 */
             sv[4] = s1; /* fS2 */
         }
@@ -130,12 +130,12 @@ static void three_tank_gen_step(fdi_gen_io_t *io)
         if ((io->sens_mask & 0x00000002U) != 0U) /* d r / d f: fL3 fC23 fC3 fS2 fS3 */
         {
             float *const sv = &io->sens[io->sens_at[1]];
-            const float s0 = fabsf(t3);
-            const float s1 = (0.000110736175f * (1.0f / (sqrtf(s0))));
-            const float s2 = (5.5368087e-05f * (1.0f / (s0 * sqrtf(s0))) * t3 * fdi_gen_sign(t3));
             sv[0] = -1.0f; /* fL3 */
             sv[1] = 1.0f; /* fC23 */
             sv[2] = -1.0f; /* fC3 */
+            const float s0 = fabsf(t3);
+            const float s1 = (0.000110736175f * (1.0f / (sqrtf(s0))));
+            const float s2 = (5.5368087e-05f * (1.0f / (s0 * sqrtf(s0))) * t3 * fdi_gen_sign(t3));
             sv[3] = ((-s1) + s2); /* fS2 */
             sv[4] = (s1 + (-s2) + (5.5368087e-05f * (1.0f / (sqrtf(fabsf(b[3].x1)))) * fdi_gen_sign(b[3].x1))); /* fS3 */
         }
@@ -153,14 +153,14 @@ static void three_tank_gen_step(fdi_gen_io_t *io)
         if ((io->sens_mask & 0x00000004U) != 0U) /* d r / d f: fL2 fC12 fC23 fS1 fS2 fS3 */
         {
             float *const sv = &io->sens[io->sens_at[2]];
-            const float s0 = fabsf(t0);
-            const float s1 = ((-0.000110736175f * (1.0f / (sqrtf(s0)))) + (5.5368087e-05f * (1.0f / (s0 * sqrtf(s0))) * t0 * fdi_gen_sign(t0)));
-            const float s2 = fabsf(t3);
-            const float s3 = ((-0.000110736175f * (1.0f / (sqrtf(s2)))) + (5.5368087e-05f * (1.0f / (s2 * sqrtf(s2))) * t3 * fdi_gen_sign(t3)));
             sv[0] = -1.0f; /* fL2 */
             sv[1] = 1.0f; /* fC12 */
             sv[2] = -1.0f; /* fC23 */
+            const float s0 = fabsf(t0);
+            const float s1 = ((-0.000110736175f * (1.0f / (sqrtf(s0)))) + (5.5368087e-05f * (1.0f / (s0 * sqrtf(s0))) * t0 * fdi_gen_sign(t0)));
             sv[3] = s1; /* fS1 */
+            const float s2 = fabsf(t3);
+            const float s3 = ((-0.000110736175f * (1.0f / (sqrtf(s2)))) + (5.5368087e-05f * (1.0f / (s2 * sqrtf(s2))) * t3 * fdi_gen_sign(t3)));
             sv[4] = ((-s1) + (-s3)); /* fS2 */
             sv[5] = s3; /* fS3 */
         }
@@ -178,12 +178,12 @@ static void three_tank_gen_step(fdi_gen_io_t *io)
         if ((io->sens_mask & 0x00000008U) != 0U) /* d r / d f: fP fL1 fL2 fC23 fS2 fS3 */
         {
             float *const sv = &io->sens[io->sens_at[3]];
-            const float s0 = fabsf(t3);
-            const float s1 = ((-0.000110736175f * (1.0f / (sqrtf(s0)))) + (5.5368087e-05f * (1.0f / (s0 * sqrtf(s0))) * t3 * fdi_gen_sign(t3)));
             sv[0] = 1.0f; /* fP */
             sv[1] = -1.0f; /* fL1 */
             sv[2] = -1.0f; /* fL2 */
             sv[3] = -1.0f; /* fC23 */
+            const float s0 = fabsf(t3);
+            const float s1 = ((-0.000110736175f * (1.0f / (sqrtf(s0)))) + (5.5368087e-05f * (1.0f / (s0 * sqrtf(s0))) * t3 * fdi_gen_sign(t3)));
             sv[4] = (-s1); /* fS2 */
             sv[5] = s1; /* fS3 */
         }
@@ -201,12 +201,12 @@ static void three_tank_gen_step(fdi_gen_io_t *io)
         if ((io->sens_mask & 0x00000010U) != 0U) /* d r / d f: fL2 fL3 fC12 fC3 fS1 fS2 fS3 */
         {
             float *const sv = &io->sens[io->sens_at[4]];
-            const float s0 = fabsf(t0);
-            const float s1 = ((-0.000110736175f * (1.0f / (sqrtf(s0)))) + (5.5368087e-05f * (1.0f / (s0 * sqrtf(s0))) * t0 * fdi_gen_sign(t0)));
             sv[0] = -1.0f; /* fL2 */
             sv[1] = -1.0f; /* fL3 */
             sv[2] = 1.0f; /* fC12 */
             sv[3] = -1.0f; /* fC3 */
+            const float s0 = fabsf(t0);
+            const float s1 = ((-0.000110736175f * (1.0f / (sqrtf(s0)))) + (5.5368087e-05f * (1.0f / (s0 * sqrtf(s0))) * t0 * fdi_gen_sign(t0)));
             sv[4] = s1; /* fS1 */
             sv[5] = (-s1); /* fS2 */
             sv[6] = (5.5368087e-05f * (1.0f / (sqrtf(fabsf(b[3].x1)))) * fdi_gen_sign(b[3].x1)); /* fS3 */
