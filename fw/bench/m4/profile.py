@@ -23,6 +23,7 @@ import bisect
 import re
 import subprocess
 from collections import Counter, defaultdict
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 
 PHASES = {"bench_step_warmup": "warm-up", "bench_step_fault_free": "fault-free",
@@ -133,40 +134,43 @@ def source_lines(elf: Path, addrs: list[int]) -> dict[int, str]:
     return where
 
 
+def _tallies(prof: Profile, kinds: Callable[[int], Iterable[str]]) -> Iterator[tuple[str, int, Counter[str]]]:
+    """Per phase with steps and kept blocks: the phase, its steps and its executed instructions counted by
+    `kinds` (block start -> one key per instruction of the block)."""
+    for phase in PHASES.values():
+        n = prof.steps.get(phase, 0)
+        if n == 0 or not prof.blocks[phase]:
+            continue
+        tally: Counter[str] = Counter()
+        for b, times in prof.blocks[phase].items():
+            for k in kinds(b):
+                tally[k] += times
+        yield phase, n, tally
+
+
+def _print_rows(tally: Counter[str], n: int, top: int) -> None:
+    total = sum(tally.values())
+    for key, ins in tally.most_common(top):
+        print(f"  {ins / n:8,.1f}  {100 * ins / total:5.1f} %  {key}")
+
+
 def print_lines(prof: Profile, elf: Path, fn: str, top: int) -> None:
     """Per phase, the source lines of fn's executed instructions (the most instructions first)."""
     addrs = sorted({a for per in prof.blocks.values() for b in per for a in prof.insns.get(b, ())})
     where = source_lines(elf, addrs)
-    for phase in PHASES.values():
-        n = prof.steps.get(phase, 0)
-        if n == 0 or not prof.blocks[phase]:
-            continue
-        per_line: Counter[str] = Counter()
-        for b, times in prof.blocks[phase].items():
-            for a in prof.insns.get(b, ()):
-                per_line[where.get(a, "?")] += times
-        total = sum(per_line.values())
-        print(f"{phase}: {fn}, {total / n:,.0f} instructions per step, by source line")
-        for loc, ins in per_line.most_common(top):
-            print(f"  {ins / n:8,.1f}  {100 * ins / total:5.1f} %  {loc}")
+    for phase, n, per_line in _tallies(prof, lambda b: (where.get(a, "?") for a in prof.insns.get(b, ()))):
+        print(f"{phase}: {fn}, {sum(per_line.values()) / n:,.0f} instructions per step, by source line")
+        _print_rows(per_line, n, top)
 
 
 def print_ops(prof: Profile, fn: str, top: int) -> None:
     """Per phase, fn's executed instructions by kind (op_kind; the most first) and its stack loads and stores."""
-    for phase in PHASES.values():
-        n = prof.steps.get(phase, 0)
-        if n == 0 or not prof.blocks[phase]:
-            continue
-        mix: Counter[str] = Counter()
-        for b, times in prof.blocks[phase].items():
-            for k in prof.ops.get(b, ()):
-                mix[k] += times
+    for phase, n, mix in _tallies(prof, lambda b: prof.ops.get(b, ())):
         total = sum(mix.values())
         stack = sum(v for k, v in mix.items() if k.endswith("(stack)"))
         print(f"{phase}: {fn}, {total / n:,.0f} instructions per step by kind; the stack's loads and stores "
               f"{stack / n:,.0f} ({100 * stack / total:.1f} %)")
-        for kind, ins in mix.most_common(top):
-            print(f"  {ins / n:8,.1f}  {100 * ins / total:5.1f} %  {kind}")
+        _print_rows(mix, n, top)
 
 
 def main() -> None:
