@@ -173,6 +173,26 @@ def test_classes_and_coarse_isolation() -> None:
     assert s3.faults[0].detected and s3.faults[0].isolation_correct is None and not s3.faults[0].wrong_isolation
 
 
+def test_part_of_the_class_isolates_only_with_the_fault() -> None:
+    """Candidates within the fault's class count as its isolation when they hold the fault ({f3} of {f1, f3}:
+    the library's `isolated`, as the quality suite counts it), never when they exonerate it ({f1} for f3)."""
+    tc = TableClasses.from_signatures([0b01, 0b10, 0b01, 0])
+    w = [FaultWindow("f3", 0.1, 1.0)]
+    early = [DiagRecord(k * DT, 1 if k >= 20 else 0, 0b0101 if 20 <= k < 40 else 0b0100 if k >= 40 else 0)
+             for k in range(100)]
+    s = score_run(early, w, tc).faults[0]
+    assert s.isolation_correct is True and s.verdict == "f3" and s.isolation_delay == pytest.approx(0.1)
+    assert s.isolated_fraction == pytest.approx(1.0)
+    part = [DiagRecord(r.t, r.alarm_mask, 0b0100 if r.alarm_mask else 0) for r in early]
+    late = [DiagRecord(r.t, r.alarm_mask, 0b0110 if 20 <= k < 70 else r.candidates) for k, r in enumerate(part)]
+    s2 = score_run(late, w, tc).faults[0]  # {f2, f3} (two classes) first, then {f3}
+    assert s2.isolation_delay == pytest.approx(0.6) and s2.isolated_fraction == pytest.approx(30 / 80)
+    assert s2.verdict == "f2,f3" and s2.isolation_correct is False and not s2.wrong_isolation
+    wrong = [DiagRecord(r.t, r.alarm_mask, 0b0001 if r.alarm_mask else 0) for r in early]
+    s3 = score_run(wrong, w, tc).faults[0]  # f3's class, named by the other fault alone
+    assert s3.isolation_correct is False and s3.wrong_isolation and s3.isolation_delay is None
+
+
 def test_reports_and_plots(scored: tuple[Monitor, dict[str, object]], tmp_path: Path) -> None:
     mon, truth = scored
     s = mon.score(truth, grace=1.0)

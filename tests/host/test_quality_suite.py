@@ -29,11 +29,13 @@ from fdi_host.sim.scenario import load_scenario
 from fdi_host.sim.vehicle_sim import faulty_drive, simulate
 
 
-def result(t: float, candidates: int = 0, alarm: int = 0) -> EcuResult:
-    iso = candidates != 0 and candidates in (1, 2, 4, 8, 16)
+def result(t: float, candidates: int = 0, alarm: int = 0, class_mask: int | None = None) -> EcuResult:
+    """A step of the ECU; every fault its own class unless `class_mask` gives the class of the candidates."""
+    iso = candidates != 0 and (candidates in (1, 2, 4, 8, 16) or class_mask is not None)
     return EcuResult(
         step=int(t * 100), t_us=round(t * 1e6), status=3 if iso else (2 if alarm else 1), validity=0x7FFFF,
-        alarm_mask=alarm, evaluable_mask=0xF, accused_mask=alarm, candidates=candidates, class_mask=candidates,
+        alarm_mask=alarm, evaluable_mask=0xF, accused_mask=alarm, candidates=candidates,
+        class_mask=candidates if class_mask is None else class_mask,
         n_classes=1 if iso else (0 if candidates == 0 else 2), detected=alarm != 0, isolated=iso,
         iso_class=0, test_status=("ok",) * 4, residuals=(0.0,) * 4, ratios=(0.0,) * 4, test_names=("",) * 4,
     )
@@ -58,6 +60,19 @@ def test_evaluate_case_outcomes() -> None:
     # detected, never a single class
     unexplained = quiet + [result(5.0 + 0.01 * k, 0, 2) for k in range(50)]
     assert evaluate_case(unexplained, spec, 5.0, 8)[2] == "not isolated"
+
+
+def test_part_of_the_class_is_exact_only_with_the_fault() -> None:
+    """f4 in a class {f4, f5} (bits 8 | 16): candidates {f4} isolate it exactly (the library's `isolated`,
+    class_mask the class); {f5} alone names the right class but exonerates the fault: wrong."""
+    spec = FaultSpec("f4", 5.0, 0.5)
+    quiet = [result(4.0 + 0.01 * k) for k in range(100)]
+    part = quiet + [result(5.0 + 0.01 * k, *((8, 3, 24) if k >= 20 else (0, 0))) for k in range(100)]
+    det, delay, outcome, iso_delay, share, final, _ = evaluate_case(part, spec, 5.0, 24)
+    assert det and delay == pytest.approx(0.2) and outcome == "exact" and iso_delay == pytest.approx(0.0)
+    assert share == pytest.approx(1.0) and final == ("f4",)
+    other = quiet + [result(5.0 + 0.01 * k, *((16, 3, 24) if k >= 20 else (0, 0))) for k in range(100)]
+    assert evaluate_case(other, spec, 5.0, 24)[2] == "wrong"
 
 
 def test_sensor_fault_shortcut_equals_full_simulation() -> None:

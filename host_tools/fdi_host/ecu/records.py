@@ -20,6 +20,16 @@ class DiagRecord:
     status: int = 0
 
 
+def isolates_fault(candidates: int, fault_class: int, fault_bit: int) -> bool:
+    """True when a diagnosis' candidate faults isolate a fault to its structural isolability class: they hold the
+    fault and lie within its class. That is the diagnosis library's `isolated` (fdi_iso.h: one class among the
+    candidates) with the fault's class as `class_mask`, and the fault itself not exonerated: with measured sizes
+    a quiet test may clear one fault of a class and not another, so the candidates may be part of the class
+    ({f6} of {f6, f18}: the diagnosis names the fault more narrowly than the structure alone can), but never a
+    part without the fault ({f18} for f6 names the right class and the wrong fault)."""
+    return candidates & fault_bit != 0 and candidates & ~fault_class == 0
+
+
 @dataclass(frozen=True)
 class TableClasses:
     """Structural facts of a diagnosis table, per fault j (bit j = fault f(j+1))."""

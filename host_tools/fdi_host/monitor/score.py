@@ -6,11 +6,12 @@ structural isolability classes of the diagnosis table (`TableClasses`). Per inje
 
 * detected / detection delay: the first step with any test in alarm in ``[start, end + grace)`` (the grace
   period stops where the next fault starts);
-* isolation delay: the first step whose candidate set equals the fault's structural isolability class, and
-  the fraction of the alarmed steps with that candidate set;
+* isolation delay: the first step whose candidate set isolates the fault to its structural isolability class
+  (the set of faults not isolable from it, a single fault if it is uniquely isolable): it holds the fault and
+  lies within the class (`isolates_fault`, the diagnosis library's `isolated` to that class, as the quality
+  suite counts it), and the fraction of the alarmed steps with such a candidate set;
 * isolation: the candidate set that holds for most of the alarmed steps in that window ("verdict"); it is
-  correct iff it equals the fault's structural isolability class (the set of faults not isolable from it,
-  a single fault if it is uniquely isolable). A non-empty verdict that does not contain the fault is a wrong
+  correct iff it isolates the fault so. A non-empty verdict that does not contain the fault is a wrong
   isolation; an empty one means the alarm pattern fits no single fault ("unexplained");
 * a fault that no test of the table is sensitive to is "not detectable" by the table (expected: no alarm;
   alarms in its window are reported, its isolation is not judged).
@@ -41,7 +42,7 @@ from dataclasses import asdict, dataclass, field
 from itertools import pairwise
 from typing import Any
 
-from fdi_host.ecu.records import DiagRecord, TableClasses
+from fdi_host.ecu.records import DiagRecord, TableClasses, isolates_fault
 from fdi_host.monitor.gaps import Gap, overlap
 from fdi_host.sim.faults import FAULT_IDS
 
@@ -82,8 +83,8 @@ class FaultScore:
     expected_class: str  # faults not isolable from it ("-" if not detectable)
     detected: bool = False
     detection_delay: float | None = None
-    isolation_delay: float | None = None  # first step whose candidates equal the expected class
-    isolated_fraction: float = 0.0  # of the alarmed steps in the window, those with the expected class
+    isolation_delay: float | None = None  # first step whose candidates isolate the fault to its class
+    isolated_fraction: float = 0.0  # of the alarmed steps in the window, those whose candidates do so
     verdict: str = "-"  # majority candidate set while in alarm
     isolation_correct: bool | None = None  # None: nothing to judge (not detected)
     wrong_isolation: bool = False  # the verdict is not empty and does not contain the fault
@@ -170,12 +171,12 @@ def score_run(
             votes = Counter(r.candidates for r in alarmed)
             verdict, _ = max(votes.items(), key=lambda kv: (kv[1], kv[0] != 0))
             fs.verdict = fault_names(verdict)
-            if det:
-                hits = [r for r in alarmed if r.candidates == classes.class_of(w.fault)]
+            if det:  # a fault no test can see has no isolation to judge (alarms then come from elsewhere)
+                cls = classes.class_of(w.fault)
+                hits = [r for r in alarmed if isolates_fault(r.candidates, cls, w.bit)]
                 fs.isolated_fraction = len(hits) / len(alarmed)
                 fs.isolation_delay = hits[0].t - w.start if hits else None
-            if det:  # a fault no test can see has no isolation to judge (alarms then come from elsewhere)
-                fs.isolation_correct = verdict == classes.class_of(w.fault)
+                fs.isolation_correct = isolates_fault(verdict, cls, w.bit)
                 fs.wrong_isolation = verdict != 0 and not verdict & w.bit
         else:
             fs.not_evaluable = fs.gap_overlap > 0.0

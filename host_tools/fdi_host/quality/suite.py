@@ -9,10 +9,12 @@ before the onset (enough for its warm-up). Measured:
   detected     a step after the onset with `detected` (any alarm) before the drive ends;
   delay        detection time minus the reference time: the onset for a step, the time the ramp reaches the
                required size for a ramp; goal: within DELAY_GOAL_S (300 ms);
-  isolation    "exact": some step after the onset isolates exactly the structural isolability class of the
-               fault (the table's iso_class, method B over the tests on board) and none isolates another
-               class; goal: the first exact isolation within ISOLATION_GOAL_S (1 s) of the detection;
-               "wrong": some step after the onset isolates a class without the fault (goal: never);
+  isolation    "exact": some step after the onset isolates the fault to exactly its structural isolability
+               class (the table's iso_class, method B over the tests on board: the candidates hold the fault
+               and lie within its class, `isolates_fault`) and none isolates another class or exonerates the
+               fault; goal: the first exact isolation within ISOLATION_GOAL_S (1 s) of the detection;
+               "wrong": some step after the onset isolates a class without the fault, or isolates the
+               fault's class with candidates that do not hold the fault (goal: never);
                "not isolated": detected, but no step isolates a single class (several classes or none);
                "missed": never detected;
   false alarms any detection before the onset (fault-free part of the drive).
@@ -41,6 +43,7 @@ from fdi_host.can.dbc import RomoDatabase
 from fdi_host.can.traffic import build_frames
 from fdi_host.ecu.bindings import EcuResult, TableInfo, table_info
 from fdi_host.ecu.offline import replay
+from fdi_host.ecu.records import isolates_fault
 from fdi_host.sim.faults import FAULT_IDS, FaultSpec
 from fdi_host.sim.scenario import FAULT_SIZES_FILE, SCENARIOS, load_scenario
 from fdi_host.sim.vehicle_sim import SimResult, faulty_drive, simulate
@@ -176,11 +179,11 @@ def evaluate_case(
             continue
         if r.detected and detect_t is None:
             detect_t = t
-        exact = r.isolated and r.class_mask == expected_class
+        exact = isolates_fault(r.candidates, expected_class, 1 << j)
         if detect_t is not None:
             n_after += 1
             n_exact += int(exact)
-        if r.isolated and not r.class_mask >> j & 1:
+        if r.isolated and not r.candidates >> j & 1:
             wrong = True
         if exact and iso_t is None:
             iso_t = t
