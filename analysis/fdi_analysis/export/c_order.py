@@ -35,6 +35,11 @@ class _Definition:
     name: str
     line: str
 
+    @property
+    def value(self) -> str:
+        """Its right-hand side, comments removed."""
+        return _COMMENT.sub(" ", self.line.split("=", 1)[1])
+
 
 @dataclass(frozen=True)
 class _Line:
@@ -119,7 +124,7 @@ def _ordered(items: Sequence[_Item]) -> list[_Item]:
             return
         placed.add(name)
         d = defs[name]
-        for operand in _names_read(d.line.split("=", 1)[1], defs):
+        for operand in _names_read(d.value, defs):
             place(operand)
         out.append(d)
 
@@ -130,8 +135,7 @@ def _ordered(items: Sequence[_Item]) -> list[_Item]:
         assigned = set(_ASSIGNED.findall(_COMMENT.sub(" ", text)))
         if assigned:  # a definition before it that reads a variable it assigns stays before it
             for d in items[:i]:
-                if isinstance(d, _Definition) and d.name not in placed and \
-                        assigned & set(_IDENTIFIER.findall(_COMMENT.sub(" ", d.line.split("=", 1)[1]))):
+                if isinstance(d, _Definition) and d.name not in placed and assigned & set(_IDENTIFIER.findall(d.value)):
                     place(d.name)
         for name in _names_read(text, defs):
             place(name)
