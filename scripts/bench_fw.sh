@@ -11,7 +11,8 @@
 #           the ROMO target with and without its sensitivity code (-DFDI_GEN_SENSITIVITIES=0), sizeof(fdi_diag_t);
 #           all of it at -O3 (CMake Release, the generated generators at -Os: cmake/FdiGenerated.cmake), with every
 #           source at -O3 (FDI_GENERATED_FOR_SIZE=OFF, the ROMO table only), and, as firmware is often built, at -Os
-#           (MinSizeRel)
+#           (MinSizeRel); whether the host and the target compute the same bits at every step of the drive
+#           (scripts/check_identity.sh)
 # and the goals of issue 21 with PASS/MISS: <= 5,000 instructions per step on the M4 (largest step of the ROMO table
 # in the ECU's configuration, isolation included; with every sensitivity reported as information), sizeof(fdi_diag_t)
 # <= 4 KB on the M4, <= 32 KB of text for the ROMO diagnosis as the ECU links it (libfdi.a + libfdi_romo.a; the
@@ -87,6 +88,8 @@ echo "m4 flash: libfdi.a (generic core) text $lib_text B; ROMO target libfdi_rom
 arm-none-eabi-size build/m4/fw/bench/fdi_bench_m4.elf
 m4_out="$(run_m4 build/m4)"
 echo "$m4_out"
+# the same bits on the host as on the target (its digests of every step's results; a gate of scripts/test_fw.sh)
+bash scripts/check_identity.sh build/bench build/m4 || true
 
 # The same bench with every source at -O3 (the generated generators too): what FDI_GENERATED_FOR_SIZE changes.
 echo "== target (Cortex-M4F, arm-none-eabi-gcc -O3 for every source: FDI_GENERATED_FOR_SIZE=OFF)"

@@ -3,6 +3,8 @@
 #   1. host build (-Werror, all warnings) + cmocka unit tests through CTest         build/fw
 #   2. ASan + UBSan (float-divide-by-zero, no recovery) build + CTest              build/fw-san
 #   3. cross build for Cortex-M4F (library + bare-metal bench ELF)                  build/m4
+#      and the same bits on both: the benchmark drive through the host build's bench and the M4 bench under qemu,
+#      a digest of every step's results compared (scripts/check_identity.sh)
 #   4. cppcheck --addon=misra over the generic core (fw/src, fw/include, fw/ecu) and the vehicle targets
 #      (fw/vehicles/*: hand-written and generated code; zero findings, suppressions: fw/misra_suppressions.txt and
 #      the cantools code's deviations by rule, fw/MISRA_DEVIATIONS.md)
@@ -47,6 +49,7 @@ for lib in fw/libfdi.a fw/ecu/libfdi_ecu.a fw/vehicles/romo/libfdi_romo.a fw/veh
   arm-none-eabi-size -t "build/m4/$lib" | tail -1 |
     awk -v n="$(basename "$lib")" '{print n " (cortex-m4f): text " $1 " B, data " $2 " B, bss " $3 " B"}'
 done
+bash scripts/check_identity.sh build/fw build/m4
 
 echo "== fw: cppcheck --addon=misra"
 # The misra addon's findings do not set cppcheck's exit code, so any output at all fails the gate.

@@ -126,4 +126,43 @@ static inline bench_phase_t bench_phase(const fdi_table_t *t, const fdi_diag_res
     return ph;
 }
 
+/* FNV-1a over 32-bit words, a byte at a time (the same on any byte order). */
+static inline uint32_t bench_fnv(uint32_t h, uint32_t w)
+{
+    uint32_t x = h;
+    uint32_t b;
+    for (b = 0U; b < 4U; ++b)
+    {
+        x = (x ^ ((w >> (8U * b)) & 0xFFU)) * 16777619U;
+    }
+    return x;
+}
+
+static inline uint32_t bench_float_bits(float v)
+{
+    uint32_t w;
+    memcpy(&w, &v, sizeof w);
+    return w;
+}
+
+/* The digest h carried over one step's result: its masks, candidates and class, and the bits of every test's
+   residual and test ratio and of every sensitivity (the step's whole arithmetic, so that two builds that print the
+   same digest computed the same values at every step). Start with BENCH_DIGEST_START. */
+#define BENCH_DIGEST_START 2166136261U
+static inline uint32_t bench_digest(uint32_t h, const fdi_table_t *t, const fdi_diag_result_t *r)
+{
+    uint32_t x = bench_fnv(bench_fnv(bench_fnv(h, r->alarm_mask), r->evaluable_mask), r->accused_mask);
+    uint32_t i;
+    x = bench_fnv(bench_fnv(x, r->iso.candidates), r->iso.class_mask);
+    for (i = 0U; i < (uint32_t)t->n_tests; ++i)
+    {
+        x = bench_fnv(bench_fnv(x, bench_float_bits(r->residual[i])), bench_float_bits(r->ratio[i]));
+    }
+    for (i = 0U; i < FDI_DIAG_MAX_SENS; ++i)
+    {
+        x = bench_fnv(x, bench_float_bits(r->sens[i]));
+    }
+    return x;
+}
+
 #endif /* BENCH_DRIVE_H */

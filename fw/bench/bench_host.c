@@ -27,6 +27,7 @@ int main(int argc, char **argv)
     const fdi_diag_config_t cfg = bench_config(table, sens);
     uint32_t count[BENCH_N_PHASES] = {0U, 0U, 0U, 0U};
     bool settled = false;
+    uint32_t digest = BENCH_DIGEST_START;
     uint32_t k;
     size_t n_words = 0U;
     int rc = 0;
@@ -56,11 +57,12 @@ int main(int argc, char **argv)
         {
             rc = 3;
         }
+        digest = bench_digest(digest, table, &res);
     }
     printf("steps %u %s, sensitivities %s: warm-up %u, fault-free %u, episode %u, undecided %u steps; "
-           "sizeof(fdi_diag_t) %zu\n",
+           "sizeof(fdi_diag_t) %zu; results digest %08x\n",
            (unsigned)drive.n_steps, name, sens ? "on" : "off", (unsigned)count[BENCH_WARMUP],
            (unsigned)count[BENCH_FAULT_FREE], (unsigned)count[BENCH_EPISODE], (unsigned)count[BENCH_UNDECIDED],
-           sizeof d);
+           sizeof d, (unsigned)digest);
     return rc;
 }

@@ -19,9 +19,15 @@
  *   fdi_gen_sign(x): -1, 0, 1 (derivatives of Max and Abs); fdi_gen_max / fdi_gen_min: the larger / smaller of two
  *   values (a NaN operand may propagate, where fmaxf would drop it: the caller's finiteness check then sees it).
  * fdi_gen_tanh: tanh of the generated expressions (the brake torque's sign law of the wheel speeds).
+ * fdi_gen_sin, fdi_gen_cos: sin and cos of the generated expressions (the steering angles' rotations).
  * The exponentials of fdi_gen_obs_predict and fdi_gen_tanh are float-only series (fdi_gen.c, a few ulp): the C
  * library's expm1f and tanhf, general-purpose, cost several times as much on the target (scripts/bench_fw.sh).
- * Cost: a few flops each (fdi_gen_obs_predict, fdi_gen_tanh ~25; fdi_gen_tanh ~8 where it saturates).
+ * fdi_gen_sin and fdi_gen_cos are float-only polynomials too (fdi_gen.c: within 1.6 ulp of the exact value for
+ * |x| <= 13, within 1e-7 up to |x| = 2048, NaN beyond): cheaper than the C library's, and the same operations on every target, so that the
+ * generated generators compute the same bits on the host (the quality suite, the bindings) as on the ECU (newlib's
+ * sinf and glibc's differ in the last bit; scripts/check_identity.sh compares a digest of every step's results).
+ * Cost: a few flops each (fdi_gen_obs_predict, fdi_gen_tanh ~25; fdi_gen_tanh ~8 where it saturates; fdi_gen_sin,
+ * fdi_gen_cos ~12 for |x| <= pi/4, ~25 beyond).
  * Memory: none (a 28-entry const table).
  */
 #ifndef FDI_GEN_IMPL_H
@@ -40,6 +46,11 @@ fdi_status_t fdi_gen_sens_finish(fdi_status_t st, const float *sens, uint32_t n)
 
 /* tanh(x) in float, a few ulp (fdi_gen.c: +-1 from |x| >= 9.1, else from e^-2|x|); NaN for NaN. */
 float fdi_gen_tanh(float x);
+
+/* sin(x) and cos(x) in float, within 1.6 ulp for |x| <= 13 and 1e-7 for |x| <= 2048; NaN beyond (no angle of a
+   vehicle model: the test is then not evaluable for the step) and for NaN and +-Inf. */
+float fdi_gen_sin(float x);
+float fdi_gen_cos(float x);
 
 float fdi_gen_obs_predict(const fdi_obs_t *obs, const fdi_gen_param_t *par, float g1, float jac);
 fdi_status_t fdi_gen_obs_store(fdi_obs_t *obs, float xh, float g_next);

@@ -508,6 +508,67 @@ float fdi_gen_tanh(float x)
     return (x < 0.0f) ? -t : t; /* NaN: a NaN t */
 }
 
+/* sin and cos: x = n pi/2 + r with |r| <= pi/4 (pi/2 in three parts, the first two with 12 significant bits, so
+   that n times each is exact for |n| < 2^11: |x| <= TRIG_MAX), then +-sin r or +-cos r by the quadrant n mod 4;
+   cos x = sin of the next quadrant. The polynomials: sin r = r + r^3 P(r^2), cos r = 1 - r^2 / 2 + r^4 Q(r^2), their
+   coefficients a weighted least-squares fit of the relative error on [0, pi/4] rounded to float (at most 0.79 and
+   1.25 ulp from the exact value there, evaluated in float as below; with the reduction 1.6 ulp for |x| <= 13, and
+   within 1e-7 of the exact value up to TRIG_MAX: tests/fw/test_fdi_gen_generated.c checks both functions against
+   the double ones). Beyond TRIG_MAX (no angle of a vehicle model) NaN, as for NaN and +-Inf: the test
+   using it is then not evaluable for the step, and the image needs no C library sinf / cosf. */
+#define TRIG_MAX 2048.0f
+#define PI_4 0.785398163f
+#define TWO_OVER_PI 0.636619772f
+#define PIO2_1 1.5703125f   /* pi / 2 to 12 significant bits */
+#define PIO2_2 4.837513e-4f /* the next 12 bits */
+#define PIO2_3 7.54979e-8f  /* the rest */
+
+static float sin_poly(float r)
+{
+    const float z = r * r;
+    float p = -0.00019586566f;
+    p = (p * z) + 0.008332739f;
+    p = (p * z) - 0.16666664f;
+    return r + ((r * z) * p);
+}
+
+static float cos_poly(float r)
+{
+    const float z = r * r;
+    float p = 2.4432831e-5f;
+    p = (p * z) - 0.0013887313f;
+    p = (p * z) + 0.041666646f;
+    return (1.0f - (0.5f * z)) + ((z * z) * p);
+}
+
+/* sin x (quadrant shift 0) or cos x (shift 1) for |x| > PI_4 (and NaN) */
+static float trig_reduced(float x, uint32_t shift)
+{
+    float v = NAN; /* beyond TRIG_MAX, +-Inf, NaN */
+    if (fabsf(x) <= TRIG_MAX)
+    {
+        const float half = (x < 0.0f) ? -0.5f : 0.5f;
+        const float nearest = (x * TWO_OVER_PI) + half; /* truncated: n = x 2 / pi rounded half away from 0 */
+        const int32_t n = (int32_t)nearest;
+        const float fn = (float)n;
+        const uint32_t q = shift + (uint32_t)n; /* modulo 2^32: n mod 4 in the low bits for a negative n too */
+        const float r = ((x - (fn * PIO2_1)) - (fn * PIO2_2)) - (fn * PIO2_3);
+        v = ((q & 1U) == 0U) ? sin_poly(r) : cos_poly(r);
+        v = ((q & 2U) == 0U) ? v : -v;
+    }
+    return v;
+}
+
+float fdi_gen_sin(float x)
+{
+    return (fabsf(x) <= PI_4) ? sin_poly(x) : trig_reduced(x, 0U);
+}
+
+float fdi_gen_cos(float x)
+{
+    return (fabsf(x) <= PI_4) ? cos_poly(x) : trig_reduced(x, 1U);
+}
+
 float fdi_gen_obs_predict(const fdi_obs_t *obs, const fdi_gen_param_t *par, float g1, float jac)
 {
     float xh = 0.0f;

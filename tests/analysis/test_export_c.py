@@ -112,10 +112,12 @@ def test_generated_table_compiles_and_passes_the_firmware_check(
     assert len(re.findall(descriptor, gens_c)) == int(n_tests)
     # the rate gains: the vx and vy offsets in the a_x and a_y kinematics (MSO1, MSO2), each -1
     assert "static const float romo_rate_gain[2] = {-1.0f, -1.0f};" in gens_c
-    # shared terms once: each steering angle's sin and cos evaluated once per step, no powf, no fmaxf, no double
-    assert all(len(re.findall(rf"{f}\(b\[\d+\]\.x1\)", gens_c)) == len(set(re.findall(rf"{f}\(b\[\d+\]\.x1\)",
-                                                                                          gens_c)))
-               for f in ("sinf", "cosf"))
+    # shared terms once: each steering angle's sin and cos evaluated once per step (the library's float-only ones,
+    # the same bits on every target), no powf, no fmaxf, no double
+    for f in ("fdi_gen_sin", "fdi_gen_cos"):
+        calls = re.findall(rf"{f}\(b\[\d+\]\.x1\)", gens_c)
+        assert len(calls) == len(set(calls)) == 4  # the four steering angles
+    assert "sinf(" not in gens_c and "cosf(" not in gens_c
     assert "powf(" not in gens_c and "fmaxf(" not in gens_c and "double" not in gens_c
 
 

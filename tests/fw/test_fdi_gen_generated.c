@@ -708,6 +708,42 @@ static void test_tanh(void **state)
     assert_true(isnan(fdi_gen_tanh(NAN)));
 }
 
+/* |f - ref| in units of the float spacing at ref (its last place) */
+static double ulps(float f, double ref)
+{
+    const float a = fabsf((float)ref);
+    const double u = (double)(nextafterf(a, INFINITY) - a);
+    return fabs((double)f - ref) / u;
+}
+
+static void test_sin_cos(void **state)
+{
+    /* fdi_gen_sin / fdi_gen_cos against the double sin / cos: within 1.6 ulp for |x| <= 13 (the polynomials alone
+       up to pi/4, the quadrant reduction beyond), within 1e-7 absolute up to 2048 (near a zero of the result far
+       out, the reduction's absolute error is many of the result's ulps); odd and even exactly; NaN beyond 2048 and
+       for NaN and +-Inf */
+    double x;
+    (void)state;
+    for (x = -13.0; x <= 13.0; x += 0.0000731)
+    {
+        const float xf = (float)x;
+        assert_true(ulps(fdi_gen_sin(xf), sin((double)xf)) <= 1.6);
+        assert_true(ulps(fdi_gen_cos(xf), cos((double)xf)) <= 1.6);
+        assert_true(fabs((double)fdi_gen_sin(-xf) + (double)fdi_gen_sin(xf)) <= 0.0);
+        assert_true(fabs((double)fdi_gen_cos(-xf) - (double)fdi_gen_cos(xf)) <= 0.0);
+    }
+    for (x = -2048.0; x <= 2048.0; x += 0.00917)
+    {
+        const float xf = (float)x;
+        assert_true(fabs((double)fdi_gen_sin(xf) - sin((double)xf)) <= 1.0e-7);
+        assert_true(fabs((double)fdi_gen_cos(xf) - cos((double)xf)) <= 1.0e-7);
+    }
+    assert_true(fabs((double)fdi_gen_sin(2048.0f) - sin(2048.0)) <= 1.0e-7);
+    assert_true(isnan(fdi_gen_sin(2048.001f)) && isnan(fdi_gen_cos(-3000.0f)));
+    assert_true(isnan(fdi_gen_sin(NAN)) && isnan(fdi_gen_cos(NAN)));
+    assert_true(isnan(fdi_gen_sin(INFINITY)) && isnan(fdi_gen_cos(-INFINITY)));
+}
+
 static void test_observer_phi_accuracy(void **state)
 {
     /* one predict step from xh = 0 with g_prev = g1 = 1 is phi = expm1(J dt) / J: within 4 float ulp of the double
@@ -743,6 +779,7 @@ int main(void)
         cmocka_unit_test(test_diag_slots_out_of_order),
         cmocka_unit_test(test_observer_building_blocks),
         cmocka_unit_test(test_tanh),
+        cmocka_unit_test(test_sin_cos),
         cmocka_unit_test(test_observer_phi_accuracy),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1,7 +1,7 @@
 """sympy expression -> MISRA-style C99 float expression (every binary operation parenthesised, float
 literals with an f suffix, integer powers as products and half-integer powers as products with one square root,
-single-precision math functions; Max/Min, the derivatives of Max and Abs and tanh through the helpers of
-fw/include/fdi_gen_impl.h, no library call)."""
+single-precision math functions; Max/Min, the derivatives of Max and Abs, tanh, sin and cos through the helpers
+of fw/include/fdi_gen_impl.h, no library call)."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import numpy as np
 import sympy
 
 MAX_PRODUCT = 8  # integer powers up to this exponent become products (beyond: powf)
-_FUNCS = {sympy.sin: "sinf", sympy.cos: "cosf", sympy.tanh: "fdi_gen_tanh", sympy.Abs: "fabsf", sympy.exp: "expf",
-          sympy.tan: "tanf", sympy.atan: "atanf"}
+_FUNCS = {sympy.sin: "fdi_gen_sin", sympy.cos: "fdi_gen_cos", sympy.tanh: "fdi_gen_tanh", sympy.Abs: "fabsf",
+          sympy.exp: "expf", sympy.tan: "tanf", sympy.atan: "atanf"}
 
 
 class CExprError(ValueError):

@@ -61,6 +61,19 @@ static void put_u(uint32_t v)
     put(&buf[i]);
 }
 
+static void put_x(uint32_t v)
+{
+    static const char hex[] = "0123456789abcdef";
+    char buf[9];
+    uint32_t i;
+    for (i = 0U; i < 8U; ++i)
+    {
+        buf[i] = hex[(v >> (28U - (4U * i))) & 0xFU];
+    }
+    buf[8] = '\0';
+    put(buf);
+}
+
 void bench_exit(int code)
 {
     const uint32_t block[2] = {0x20026U, (uint32_t)code}; /* ADP_Stopped_ApplicationExit */
@@ -127,6 +140,7 @@ static bool bench_table_drive(const bench_drive_t *drive, uint32_t k, bool sens,
     uint32_t count[BENCH_N_PHASES] = {0U, 0U, 0U, 0U};
     uint32_t worst = 0U;
     uint32_t worst_step = 0U;
+    uint32_t digest = BENCH_DIGEST_START;
     bool settled = false;
     bool ok = (fdi_diag_init(&diag, &cfg) == FDI_OK) && (fdi_diag_result(&diag, &res) == FDI_OK);
     uint32_t i;
@@ -146,6 +160,7 @@ static bool bench_table_drive(const bench_drive_t *drive, uint32_t k, bool sens,
             worst_step = i;
         }
         ok = (st == FDI_OK) && (fdi_diag_result(&diag, &res) == FDI_OK);
+        digest = bench_digest(digest, table, &res);
     }
     if (ok)
     {
@@ -166,6 +181,8 @@ static bool bench_table_drive(const bench_drive_t *drive, uint32_t k, bool sens,
         put_u(count[BENCH_EPISODE]);
         put(", undecided ");
         put_u(count[BENCH_UNDECIDED]);
+        put("; results digest ");
+        put_x(digest);
         put("\n");
     }
     return ok;

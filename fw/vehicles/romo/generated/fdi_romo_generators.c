@@ -289,8 +289,8 @@ static void romo_gen_step(fdi_gen_io_t *io)
     float t464 = 0.0f;
     if ((run & 0x00000FACU) != 0U)
     {
-        t3 = sinf(b[5].x1);
-        t4 = cosf(b[5].x1);
+        t3 = fdi_gen_sin(b[5].x1);
+        t4 = fdi_gen_cos(b[5].x1);
     }
     if ((run & 0x00000F2CU) != 0U)
     {
@@ -403,8 +403,8 @@ static void romo_gen_step(fdi_gen_io_t *io)
     }
     if ((run & 0x00000EF0U) != 0U)
     {
-        t79 = cosf(b[6].x1);
-        t80 = sinf(b[6].x1);
+        t79 = fdi_gen_cos(b[6].x1);
+        t80 = fdi_gen_sin(b[6].x1);
     }
     if ((run & 0x00000FF0U) != 0U)
     {
@@ -459,14 +459,14 @@ static void romo_gen_step(fdi_gen_io_t *io)
     if ((run & 0x00000360U) != 0U)
     {
         t105 = (0.00010666667f * b[14].x1);
-        t160 = sinf(b[8].x1);
-        t161 = cosf(b[8].x1);
+        t160 = fdi_gen_sin(b[8].x1);
+        t161 = fdi_gen_cos(b[8].x1);
         t165 = (t161 * t81);
     }
     if ((run & 0x00000DE0U) != 0U)
     {
-        t106 = cosf(b[7].x1);
-        t109 = sinf(b[7].x1);
+        t106 = fdi_gen_cos(b[7].x1);
+        t109 = fdi_gen_sin(b[7].x1);
         t110 = (t109 * t47);
         t114 = (t106 * t47);
         t119 = (t106 * t56);
