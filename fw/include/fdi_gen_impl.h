@@ -23,9 +23,10 @@
  * The exponentials of fdi_gen_obs_predict and fdi_gen_tanh are float-only series (fdi_gen.c, a few ulp): the C
  * library's expm1f and tanhf, general-purpose, cost several times as much on the target (scripts/bench_fw.sh).
  * fdi_gen_sin and fdi_gen_cos are float-only polynomials too (fdi_gen.c: within 1.6 ulp of the exact value for
- * |x| <= 13, within 1e-7 up to |x| = 2048, NaN beyond): cheaper than the C library's, and the same operations on every target, so that the
- * generated generators compute the same bits on the host (the quality suite, the bindings) as on the ECU (newlib's
- * sinf and glibc's differ in the last bit; scripts/check_identity.sh compares a digest of every step's results).
+ * |x| <= 13, within 1e-7 up to |x| = 2048, NaN beyond): cheaper than the C library's, and the same operations on
+ * every target, so that the generated generators compute the same bits on the host (the quality suite, the
+ * bindings) as on the ECU (newlib's sinf and glibc's differ in the last bit; scripts/check_identity.sh compares a
+ * digest of every step's results).
  * Cost: a few flops each (fdi_gen_obs_predict, fdi_gen_tanh ~25; fdi_gen_tanh ~8 where it saturates; fdi_gen_sin,
  * fdi_gen_cos ~12 for |x| <= pi/4, ~25 beyond).
  * Memory: none (a 28-entry const table).

@@ -514,8 +514,8 @@ float fdi_gen_tanh(float x)
    coefficients a weighted least-squares fit of the relative error on [0, pi/4] rounded to float (at most 0.79 and
    1.25 ulp from the exact value there, evaluated in float as below; with the reduction 1.6 ulp for |x| <= 13, and
    within 1e-7 of the exact value up to TRIG_MAX: tests/fw/test_fdi_gen_generated.c checks both functions against
-   the double ones). Beyond TRIG_MAX (no angle of a vehicle model) NaN, as for NaN and +-Inf: the test
-   using it is then not evaluable for the step, and the image needs no C library sinf / cosf. */
+   the double ones). Beyond TRIG_MAX (no angle of a vehicle model) NaN, as for NaN and +-Inf: the test using it is
+   then not evaluable for the step, and the image needs no C library sinf / cosf. */
 #define TRIG_MAX 2048.0f
 #define PI_4 0.785398163f
 #define TWO_OVER_PI 0.636619772f
