@@ -28,8 +28,8 @@
  * bindings) as on the ECU (newlib's sinf and glibc's differ in the last bit; scripts/check_identity.sh compares a
  * digest of every step's results).
  * Cost: a few flops each (fdi_gen_obs_predict, fdi_gen_tanh ~25; fdi_gen_tanh ~8 where it saturates); fdi_gen_sin
- * 17 and fdi_gen_cos 21 Cortex-M4F instructions a call for the ROMO steering angles (|x| <= pi/4; scripts/
- * profile_m4.sh: 68 and 84 per step for four calls each), more where the quadrant is reduced.
+ * 17 and fdi_gen_cos 21 Cortex-M4F instructions a call for the steering angles of the benchmark drive (|x| <=
+ * pi/4; scripts/profile_m4.sh: 68 and 84 per step for four calls each), more where the quadrant is reduced.
  * Memory: none (a 28-entry const table).
  */
 #ifndef FDI_GEN_IMPL_H
