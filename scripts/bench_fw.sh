@@ -12,7 +12,8 @@
 #           all of it at -O3 (CMake Release, the generated generators at -Os: cmake/FdiGenerated.cmake), with every
 #           source at -O3 (FDI_GENERATED_FOR_SIZE=OFF, the ROMO table only), and, as firmware is often built, at -Os
 #           (MinSizeRel); whether the host and the target compute the same bits at every step of the drive
-#           (scripts/check_identity.sh)
+#           (scripts/check_identity.sh); per function on the M4 (scripts/profile_m4.sh): instructions per step, calls
+#           per step and instructions a call, for both tables; the const data of the hand-written kinematic table
 # and the goals of issue 21 with PASS/MISS: <= 5,000 instructions per step on the M4 (largest step of the ROMO table
 # in the ECU's configuration, isolation included; with every sensitivity reported as information), sizeof(fdi_diag_t)
 # <= 4 KB on the M4, <= 32 KB of text for the ROMO diagnosis as the ECU links it (libfdi.a + libfdi_romo.a; the
@@ -85,6 +86,11 @@ romo_lib_nosens="$(text_of build/m4-nosens/fw/vehicles/romo/libfdi_romo.a)"
 lib_text="$(text_of build/m4/fw/libfdi.a)"
 echo "m4 flash: libfdi.a (generic core) text $lib_text B; ROMO target libfdi_romo.a text $romo_lib B" \
   "($romo_lib_nosens B with -DFDI_GEN_SENSITIVITIES=0), of which the generated generators $romo_gen B ($romo_gen_nosens B)"
+# const data (.rodata, strings included) of the hand-written kinematic table and generators (their headers cite this)
+rodata_of() { arm-none-eabi-size -A "$1" | awk '$1 ~ /^\.rodata/ {s += $2} END {print s + 0}'; }
+kin_objs=build/m4/fw/vehicles/romo/CMakeFiles/fdi_romo.dir/src
+echo "m4 const data: the kinematic table (fdi_kin_table.c) $(rodata_of "$kin_objs/fdi_kin_table.c.obj") B, the" \
+  "kinematic generators' six descriptors with their names (fdi_romo_kin.c) $(rodata_of "$kin_objs/fdi_romo_kin.c.obj") B"
 arm-none-eabi-size build/m4/fw/bench/fdi_bench_m4.elf
 m4_out="$(run_m4 build/m4)"
 echo "$m4_out"
@@ -109,6 +115,12 @@ romo_lib_os="$(text_of build/m4-os/fw/vehicles/romo/libfdi_romo.a)"
 echo "m4 -Os flash: libfdi.a (generic core) text $lib_text_os B; ROMO target libfdi_romo.a text $romo_lib_os B"
 m4_os_out="$(run_m4 build/m4-os)"
 echo "$m4_os_out" | sed 's/^m4: /m4 -Os: /'
+
+# Per function: instructions per step, calls per step and instructions a call, from qemu's instruction trace of a
+# profile build (-g) of the same bench (the headers' cost figures point here); the largest 20 per phase.
+for table in romo kin; do
+  bash scripts/profile_m4.sh "$table" off --top 20 | sed -n '/^== per phase/,$p'
+done
 
 echo "== goals (issue 21)"
 verdict() { if [ "$1" -le "$2" ]; then echo PASS; else echo MISS; fi; }

@@ -11,7 +11,7 @@
  *
  * A constant input gives y = 0 exactly and a ramp of slope s gives y -> s exactly (no coefficient
  * rounding can bias it: the input enters only as a difference).
- * Cost per step: 3 multiplications, 3 additions, 2 finiteness checks. Memory: coefficients 12 bytes
+ * Cost per step: 3 multiplications, 3 additions, 3 finiteness checks. Memory: coefficients 12 bytes
  * (fdi_deriv_coef_t, shareable by any number of filters with equal dt and cut-off), state 8 bytes.
  */
 #ifndef FDI_DERIV_H

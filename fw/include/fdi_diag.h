@@ -83,20 +83,20 @@
  * its turn (sens_every, above); outside episodes, and once no fault is left to decide, none (no cost). They are 0 while a test lacks its inputs or its domain; a non-finite
  * sensitivity makes the step fail like a non-finite residual (the test is "not evaluable" and restarts).
  *
- * Cost per step: the bank (~20 flops per filter) + the set's step (the shared terms once, each evaluated test's own
- * terms, the sensitivities the on-line rule reads during an episode at their turn, all of them with
- * cfg->sensitivities) + the hand-written generators + ~25 operations per test for evaluation + n_faults iterations
- * of isolation (while a fault is undecided, ~30 more per undecided fault of each settled quiet or alarmed test's
- * sensitivities for the implied sizes and the clearing rules, which visit only those faults, plus the reaction-size
- * rule) + the finiteness of the signals (fdi_frame_finite_mask). Measured by
- * scripts/bench_fw.sh (instructions per step of the vehicle tables it benchmarks over a simulated drive on x86-64
- * with callgrind and on Cortex-M4F under qemu -icount: fault-free, in an episode with one class left, in one with
- * several (undecided), largest step).
- * Memory: sizeof(fdi_diag_t) ~ 192 + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 33) +
- * 12 * FDI_DIAG_MAX_FILTERS + 4 * FDI_DIAG_MAX_SENS + 10 * FDI_TABLE_MAX_FAULTS + 2 * FDI_GEN_MAX_SLOTS +
- * 4 * FDI_DIAG_MAX_SENS_EVERY bytes (bound
- * asserted below; scripts/bench_fw.sh prints the value), caller-owned (static or stack); the library itself has no
- * .data/.bss.
+ * Cost per step: the bank (per running filter 4 multiplications, 7 additions and one finiteness check) + the set's
+ * step (the shared terms once, each evaluated test's own terms, the sensitivities the on-line rule reads during an
+ * episode at their turn, all of them with cfg->sensitivities) + the hand-written generators + the evaluation of each
+ * evaluated test (fdi_eval.h) + n_faults iterations of isolation (while a fault is undecided, for each settled quiet
+ * or alarmed test, its sensitivities of the undecided faults for the implied sizes and the clearing rules, which
+ * visit only those faults, plus the reaction-size rule) + the finiteness of the signals (fdi_frame_finite_mask).
+ * Measured, not estimated, by scripts/bench_fw.sh: instructions per step of the vehicle tables it benchmarks over a
+ * simulated drive on x86-64 with callgrind and on Cortex-M4F under qemu -icount (fault-free, in an episode with one
+ * class left, in one with several (undecided), largest step), and on the Cortex-M4F per function: instructions per
+ * step, calls per step and instructions a call (its profile, scripts/profile_m4.sh).
+ * Memory: sizeof(fdi_diag_t) <= 192 + 2 * sizeof(void *) + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) +
+ * sizeof(fdi_obs_t) + 33) + 12 * FDI_DIAG_MAX_FILTERS + 4 * FDI_DIAG_MAX_SENS + 10 * FDI_TABLE_MAX_FAULTS +
+ * 2 * FDI_GEN_MAX_SLOTS + 4 * FDI_DIAG_MAX_SENS_EVERY bytes (asserted below; scripts/bench_fw.sh prints the
+ * value), caller-owned (static or stack); the library itself has no .data/.bss.
  */
 #ifndef FDI_DIAG_H
 #define FDI_DIAG_H

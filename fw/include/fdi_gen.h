@@ -45,8 +45,10 @@
  * in; hand-written ones may read run-time parameters from fdi_gen_param_t.param (their target documents the
  * meaning of each index).
  *
- * Cost per step: the bank, ~20 flops per filter, once for all tests; the set's step (the shared terms once, each
- * running slot's own terms); a hand-written generator's filters and expression. Measured by scripts/bench_fw.sh.
+ * Cost per step: the bank, once for all tests (per running filter 4 multiplications, 7 additions and one
+ * finiteness check); the set's step (the shared terms once, each running slot's own terms); a hand-written
+ * generator's filters and expression. Measured by scripts/bench_fw.sh (per step, and per function and call on the
+ * Cortex-M4F).
  * Memory: a bank filter 12 bytes (fdi_svf_t), an observer 8 bytes (fdi_obs_t), held by the caller (fdi_diag_t); a
  * set with derived signals costs the diagnoser a copy of the frame per step (fdi_frame_t, 128 bytes of stack);
  * fdi_gen_param_t 12 + 12 + 4 * FDI_GEN_N_PARAMS = 40 bytes (shared by all tests), asserted below; the set's

@@ -15,21 +15,22 @@
  *   par NULL give 0 (callers pass their checked state).
  *   fdi_gen_obs_store: keep xh and g_prev for the next step; NOT_FINITE (nothing stored) on NaN/Inf, BAD_ARG
  *   on NULL.
- * Inline helpers of generated expressions (no call, no library): fdi_gen_heaviside(x): 1 for x > 0, else 0;
- *   fdi_gen_sign(x): -1, 0, 1 (derivatives of Max and Abs); fdi_gen_max / fdi_gen_min: the larger / smaller of two
- *   values (a NaN operand may propagate, where fmaxf would drop it: the caller's finiteness check then sees it).
+ * Inline helpers of generated expressions (static inline, no library; the generated generators, built for size,
+ *   may still call them: the profile of scripts/bench_fw.sh lists such calls): fdi_gen_heaviside(x): 1 for x > 0,
+ *   else 0; fdi_gen_sign(x): -1, 0, 1 (derivatives of Max and Abs); fdi_gen_max / fdi_gen_min: the larger / smaller
+ *   of two values (a NaN operand may propagate, where fmaxf would drop it: the caller's finiteness check then sees it).
  * fdi_gen_tanh: tanh of the generated expressions (the brake torque's sign law of the wheel speeds).
  * fdi_gen_sin, fdi_gen_cos: sin and cos of the generated expressions (the steering angles' rotations).
  * The exponentials of fdi_gen_obs_predict and fdi_gen_tanh are float-only series (fdi_gen.c, a few ulp): the C
- * library's expm1f and tanhf, general-purpose, cost several times as much on the target (scripts/bench_fw.sh).
+ * library's expm1f and tanhf, general-purpose, cost several times as much on the target.
  * fdi_gen_sin and fdi_gen_cos are float-only polynomials too (fdi_gen.c: within 1.6 ulp of the exact value for
  * |x| <= 13, within 1e-7 up to |x| = 2048, NaN beyond): cheaper than the C library's, and the same operations on
  * every target, so that the generated generators compute the same bits on the host (the quality suite, the
  * bindings) as on the ECU (newlib's sinf and glibc's differ in the last bit; scripts/check_identity.sh compares a
  * digest of every step's results).
- * Cost: a few flops each (fdi_gen_obs_predict, fdi_gen_tanh ~25; fdi_gen_tanh ~8 where it saturates); fdi_gen_sin
- * 17 and fdi_gen_cos 21 Cortex-M4F instructions a call for the steering angles of the benchmark drive (|x| <=
- * pi/4; scripts/profile_m4.sh: 68 and 84 per step for four calls each), more where the quadrant is reduced.
+ * Cost: a polynomial of degree 7 to 9 each, a table look-up for the exponentials of large arguments, a division for
+ * fdi_gen_tanh, none where it saturates; the Cortex-M4F instructions of each call, for the arguments of the benchmark
+ * drive, are printed by scripts/bench_fw.sh (its profile: calls per step and instructions a call).
  * Memory: none (a 28-entry const table).
  */
 #ifndef FDI_GEN_IMPL_H

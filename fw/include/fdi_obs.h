@@ -12,7 +12,7 @@
  *   g[k]  = f[k] + L * y[k]
  *   xh[k] = ad * xh[k-1] + bd * (g[k-1] + g[k]) / 2,   ad = exp(lambda dt),  bd = (ad - 1) / lambda
  *   r[k]  = y[k] - xh[k]
- * Cost per step: 4 multiplications, 4 additions, 4 finiteness checks. Memory: coefficients 12 bytes
+ * Cost per step: 4 multiplications, 4 additions, 5 finiteness checks. Memory: coefficients 12 bytes
  * (shareable), state 8 bytes.
  */
 #ifndef FDI_OBS_H

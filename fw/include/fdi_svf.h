@@ -15,7 +15,7 @@
  * The input enters only as u - x1, so a constant is reproduced exactly (x2 = 0) and a ramp of slope s
  * gives x2 -> s exactly, whatever the rounding of c1, c2. The low-frequency delay of x1 and x2 is
  * 2*zeta/W seconds; generators feed all signals of one relation through equal filters so the delays match.
- * Cost per step: 5 multiplications, 7 additions, 3 finiteness checks. Memory: coefficients 12 bytes
+ * Cost per step: 4 multiplications, 7 additions, 3 finiteness checks. Memory: coefficients 12 bytes
  * (fdi_svf_coef_t, shareable), state 12 bytes per filter.
  */
 #ifndef FDI_SVF_H

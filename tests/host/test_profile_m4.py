@@ -56,6 +56,14 @@ def test_steps_are_attributed_to_their_phase_and_function(tmp_path: Path) -> Non
     assert "main" not in per["fault-free"] and "main" not in per["undecided"]
 
 
+def test_calls_count_the_entries_of_a_function_not_its_inner_blocks(tmp_path: Path) -> None:
+    prof = profile_m4.profile(trace_of(tmp_path), FakeSymbols())
+    # fdi_diag_step is entered at 0x300 once per step (0x308, inside it, is no call); romo_gen_step once in the
+    # first fault-free step, twice in the undecided one
+    assert prof.calls["fault-free"] == {"bench_step_fault_free": 2, "fdi_diag_step": 2, "romo_gen_step": 1}
+    assert prof.calls["undecided"] == {"bench_step_undecided": 1, "fdi_diag_step": 1, "romo_gen_step": 2}
+
+
 def test_lines_spread_one_functions_instructions_over_its_source_lines(tmp_path: Path,
                                                                        monkeypatch: pytest.MonkeyPatch,
                                                                        capsys: pytest.CaptureFixture[str]) -> None:

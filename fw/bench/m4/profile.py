@@ -5,7 +5,9 @@ qemu -d in_asm,exec,nochain logs each translation block once with its instructio
 a block (exec, unchained, so none is skipped). A step of a phase is every block executed from the entry of its
 bench_step_<phase> function up to the next block of the harness (bench_m4.c's own functions); a block's
 instructions count for the function holding it (the ELF's symbols, arm-none-eabi-nm). Printed: per phase the mean
-instructions per step in total and per function (the largest first), from the same run, so they add up. With
+instructions per step in total and per function (the largest first), from the same run, so they add up, and each
+function's calls per step and its own instructions a call (a call: an execution of the block at the function's
+first address; a function inlined into its caller has no calls of its own and counts for the caller). With
 --lines FUNCTION, also the source lines of that function (and of what the compiler inlined into it) where its
 instructions go, per phase (arm-none-eabi-addr2line of every executed instruction's address). With --ops FUNCTION,
 its instruction mix per phase: executed instructions by mnemonic, the loads and stores by what they address (the
@@ -63,6 +65,7 @@ class Profile:
 
     def __init__(self) -> None:
         self.per: dict[str, Counter[str]] = defaultdict(Counter)
+        self.calls: dict[str, Counter[str]] = defaultdict(Counter)  # phase -> function -> entries
         self.steps: Counter[str] = Counter()
         self.blocks: dict[str, Counter[int]] = defaultdict(Counter)  # phase -> block start -> executions
         self.insns: dict[int, list[int]] = {}  # block start -> its instructions' addresses
@@ -85,7 +88,7 @@ def profile(trace: Path, syms: Symbols, lines_of: str | None = None) -> Profile:
     addrs: list[int] = []
     kinds: list[str] = []
     cur: int | None = None
-    names: dict[int, str] = {}
+    names: dict[int, tuple[str, bool]] = {}  # pc -> its function, and whether pc is the function's first address
     phase: str | None = None
     with trace.open(errors="replace") as fh:
         for line in fh:
@@ -103,16 +106,19 @@ def profile(trace: Path, syms: Symbols, lines_of: str | None = None) -> Profile:
             if not m:
                 continue
             pc = int(m.group(1), 16)
-            fn = names.get(pc)
-            if fn is None:
-                fn = names[pc] = syms.name(pc)
-            if fn in PHASES and pc == syms.starts[bisect.bisect_right(syms.starts, pc) - 1]:
+            known = names.get(pc)
+            if known is None:
+                known = names[pc] = (syms.name(pc), pc == syms.starts[bisect.bisect_right(syms.starts, pc) - 1])
+            fn, entry = known
+            if fn in PHASES and entry:
                 phase = PHASES[fn]
                 out.steps[phase] += 1
             elif fn in HARNESS:
                 phase = None
             if phase is not None:
                 out.per[phase][fn] += len(out.insns.get(pc, ()))
+                if entry:
+                    out.calls[phase][fn] += 1
                 if fn == lines_of:
                     out.blocks[phase][pc] += 1
     return out
@@ -190,9 +196,12 @@ def main() -> None:
         if n == 0:
             continue
         total = sum(per[phase].values())
-        print(f"{phase}: {n} steps, {total / n:,.0f} instructions per step")
+        print(f"{phase}: {n} steps, {total / n:,.0f} instructions per step "
+              "(per function: instructions per step, share, calls per step, instructions a call)")
         for fn, ins in per[phase].most_common(args.top):
-            print(f"  {ins / n:8,.0f}  {100 * ins / total:5.1f} %  {fn}")
+            calls = prof.calls[phase][fn]
+            each = f"{calls / n:8,.2f} calls  {ins / calls:6,.1f} a call" if calls else f"{'(entered mid-way)':>22}"
+            print(f"  {ins / n:8,.0f}  {100 * ins / total:5.1f} %  {fn:<28} {each}")
         rest = total - sum(v for _, v in per[phase].most_common(args.top))
         if rest:
             print(f"  {rest / n:8,.0f}  {100 * rest / total:5.1f} %  (the other functions)")

@@ -61,11 +61,12 @@
  *                  255 = detected but not isolated.
  * (the encode function keeps the bits its DBC signals hold).
  *
- * Cost: rx ~ 100 operations (CRC 8 table look-ups, unpack, range checks, the values kept); a step =
- * fdi_diag_step + per message one timeout compare and a search of its kept frames, per signal one
- * interpolation + frame packing. Memory: sizeof(fdi_ecu_t) = sizeof(fdi_diag_t) + sizeof(fdi_diag_result_t) +
- * 128 (frame) + per message slot ~80 + FDI_ECU_HISTORY x 36 (kept frames) + ~70 (scripts/bench_fw.sh prints
- * it); caller-owned. Flash: 256 bytes of CRC table.
+ * Cost: rx = a CRC of the frame's bytes (one table look-up per byte), the unpack, one range check per signal and
+ * the values kept; a step = fdi_diag_step + per message one timeout compare and a search of its kept frames, per
+ * signal one interpolation + frame packing. Memory: sizeof(fdi_ecu_t) (scripts/bench_fw.sh prints it) = the
+ * diagnoser (fdi_diag_t) and its result (fdi_diag_result_t), a frame (fdi_frame_t), per message slot its counters
+ * and FDI_ECU_HISTORY kept frames, and the ECU's own state; caller-owned. Flash: a 256-entry table of uint8_t for
+ * the CRC.
  */
 #ifndef FDI_ECU_H
 #define FDI_ECU_H

@@ -10,7 +10,7 @@
  *   2     3    1,2,3,4      ax_m ay_m psidot_m vx_m      fdi_romo_kin_arr3
  *   3     4    1,2,3,5      ax_m ay_m psidot_m vy_m      fdi_romo_kin_arr4
  * Every fault has a unique signature, so every isolability class has one fault.
- * Memory: ~250 bytes of const data (flash).
+ * Memory: const data (flash) only, its size printed by scripts/bench_fw.sh.
  */
 #ifndef FDI_KIN_TABLE_H
 #define FDI_KIN_TABLE_H

@@ -18,8 +18,11 @@
  * r3, r4 scale with w^2: they lose sensitivity when driving straight (w -> 0). They output no fault
  * sensitivities (sens_mask 0).
  *
- * Cost per step: r1, r2 4 filters (~70 flops); r3, r4 8 filters (~140 flops); observer ~12 flops.
- * Memory: the descriptors, 6 x 24 bytes of flash (32-bit target); state in the caller's fdi_gen_t.
+ * Cost per step: r1, r2 4 filters each (fdi_svf.h); r3, r4 8 filters each; an observer form no filter, its
+ * observer's step (fdi_obs.h); the Cortex-M4F instructions of each function per step and a call are printed by
+ * scripts/bench_fw.sh (its profile of the kinematic table).
+ * Memory: the six descriptors, const (flash), their size printed by scripts/bench_fw.sh; state in the caller's
+ * fdi_gen_t.
  */
 #ifndef FDI_ROMO_KIN_H
 #define FDI_ROMO_KIN_H
