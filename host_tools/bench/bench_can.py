@@ -12,8 +12,9 @@ Printed numbers (each against its goal):
   alarm (the drive is fault-free: goal 0);
 * offline replay speed vs real time (goal >= 1,000x, PASS/MISS): the same drive through `fdi-replay --offline`'s
   two code paths (one C call; frame by frame with the residual log, the anchor of the ratio), the time in the C
-  call alone, and the one-call path on the log with the other ECUs' frames (with its C call alone); all from
-  frames in memory; the time python-can takes to read the ECU's receive log of the run, apart;
+  call alone, and the one-call path on the log with the other ECUs' frames (with its C call alone), all from
+  frame objects in memory; and the fleet's path on the ECU's receive log of the run (every frame of the full
+  bus): the file read as columns (against python-can's reader), the replay from them, and both together;
 * the load average at the start and at the end (the machine is shared: the goals are about a quiet machine).
 During the live phase the bench holds a CPU wake-up latency request of 0 us (PM QoS, as cyclictest does; root):
 on this virtual machine an idle vCPU otherwise halts and waits for the host to run it again when a frame
@@ -44,6 +45,7 @@ import numpy as np
 from fdi_host.can import background, traffic
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.can.frame import Frame
+from fdi_host.can.log_columns import read_log_columns
 from fdi_host.can.logs import read_log, write_log
 from fdi_host.ecu.session import DIAG_ID, load_steps
 from fdi_host.live.bus import (
@@ -57,7 +59,7 @@ from fdi_host.live.bus import (
 )
 from fdi_host.live.netns import check_unshare, inside_private_netns, netns_command
 from fdi_host.live.sender import SendLog, send_paced
-from fdi_host.replay import replay_offline, replay_offline_fast
+from fdi_host.replay import replay_columns, replay_offline, replay_offline_fast
 from fdi_host.sim.scenario import load_scenario
 from fdi_host.sim.vehicle_sim import simulate
 
@@ -327,12 +329,20 @@ def report(args: argparse.Namespace, out: Path, frames: Sequence[Frame], sim_fra
               f"{fast_all.c_wall:.3f} s = {c_speed:,.0f}x real time, the rest the frames' conversion into arrays "
               "(one Python object each) and the records")
     rx_log = out / "ecu_rx.log"
-    if rx_log.is_file():
+    if rx_log.is_file():  # the fleet's path (replay_log): the log file read as columns, then one C call
         t_read = time.perf_counter()
-        n_read = len(read_log(rx_log))
+        read_log(rx_log)
         t_read = time.perf_counter() - t_read
-        print(f"  before any replay: reading the ECU's receive log ({rx_log.name}, candump, {n_read} frames) with "
-              f"python-can: {t_read:.2f} s = {args.duration / t_read:,.0f}x real time (not in the figures above)")
+        t_cols = time.perf_counter()
+        columns = read_log_columns(rx_log)
+        t_cols = time.perf_counter() - t_cols
+        from_file = replay_columns(columns, args.table)
+        total = t_cols + from_file.wall
+        print(f"  from the ECU's receive log of the run ({rx_log.name}, candump, {len(columns)} frames, "
+              f"{from_file.log_duration:.1f} s): read as columns {t_cols:.3f} s (python-can's reader {t_read:.2f} s, "
+              f"{t_read / t_cols:.1f}x as long); replay from the columns {from_file.wall:.3f} s = "
+              f"{from_file.speed:,.0f}x real time ({_verdict(from_file.speed)}); read and replay {total:.3f} s = "
+              f"{from_file.log_duration / total:,.0f}x real time")
     print(f"  fdi-replay --offline --ecu-log (per frame, residual log): {off.wall:.3f} s = {off.speed:,.0f}x real time "
           f"(one C call: {fast.speed / off.speed:.1f}x faster)")
     print(f"end: {load_end} (start: {load_start})")

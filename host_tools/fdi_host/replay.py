@@ -19,9 +19,8 @@ import argparse
 import sys
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
-from operator import attrgetter
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +32,7 @@ from fdi_analysis.cli.common import EXIT_ERROR, INPUT_ERRORS, add_version, fail,
 from fdi_host import fleet
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.can.frame import Frame
+from fdi_host.can.log_columns import FrameColumns, frame_columns, read_log_columns
 from fdi_host.can.logs import LOG_SUFFIXES, LogError, read_log
 from fdi_host.ecu.bindings import EcuError
 from fdi_host.ecu.records import DiagRecord
@@ -116,43 +116,39 @@ def _diag_decoder(db: RomoDatabase) -> Callable[[bytes], list[list[int]]]:
     return decode
 
 
-def _frame_arrays(frames: Sequence[Frame], origin: float) -> tuple[Any, Any, Any, Any]:
-    """Times on the ECU clock [s], IDs, payload lengths and payloads (n x 8 bytes, zero padded) of `frames`
-    without the ECU's own diagnosis frames: a few passes of map/numpy, no Python code per frame."""
-    n = len(frames)
-    t = np.fromiter(map(attrgetter("timestamp"), frames), np.float64, n) - origin
-    ids = np.fromiter(map(attrgetter("frame_id"), frames), np.int64, n)
-    datas = list(map(attrgetter("data"), frames))
-    dlc = np.fromiter(map(len, datas), np.int64, n)
-    if not (dlc == 8).all():
-        datas = [d if len(d) == 8 else d[:8].ljust(8, b"\0") for d in datas]
-    data = np.frombuffer(b"".join(datas), np.uint8).reshape(n, 8)
-    keep = ids != DIAG_ID
-    if not keep.all():
-        t, ids, dlc, data = t[keep], ids[keep], dlc[keep], data[keep]
-    return t, ids, dlc, data
-
-
-def replay_offline_fast(frames: Sequence[Frame], table: str) -> FastResult:
-    """The whole log through the ECU in one C call (`ecu_lib.Ecu.process_arrays`: rx then poll per frame),
-    same time base as `EcuSession` (first frame at 0.5 ms after a step boundary). Only the diagnosis frames
-    come back (no residuals): the fast path for scoring and for measuring speed."""
+def replay_columns(columns: FrameColumns, table: str) -> FastResult:
+    """A whole log, as columns in file order, through the ECU in one C call (`ecu_lib.Ecu.process_arrays`: rx then
+    poll per frame), same time base as `EcuSession` (first frame at 0.5 ms after a step boundary); the ECU's own
+    diagnosis frames in the log are left out. Only the diagnosis frames come back (no residuals): the fast path
+    for scoring and for measuring speed. `wall` runs from the columns to the records."""
     session = EcuSession(table)
     ecu = session.ecu
     decode = _diag_decoder(RomoDatabase())
     t_start = time.perf_counter()
     records: list[DiagRecord] = []
     c_wall = 0.0
-    if frames:
+    n = len(columns)
+    if n:
         ecu.poll(0.0)  # anchors the step schedule, as EcuSession.anchor
-        t, ids, dlc, data = _frame_arrays(frames, frames[0].timestamp - ORIGIN_LEAD)
+        keep = columns.frame_id != DIAG_ID
+        sent = columns if keep.all() else columns.select(keep)
+        t = sent.t - (columns.t[0] - ORIGIN_LEAD)
         t_c = time.perf_counter()
-        idx, payloads = ecu.process_arrays(t, ids, dlc, data)
+        idx, payloads = ecu.process_arrays(t, sent.frame_id, sent.dlc, sent.data)
         c_wall = time.perf_counter() - t_c
         records = list(map(DiagRecord, (t[idx] - ORIGIN_LEAD).tolist(), *decode(payloads)))
     wall = time.perf_counter() - t_start
-    dur = frames[-1].timestamp - frames[0].timestamp if frames else 0.0
-    return FastResult(records, ecu, len(frames), dur, wall, c_wall)
+    dur = float(columns.t[-1] - columns.t[0]) if n else 0.0
+    return FastResult(records, ecu, n, dur, wall, c_wall)
+
+
+def replay_offline_fast(frames: Sequence[Frame], table: str) -> FastResult:
+    """`replay_columns` of frame objects; their conversion into columns counts in `wall`."""
+    t0 = time.perf_counter()
+    columns = frame_columns(frames)
+    convert = time.perf_counter() - t0
+    res = replay_columns(columns, table)
+    return replace(res, wall=res.wall + convert)
 
 
 LOG_ERRORS: tuple[type[BaseException], ...] = (*INPUT_ERRORS, EcuError)  # a bad log, truth file or table
@@ -164,10 +160,10 @@ def replay_log(path: str, table: str = "romo", grace: float = 3.0) -> fleet.LogR
     t0 = time.perf_counter()
     p = Path(path)
     try:
-        frames = read_log(p)
-        if not frames:
+        columns = read_log_columns(p)
+        if not len(columns):
             raise LogError(f"{p}: holds no data frames")
-        res = replay_offline_fast(frames, table)
+        res = replay_columns(columns, table)
         steps = len(res.records)
         alarms = sum(1 for r in res.records if r.alarm_mask)
         truth = fleet.truth_file(p)
@@ -246,12 +242,14 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _one_log(args: argparse.Namespace) -> int:
-    """One log onto the bus, or offline through the ECU."""
-    frames = read_log(args.log)  # a LogError names the file and what is wrong
+    """One log onto the bus, or offline through the ECU (in one C call the log read as columns, no frame objects)."""
+    empty = f"{args.log}: holds no data frames"
+    if args.offline:  # a LogError names the file and what is wrong
+        source = read_log_columns(args.log) if args.ecu_log is None else read_log(args.log)
+        return _offline(args, source) if len(source) else fail("fdi-replay", empty)
+    frames = read_log(args.log)
     if not frames:
-        return fail("fdi-replay", f"{args.log}: holds no data frames")
-    if args.offline:
-        return _offline(args, frames)
+        return fail("fdi-replay", empty)
     stop = StopFlag()
     try:
         bus = open_bus(args.interface, args.channel)
@@ -271,23 +269,25 @@ def _one_log(args: argparse.Namespace) -> int:
     return 130 if log.interrupted else 0
 
 
-def _offline(args: argparse.Namespace, frames: list[Frame]) -> int:
-    """Through the bindings: per frame with the ECU log (residuals) if --ecu-log is given, else in one C call."""
+def _offline(args: argparse.Namespace, source: list[Frame] | FrameColumns) -> int:
+    """Through the bindings: per frame with the ECU log (residuals) from frame objects if --ecu-log is given, else
+    in one C call from the columns."""
     try:
-        if args.ecu_log is not None:
-            res = replay_offline(frames, args.table)
+        if isinstance(source, FrameColumns):
+            fast = replay_columns(source, args.table)
+            ecu, records, steps, speed, wall = fast.ecu, fast.records, [], fast.speed, fast.wall
+            n, dur = fast.frames, fast.log_duration
+        else:
+            res = replay_offline(source, args.table)
             ecu, records, steps, speed, wall = res.session.ecu, res.session.records(), res.session.steps, \
                 res.speed, res.wall
-        else:
-            fast = replay_offline_fast(frames, args.table)
-            ecu, records, steps, speed, wall = fast.ecu, fast.records, [], fast.speed, fast.wall
+            n, dur = len(source), source[-1].timestamp - source[0].timestamp
     except (ImportError, OSError, RuntimeError) as exc:
         print(f"fdi-replay: cannot load the ECU bindings ({exc}); build them with `pip install -e .`",
               file=sys.stderr)
         return EXIT_ERROR
-    dur = frames[-1].timestamp - frames[0].timestamp
     mode = "per frame, with ECU log" if args.ecu_log is not None else "one C call (Ecu.process)"
-    print(f"offline ({mode}): {len(frames)} frames, {dur:.2f} s of log in {wall:.3f} s = {speed:.0f}x real time; "
+    print(f"offline ({mode}): {n} frames, {dur:.2f} s of log in {wall:.3f} s = {speed:.0f}x real time; "
           f"{len(records)} diagnosis steps; {sum(1 for r in records if r.alarm_mask)} with an alarm")
     c = ecu.counters()
     print(f"ECU counters: frames {c.frames}, steps {c.steps}, rejected {c.rejected_total}")
