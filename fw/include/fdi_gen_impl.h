@@ -28,9 +28,10 @@
  * every target, so that the generated generators compute the same bits on the host (the quality suite, the
  * bindings) as on the ECU (newlib's sinf and glibc's differ in the last bit; scripts/check_identity.sh compares a
  * digest of every step's results).
- * Cost: a polynomial of degree 7 to 9 each, a table look-up for the exponentials of large arguments, a division for
- * fdi_gen_tanh, none where it saturates; the Cortex-M4F instructions of each call, for the arguments of the benchmark
- * drive, are printed by scripts/bench_fw.sh (its profile: calls per step and instructions a call).
+ * Cost: fdi_gen_sin and fdi_gen_cos a polynomial of degree 7 and 8 after the quadrant's reduction; the exponentials
+ * a polynomial of degree 7 (for large negative arguments times 2^-n from the table); fdi_gen_tanh one division
+ * more, none where it saturates. The Cortex-M4F instructions of each call, for the arguments of the benchmark drive,
+ * are printed by scripts/bench_fw.sh (its profile: calls per step and instructions a call).
  * Memory: none (a 28-entry const table).
  */
 #ifndef FDI_GEN_IMPL_H

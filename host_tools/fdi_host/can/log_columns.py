@@ -78,15 +78,14 @@ _EXACT_INT = 2**53  # a decimal N / 10^d with N below this is float(its text) af
 _POW10 = np.array([float(10**d) for d in range(17)])  # exact: 10^d < 2^53 for d <= 15, 10^16 = 2^16 5^16 exact too
 
 
-def _gather(raw: NDArray[np.uint8], start: NDArray[np.int64], end: NDArray[np.int64],
+def _gather(padded: NDArray[np.uint8], start: NDArray[np.int64], end: NDArray[np.int64],
             width: int) -> tuple[NDArray[np.uint8], NDArray[np.int64]] | None:
-    """Each token raw[start:end] as a row of `width` bytes (0 past its end) and its length; None when a token is
-    empty or longer than width."""
+    """Each token padded[start:end] as a row of `width` bytes (0 past its end) and its length; None when a token is
+    empty or longer than width. `padded` ends in at least `width` bytes past the last token."""
     length = end - start
     if length.size and (int(length.min()) < 1 or int(length.max()) > width):
         return None
-    padded = np.concatenate((raw, np.zeros(width, np.uint8)))
-    rows = np.lib.stride_tricks.sliding_window_view(padded, width)[start]  # a copy: row i = raw[start[i]:][:width]
+    rows = np.lib.stride_tricks.sliding_window_view(padded, width)[start]  # a copy: row i = padded[start[i]:][:width]
     rows[np.arange(width)[None, :] >= length[:, None]] = 0
     return rows, length
 
@@ -143,10 +142,10 @@ def _frames(tok: NDArray[np.uint8], length: NDArray[np.int64]) -> tuple[NDArray[
         return None  # error frames (CAN_ERR_FLAG) and flag bits: python-can's reader decides
     dlc = n_data // 2
     cols = np.minimum(at[:, None] + 1 + np.arange(_DATA_MAX_DIGITS)[None, :], width - 1)
-    digits = np.take_along_axis(nib, cols, axis=1).astype(np.uint8)
+    digits = np.take_along_axis(nib, cols, axis=1)  # uint8, as nib
     data = (digits[:, 0::2] << 4) | digits[:, 1::2]
     data[np.arange(8)[None, :] >= dlc[:, None]] = 0
-    return ids, dlc.astype(np.int64), data.astype(np.uint8)
+    return ids, dlc, data.astype(np.uint8, copy=False)  # already uint8: no copy (the annotation for mypy)
 
 
 def parse_candump(raw: bytes) -> FrameColumns | None:
@@ -173,8 +172,10 @@ def parse_candump(raw: bytes) -> FrameColumns | None:
         frame_end = sp[:, 2]
     else:
         frame_end = newline.astype(np.int64)
-    ts = _gather(buf, starts, sp[:, 0], 24)
-    fr = _gather(buf, sp[:, 1] + 1, frame_end, _ID_MAX_DIGITS + 1 + _DATA_MAX_DIGITS)
+    ts_width, frame_width = 24, _ID_MAX_DIGITS + 1 + _DATA_MAX_DIGITS
+    padded = np.concatenate((buf, np.zeros(max(ts_width, frame_width), np.uint8)))  # once, for both gathers
+    ts = _gather(padded, starts, sp[:, 0], ts_width)
+    fr = _gather(padded, sp[:, 1] + 1, frame_end, frame_width)
     if ts is None or fr is None:
         return None
     t = _timestamps(*ts)
