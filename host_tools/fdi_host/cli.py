@@ -45,7 +45,9 @@ outputs: every --out gets a ground-truth file <out>.truth.json next to it (unles
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(
         prog="fdi-sim",
-        description="Simulate the ROboMObil dual-track model (from analysis/models/romo_quasistatic.toml) "
+        description="Simulate the ROboMObil: the model plant (the dual-track model of "
+        "analysis/models/romo_quasistatic.toml) or, with --truth-vehicle, the truth plant (vehicle-dynamics physics "
+        "with suspension, Magic-Formula tyres, road grade, bank and friction, sensor biases and lags) "
         "driven by a geometric controller, inject Table I faults, and write the sensor CAN frames "
         "(dbc/romo.dbc) as candump .log, Vector .asc or .blf.",
         epilog=EPILOG,

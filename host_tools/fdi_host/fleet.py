@@ -27,16 +27,15 @@ from __future__ import annotations
 
 import glob
 import json
-import os
 import statistics
 import time
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 from fdi_host.can.logs import LOG_SUFFIXES, LogError
+from fdi_host.executors import ExecutorError, run_tasks
 from fdi_host.monitor.score import FaultScore
 from fdi_host.sim.faults import FAULT_IDS
 
@@ -175,13 +174,12 @@ Progress = Callable[[LogResult], None]
 def run_fleet(task: Task, logs: Sequence[Path], *, workers: int | None = None, scheduler: str | None = None,
               progress: Progress | None = None, table: str = "") -> FleetReport:
     """`task` on every log: in this process (``workers=1``), on local processes (default: one per core) or on
-    the Dask cluster at `scheduler`; `progress` is called with each result as it arrives."""
-    if scheduler is not None:
-        return _collect(_on_dask(task, logs, scheduler), progress, table)
-    n = max(1, workers or os.cpu_count() or 1)
-    if n == 1:
-        return _collect(_in_process(task, logs), progress, table)
-    return _collect(_on_processes(task, logs, n), progress, table)
+    the Dask cluster at `scheduler` (`fdi_host.executors`); `progress` is called with each result as it arrives."""
+    try:
+        source = run_tasks(task, [str(p) for p in logs], _failed, workers=workers, scheduler=scheduler)
+    except ExecutorError as exc:
+        raise FleetError(str(exc)) from exc
+    return _collect(source, progress, table)
 
 
 def _collect(source: tuple[str, Iterator[LogResult]], progress: Progress | None, table: str) -> FleetReport:
@@ -199,64 +197,6 @@ def _collect(source: tuple[str, Iterator[LogResult]], progress: Progress | None,
 def _failed(log: str, exc: BaseException) -> LogResult:
     """A task that raised instead of returning its error (a bug, or a worker lost): still one row."""
     return LogResult(log, error=f"{type(exc).__name__}: {' '.join(str(exc).split())}")
-
-
-def _in_process(task: Task, logs: Sequence[Path]) -> tuple[str, Iterator[LogResult]]:
-    def results() -> Iterator[LogResult]:
-        for p in logs:
-            try:
-                yield task(str(p))
-            except Exception as exc:  # as on processes and Dask: one failed task is one row
-                yield _failed(str(p), exc)
-
-    return "one process", results()
-
-
-def _on_processes(task: Task, logs: Sequence[Path], n: int) -> tuple[str, Iterator[LogResult]]:
-    def results() -> Iterator[LogResult]:
-        with ProcessPoolExecutor(max_workers=min(n, len(logs))) as pool:
-            futures = {pool.submit(task, str(p)): str(p) for p in logs}
-            try:
-                for fut in as_completed(futures):
-                    try:
-                        yield fut.result()
-                    except Exception as exc:  # one failed task is one row, not the fleet's end
-                        yield _failed(futures[fut], exc)
-            except BaseException:  # Ctrl-C: the queued logs are not started
-                pool.shutdown(wait=False, cancel_futures=True)
-                raise
-
-    return f"{min(n, len(logs))} local processes", results()
-
-
-def _on_dask(task: Task, logs: Sequence[Path], scheduler: str) -> tuple[str, Iterator[LogResult]]:
-    try:
-        from distributed import Client
-        from distributed import as_completed as dask_completed
-    except ImportError as exc:
-        raise FleetError("--scheduler needs Dask: pip install 'romo-fdi[fleet]'") from exc
-    try:
-        client = Client(scheduler, timeout="10s")  # type: ignore[no-untyped-call]
-    except (OSError, TimeoutError) as exc:
-        raise FleetError(f"cannot reach the Dask scheduler {scheduler}: {exc}") from exc
-    workers = client.scheduler_info().get("workers", {})
-    threads = sum(int(w.get("nthreads", 1)) for w in workers.values())
-    name = f"Dask {scheduler}: {threads} threads on {len(workers)} workers"
-
-    def results() -> Iterator[LogResult]:
-        try:
-            names = [str(p) for p in logs]
-            futures = client.map(task, names, pure=False)
-            by_key = {f.key: n for f, n in zip(futures, names, strict=True)}
-            for fut in dask_completed(futures):  # type: ignore[no-untyped-call]
-                try:
-                    yield fut.result()
-                except Exception as exc:  # one failed task is one row, not the fleet's end
-                    yield _failed(by_key[fut.key], exc)
-        finally:
-            client.close()  # type: ignore[no-untyped-call]
-
-    return name, results()
 
 
 # ---------------------------------------------------------------------------------------------- the table

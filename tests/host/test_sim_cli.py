@@ -11,7 +11,7 @@ import pytest
 from fdi_host.can.logs import read_log
 from fdi_host.can.traffic import decode_frames
 from fdi_host.cli import main
-from fdi_host.sim.scenario import SCENARIOS
+from fdi_host.sim.scenario import FLEET_SCENARIOS
 
 
 def test_help_has_examples(capsys: pytest.CaptureFixture[str]) -> None:
@@ -27,7 +27,7 @@ def test_list_names_the_vehicle_scenarios_only(capsys: pytest.CaptureFixture[str
     --list shows the vehicle scenarios and nothing else, without an error."""
     assert main(["--list"]) == 0
     out = capsys.readouterr()
-    assert [line.split()[0] for line in out.out.splitlines()] == sorted(SCENARIOS)
+    assert [line.split()[0] for line in out.out.splitlines()] == sorted(FLEET_SCENARIOS)
     assert out.err == ""
 
 

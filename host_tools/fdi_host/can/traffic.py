@@ -34,8 +34,10 @@ def build_frames(
     db: RomoDatabase | None = None,
     t0: float = 0.0,
     progress: Callable[[int], None] | None = None,
+    t_from: float = 0.0,
 ) -> list[Frame]:
-    """All frames of the drive, time ordered. `t0` is added to every timestamp."""
+    """All frames of the drive, time ordered, from `t_from` on (the frames before it are not encoded; the E2E
+    counters run as if they were). `t0` is added to every timestamp."""
     db = db or RomoDatabase()
     sig = sim_signal_arrays(result)
     dt = result.config.dt
@@ -51,7 +53,8 @@ def build_frames(
         cols = {sm.sim: sig[sm.sim][idx].tolist() for sm in maps}
         counter = 0
         for j, ts in enumerate(times.tolist()):
-            frames.append((ts, msg.frame_id, db.encode_sim(name, {k: v[j] for k, v in cols.items()}, counter)))
+            if ts >= t_from:
+                frames.append((ts, msg.frame_id, db.encode_sim(name, {k: v[j] for k, v in cols.items()}, counter)))
             counter = e2e.next_counter(counter)
         if progress is not None:
             progress(len(times))

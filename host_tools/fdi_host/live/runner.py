@@ -219,6 +219,8 @@ def run_here(args: argparse.Namespace, interface: str, channel: str) -> int:
         drive.append("--no-scenario-faults")
     if args.duration is not None:
         drive += ["--duration", str(args.duration)]
+    if args.truth_vehicle is not None:
+        drive += ["--truth-vehicle", args.truth_vehicle]
     if args.seed is not None:
         drive += ["--seed", str(args.seed)]
     sim_cmd = _py("fdi_host.cli", "live", *drive, "--out", str(out / "drive.blf"), "--truth",

@@ -4,6 +4,7 @@ plus fault-free drives) through the C ECU core, offline; writes quality.json and
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -32,6 +33,9 @@ EXAMPLES = """examples:
                                                       # where the tests' rho differ by more than the rule's margin
                                                       # (linearity.json, linearity.md, linearity.png)
   fdi-quality --table romo --ecu noise_allowance=2 --out out/quality-na2   # a study with another ECU setting
+  fdi-quality --fleet 25 --out out/fleet      # truth-plant fleet: 25 vehicles x 8 scenarios, the model plant beside,
+                                              # false alarms per hour, minimum detectable faults (about 40 min)
+  fdi-quality --fleet 2 --quick --out out/fleet-quick   # CI size: 2 vehicles, cornering and the wet patch
 """
 
 
@@ -93,6 +97,12 @@ def main(argv: list[str] | None = None) -> int:
                         "predicts (the linearisation the on-line exoneration relies on), and a plot in --out; "
                         "without: the same over the suite's cases (faults x scenarios x seeds), where the tests' "
                         "departures exceed the rule's margin (linearity.json, .md and .png in --out)")
+    p.add_argument("--fleet", type=int, metavar="N", default=None,
+                   help="instead of the model-plant suite: the fleet suite on N truth-plant vehicles drawn from the "
+                        "envelope (all eight scenarios, the model plant's figures beside; fleet.json, fleet.md)")
+    p.add_argument("--workers", type=int, default=None, help="with --fleet: local processes (default one per core)")
+    p.add_argument("--scheduler", default=None, help="with --fleet: a Dask scheduler (tcp://host:8786) instead")
+    p.add_argument("--no-sweep", action="store_true", help="with --fleet: no minimum-detectable-fault search")
     p.add_argument("-o", "--out", type=Path, default=None,
                    help="folder for quality.json and quality.md (with --trace or --linearity: their files)")
     args = p.parse_args(argv)
@@ -102,6 +112,8 @@ def main(argv: list[str] | None = None) -> int:
         return fail("fdi-quality", exc)
     if args.trace is not None:
         return _trace(args)
+    if args.fleet is not None:
+        return _fleet(args)
     try:
         cfg = _config(args)
         if args.linearity:
@@ -147,6 +159,29 @@ def _config(args: argparse.Namespace) -> SuiteConfig:
         sizes_file=args.sizes,
         ecu=args.ecu,
     )
+
+
+def _fleet(args: argparse.Namespace) -> int:
+    from fdi_host.quality import fleet, fleet_report
+
+    try:
+        base = fleet.quick_config(args.table) if args.quick else fleet.FleetConfig(table=args.table)
+        cfg = dataclasses.replace(
+            base, vehicles=args.fleet, scenarios=tuple(args.scenarios) if args.scenarios else base.scenarios,
+            faults=tuple(args.faults) if args.faults else (), sizes_file=args.sizes, ecu=args.ecu,
+            workers=args.workers, scheduler=args.scheduler, sweep=base.sweep and not args.no_sweep,
+            model_plant_seeds=tuple(args.seeds) if args.seeds else base.model_plant_seeds)
+        with _progress("fleet", "task") as progress:
+            result = fleet.run_fleet_suite(cfg, progress)
+    except (QualityError, OSError) as exc:
+        return fail("fdi-quality", exc)
+    print(fleet_report.markdown(result))
+    if args.out is not None:
+        args.out.mkdir(parents=True, exist_ok=True)
+        fleet_report.write_json(result, args.out / "fleet.json")
+        (args.out / "fleet.md").write_text(fleet_report.markdown(result), encoding="utf-8")
+        print(f"wrote {args.out / 'fleet.json'} and {args.out / 'fleet.md'}")
+    return 1 if result.errors else 0
 
 
 def _survey(cfg: SuiteConfig, out: Path | None) -> int:

@@ -13,6 +13,7 @@ from tqdm import tqdm
 from fdi_host.sim.faults import FaultSpecError, ground_truth, parse_fault
 from fdi_host.sim.plant import Plant
 from fdi_host.sim.scenario import ScenarioError, load_scenario
+from fdi_host.sim.vehicle_envelope import vehicle_from_option
 from fdi_host.sim.vehicle_sim import SimConfig, SimResult, default_plant, simulate
 
 
@@ -29,7 +30,9 @@ def write_truth(result: SimResult, plant: Plant, duration: float, start_time: fl
     }
     gt = ground_truth(result.faults, result.t, info)
     gt |= {"scenario": result.scenario.name, "seed": result.seed, "duration": duration, "start_time": start_time,
-           "noise": noise}
+           "noise": noise, "plant": result.label}
+    if result.vehicle is not None:
+        gt["vehicle"] = result.vehicle.describe()
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(gt, indent=2) + "\n", encoding="utf-8")
     return path
@@ -46,17 +49,26 @@ class Drive:
 
 def simulate_from_args(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Drive:
     """Scenario, scenario faults (unless --no-scenario-faults) and --fault specs, duration, seed and noise from
-    the common options of `fdi-sim` and `fdi-sim live`; simulates with a progress bar (a bad option: ap.error)."""
+    the common options of `fdi-sim` and `fdi-sim live`, on the model plant or (--truth-vehicle) the truth plant;
+    simulates with a progress bar (a bad option: ap.error)."""
     try:
         sc = load_scenario(args.scenario)
         extra = [parse_fault(f) for f in args.fault]
-    except (ScenarioError, FaultSpecError) as exc:
+        vehicle = vehicle_from_option(getattr(args, "truth_vehicle", None))
+    except (ScenarioError, FaultSpecError, ValueError) as exc:
         ap.error(str(exc))
     faults = ([] if args.no_scenario_faults else list(sc.faults)) + extra
     duration = args.duration if args.duration is not None else sc.duration
     cfg = SimConfig(noise_scale=0.0 if args.no_noise else 1.0)
     plant = default_plant()
-    with tqdm(total=round(duration / cfg.dt) + 1, unit="ms", desc=f"simulate {sc.name}", disable=args.quiet) as bar:
-        result = simulate(sc, faults, seed=args.seed, plant=plant, config=cfg, duration=duration,
-                          progress=bar.update)
+    desc = f"simulate {sc.name}" + ("" if vehicle is None else f" ({vehicle.label})")
+    with tqdm(total=round(duration / cfg.dt) + 1, unit="ms", desc=desc, disable=args.quiet) as bar:
+        if vehicle is None:
+            result = simulate(sc, faults, seed=args.seed, plant=plant, config=cfg, duration=duration,
+                              progress=bar.update)
+        else:
+            from fdi_host.sim.truth_sim import simulate_truth
+
+            result = simulate_truth(sc, faults, vehicle=vehicle, seed=args.seed, config=cfg, duration=duration,
+                                    progress=bar.update)
     return Drive(result=result, plant=plant, duration=duration)

@@ -14,5 +14,8 @@ def add_drive_arguments(ap: argparse.ArgumentParser, noise: bool = True) -> None
     ap.add_argument("--no-scenario-faults", action="store_true", help="ignore the faults of the scenario file")
     ap.add_argument("--duration", type=float, help="override the scenario duration [s]")
     ap.add_argument("--seed", type=int, help="override the noise seed")
+    ap.add_argument("--truth-vehicle", metavar="nominal|SEED", default=None,
+                    help="drive the truth plant (vehicle-dynamics physics, not the diagnosis model) with the nominal "
+                         "vehicle or the vehicle drawn from the envelope with this seed; default: the model plant")
     if noise:
         ap.add_argument("--no-noise", action="store_true", help="switch sensor noise off (quantisation stays)")

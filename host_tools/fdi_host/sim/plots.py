@@ -57,7 +57,8 @@ def plot_drive(result: SimResult, path: str | Path) -> Path:
     ax2.set_ylabel("pressure [bar]")
     axs[-1].set_xlabel("t [s]")
     faults = ", ".join(s.describe() for s in result.faults) or "none"
-    fig.suptitle(f"ROMO drive '{result.scenario.name}' (seed {result.seed}); faults: {faults}", fontsize=10)
+    fig.suptitle(f"ROMO drive '{result.scenario.name}' on the {result.label} (seed {result.seed}); faults: {faults}",
+                 fontsize=10)
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

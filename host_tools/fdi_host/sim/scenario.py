@@ -27,6 +27,8 @@ A scenario file (``host_tools/scenarios/<name>.toml``)::
     period = 8.0
     duty = 0.25
 
+    [road]                   # optional: grade, bank and friction patches, see fdi_host.sim.road
+
     [[fault]]                # optional, see fdi_host.sim.faults
     fault = "f4"
     onset = 10.0
@@ -48,10 +50,15 @@ from scipy.signal import lfilter
 
 from fdi_host import resources
 from fdi_host.sim.faults import FaultSpec, fault_from_table
+from fdi_host.sim.road import Road, RoadError, road_from_dict
 
 SCENARIO_DIR = resources.SCENARIOS.path()  # host_tools/scenarios in a checkout, the package's copy in a wheel
 FAULT_SIZES_FILE = SCENARIO_DIR / "fault_sizes.toml"  # the required fault sizes, and the sizes the sweep states
 SCENARIOS: tuple[str, ...] = ("straight", "cornering", "slalom", "fig6", "low_speed")  # the five manoeuvres
+# The drives of real roads (grade and bank, stops and standstill, a wet patch): their [road] table needs the truth
+# plant (the model plant has no road); the fleet suite drives all eight.
+ROAD_SCENARIOS: tuple[str, ...] = ("country_road", "urban", "wet_patch")
+FLEET_SCENARIOS: tuple[str, ...] = SCENARIOS + ROAD_SCENARIOS
 CHANNELS: tuple[str, ...] = ("speed", "sideslip", "yaw_rate")
 FloatArray = NDArray[np.float64]
 
@@ -126,6 +133,7 @@ class Scenario:
     description: str = ""
     source: Path | None = None
     extra: Mapping[str, Any] = field(default_factory=dict)
+    road: Road = field(default_factory=Road)  # the truth plant's road (grade, bank, friction patches)
 
     def demand_signals(self, t: FloatArray) -> dict[str, FloatArray]:
         """Demand channels at times `t` plus ``speed_rate`` (d/dt of the speed demand)."""
@@ -158,6 +166,10 @@ def scenario_from_dict(doc: Mapping[str, Any], source: Path | None = None) -> Sc
         raise ScenarioError(f"{where}: unknown demand channels {sorted(unknown)}; use {CHANNELS}")
     demand = {c: _channel(v, f"{where}: demand.{c}") for c, v in demand_doc.items()}
     faults = tuple(fault_from_table(f) for f in doc.get("fault", []))
+    try:
+        road = road_from_dict(doc.get("road"), where)
+    except RoadError as exc:
+        raise ScenarioError(str(exc)) from exc
     known = {"name", "duration", "seed", "initial_speed", "description"}
     return Scenario(
         name=str(meta.get("name", source.stem if source else "scenario")),
@@ -169,6 +181,7 @@ def scenario_from_dict(doc: Mapping[str, Any], source: Path | None = None) -> Sc
         description=str(meta.get("description", "")),
         source=source,
         extra={k: v for k, v in meta.items() if k not in known},
+        road=road,
     )
 
 

@@ -23,6 +23,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,6 +33,7 @@ from fdi_host.sim.faults import FAULT_IDS, FaultSpec, fault_matrix
 from fdi_host.sim.plant import RECORDED, STATES, Plant
 from fdi_host.sim.scenario import Scenario
 from fdi_host.sim.sensors import add_noise
+from fdi_host.sim.vehicle_envelope import Vehicle
 
 FloatArray = NDArray[np.float64]
 
@@ -55,6 +57,15 @@ class SimResult:
     measured: dict[str, FloatArray]  # measured signals with faults and noise (quantised later, on CAN)
     fault_values: FloatArray  # (N, 25)
     config: SimConfig
+    plant: str = "model plant"  # the label every figure made from this drive carries
+    vehicle: Vehicle | None = None  # the truth plant's vehicle (None: the model plant)
+    snapshots: dict[int, Any] = field(default_factory=dict)  # truth plant: states kept for fault cases
+    runs: Any = None  # truth plant: the raw arrays of the drive (for fault cases from a snapshot)
+
+    @property
+    def label(self) -> str:
+        """The plant and vehicle the drive came from, as figures name it."""
+        return self.plant if self.vehicle is None else f"{self.plant}, {self.vehicle.label}"
 
     def fault(self, fid: str) -> FloatArray:
         return self.fault_values[:, FAULT_IDS.index(fid)]
@@ -157,11 +168,15 @@ def simulate(
 SENSOR_FAULTS: frozenset[str] = frozenset({"f1", "f2", "f3", "f4", "f5", "f22", "f23", "f24", "f25"})
 
 
-def faulty_drive(base: SimResult, spec: FaultSpec) -> SimResult:
-    """The drive of `base` (fault-free, same scenario and seed) with `spec` added. Sensor faults reuse the
-    simulation (measurement equations and noise recomputed); others are simulated again."""
+def faulty_drive(base: SimResult, spec: FaultSpec, until: float | None = None) -> SimResult:
+    """The drive of `base` (fault-free, same scenario and seed) with `spec` added, up to `until` (default: its
+    end). Sensor faults reuse the simulation (measurement equations and noise recomputed); others are simulated
+    again. A truth-plant drive has its own: `fdi_host.sim.truth_sim.faulty_truth_drive`."""
+    if base.vehicle is not None:
+        raise ValueError("a truth-plant drive: use fdi_host.sim.truth_sim.faulty_truth_drive")
     if spec.fault not in SENSOR_FAULTS:
-        return simulate(base.scenario, [spec], seed=base.seed, config=base.config, duration=float(base.t[-1]))
+        end = float(base.t[-1]) if until is None else min(until, float(base.t[-1]))
+        return simulate(base.scenario, [spec], seed=base.seed, config=base.config, duration=end)
     F = base.fault_values + fault_matrix([spec], base.t)
     sig = dict(base.true) | {f: F[:, i] for i, f in enumerate(FAULT_IDS)}
     clean = {name: fn(sig) for name, fn in default_plant().measurement_functions().items()}

@@ -30,6 +30,7 @@ from fdi_analysis.export.fault_sizes import REACTION_WINDOW_S, FaultSizes
 from fdi_analysis.residuals.evaluate import FilterDesign, evaluable_segments
 from fdi_analysis.residuals.generator import Generator
 from fdi_host.tuning.calibrate import first_alarm
+from fdi_host.tuning.seeds import CONFIRM_SEED_OFFSETS
 
 FloatArray = NDArray[np.float64]
 
@@ -38,7 +39,6 @@ START = 6.0  # s, first fault onset (cornering is in steady state from 5 s)
 ON, OFF = REACTION_WINDOW_S, 2.0  # s per window
 CHUNK = 6  # windows per simulated drive
 MAX_DOWN = 3  # chunks swept below the smallest size at most (3 decades)
-CONFIRM_SEED_OFFSETS = (100, 200, 300)  # the confirmation also uses seed + each of these for every sweep seed
 
 
 @dataclass(frozen=True)

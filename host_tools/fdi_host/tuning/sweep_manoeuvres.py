@@ -27,7 +27,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fdi_analysis.residuals.generator import Generator
-from fdi_host.tuning.sweep import CONFIRM_SEED_OFFSETS, ScenarioLimit, alarms_in_windows, grid
+from fdi_host.tuning.seeds import CONFIRM_SEED_OFFSETS
+from fdi_host.tuning.sweep import ScenarioLimit, alarms_in_windows, grid
 
 FloatArray = NDArray[np.float64]
 

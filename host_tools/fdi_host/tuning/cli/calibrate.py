@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from fdi_analysis.cli.common import EXIT_ERROR
+from fdi_host.tuning.seeds import CALIBRATION_SEEDS, CONFIRM_SEED_OFFSETS, SWEEP_SEEDS
 
 EXAMPLE = ("example: fdi-tune calibrate analysis/models/romo_grouped.toml "
            "--thresholds analysis/models/romo_thresholds.toml --scenarios cornering slalom straight")
@@ -16,16 +17,11 @@ EXAMPLE = ("example: fdi-tune calibrate analysis/models/romo_grouped.toml "
 # All five scenarios of host_tools/scenarios; near standstill (low_speed) the tyre-law residuals are outside
 # their operating domain (Generator.min_speed) and not evaluated, as on the vehicle.
 DEFAULT_SCENARIOS = ("cornering", "fig6", "low_speed", "slalom", "straight")
-# Noise seeds of further drives per scenario besides the scenario's own. Twelve: with the two of the first
-# calibration the 30 fault-free minutes of the quality suite (other seeds) saw 4 false detections, all at the onset
-# of the straight drive's hard braking (a tail that three drives per scenario do not reach).
-CALIBRATION_SEEDS = tuple(range(1001, 1013))
 # Each drive as long as its scenario (as the quality suite's fault-free drives): a shorter drive would miss the
 # end of a profile, e.g. fig6's hardest transient at 34 s (sawtooth yaw-rate reset with a side-slip step).
 CALIBRATION_DURATION: float | None = None
 CALIBRATION_WARMUP = 3.0  # s ignored at the start
 SWEEP_SCENARIO = "cornering"  # fault-sizes: the fault-free drive the step faults are injected in
-SWEEP_SEEDS = (777, 778)  # fault-sizes: an alarm counts when the drives of every seed alarm
 
 
 def register(sub: Any) -> None:
@@ -208,7 +204,7 @@ def run_sizes(args: argparse.Namespace) -> int:
                   f"{args.thresholds.as_posix()}) inside the test's operating domain;\n"
                   "stated size = the grid value above the first alarm, confirmed (raised along the grid until it "
                   "alarms in a drive of its own with every seed and every seed + "
-                  f"{', '.join(map(str, sweep.CONFIRM_SEED_OFFSETS))});\n"
+                  f"{', '.join(map(str, CONFIRM_SEED_OFFSETS))});\n"
                   "pairs without a stated size there: swept in "
                   f"{', '.join(others) if others else '(no other scenario)'}, each driven whole with the fault from "
                   f"{sweep_manoeuvres.ONSET:g} s on (an alarm after the onset with every seed, none in the seed's "

@@ -8,7 +8,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from fdi_host.tuning.cli.calibrate import CALIBRATION_SEEDS, DEFAULT_SCENARIOS
+from fdi_host.tuning.cli.calibrate import DEFAULT_SCENARIOS
+from fdi_host.tuning.seeds import CALIBRATION_SEEDS
 
 EXAMPLE = ("example: fdi-tune screen analysis/models/romo_grouped.toml --thresholds "
            "analysis/models/romo_thresholds.toml --sizes host_tools/scenarios/fault_sizes.toml "
