@@ -41,9 +41,9 @@ def test_tyre_matches_commonroads_published_functions() -> None:
                 F0y, mu_y = tm.formula_lateral(alpha, 0.0, Fz, pt)
                 fx = tm.formula_longitudinal_comb(s, alpha, F0x, pt)
                 fy = tm.formula_lateral_comb(s, alpha, 0.0, mu_y, Fz, F0y, pt)
-                FL, FS = combined_forces(kappa, alpha, Fz, p, 1.0, 1.0)
-                assert FL == pytest.approx(fx, rel=1e-9, abs=1e-6)
-                assert FS == pytest.approx(fy, rel=1e-9, abs=1e-6)
+                fl, fs = combined_forces(kappa, alpha, Fz, p, 1.0, 1.0)
+                assert fl == pytest.approx(fx, rel=1e-9, abs=1e-6)
+                assert fs == pytest.approx(fy, rel=1e-9, abs=1e-6)
 
 
 def test_tyre_scales_friction_and_stiffness() -> None:
