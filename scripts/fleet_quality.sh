@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# The fleet quality suite's full run (issue 44's instrument; prints numbers, not a test):
+#   1. set-up (scripts/bootstrap.sh) and the ECU bindings of the checkout;
+#   2. fdi-quality --fleet N: N truth-plant vehicles drawn from the envelope (evaluation seeds 5001.., never a
+#      calibration vehicle) x the eight scenarios, each with its fault-free drive and all faults of the table at the
+#      required sizes (host_tools/scenarios/fault_sizes.toml), the model plant's same cases beside, then the
+#      minimum-detectable-fault search; local processes (FDI_JOBS, default one per core) or a Dask scheduler
+#      (FDI_SCHEDULER=tcp://host:8786)                                      -> out/fleet/fleet.json, fleet.md
+#   (a plot of the minimum detectable fault against the required size: still to come, issue 44)
+# Usage: scripts/fleet_quality.sh [N] [TABLE]   (N: vehicles, default 27, which drives > 2 h fault-free; TABLE: romo)
+# Time: about 2 min of one core per vehicle, plus the size sweep where a fault is not masked.
+set -euo pipefail
+top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$top"
+n="${1:-27}"
+table="${2:-romo}"
+case "$n" in ''|*[!0-9]*) echo "N: the number of vehicles, a whole number" >&2; exit 2 ;; esac
+[ -x .venv/bin/python ] || bash scripts/bootstrap.sh
+.venv/bin/python -m pip install -q --no-deps --no-build-isolation -e .
+args=(--fleet "$n" --table "$table" --out out/fleet)
+if [ -n "${FDI_SCHEDULER:-}" ]; then args+=(--scheduler "$FDI_SCHEDULER"); fi
+if [ -n "${FDI_JOBS:-}" ]; then args+=(--workers "$FDI_JOBS"); fi
+.venv/bin/fdi-quality "${args[@]}"
