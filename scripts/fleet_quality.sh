@@ -5,8 +5,10 @@
 #      calibration vehicle) x the eight scenarios, each with its fault-free drive and all faults of the table at the
 #      required sizes (host_tools/scenarios/fault_sizes.toml), the model plant's same cases beside, then the
 #      minimum-detectable-fault search; local processes (FDI_JOBS, default one per core) or a Dask scheduler
-#      (FDI_SCHEDULER=tcp://host:8786)                                      -> out/fleet/fleet.json, fleet.md
-#   (a plot of the minimum detectable fault against the required size: still to come, issue 44)
+#      (FDI_SCHEDULER=tcp://host:8786)                         -> out/fleet/fleet.json, fleet.md, fleet.png
+#   (fleet.png: detection/isolation per fault, minimum detectable fault against the required size, false alarms
+#   per vehicle, alarm share per scenario; `fdi-quality --replot out/fleet/fleet.json` draws it again.
+#   docs/fleet_quality.md and docs/fleet_quality.png are the committed copies of a run.)
 # Usage: scripts/fleet_quality.sh [N] [TABLE]   (N: vehicles, default 27, which drives > 2 h fault-free; TABLE: romo)
 # Time: about 2 min of one core per vehicle, plus the size sweep where a fault is not masked.
 set -euo pipefail

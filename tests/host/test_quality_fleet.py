@@ -3,9 +3,13 @@ and the shared fault-free part of a truth-plant fault case."""
 
 from __future__ import annotations
 
-import numpy as np
+import json
+from pathlib import Path
 
-from fdi_host.quality import fleet_report
+import numpy as np
+import pytest
+
+from fdi_host.quality import cli, fleet_plots, fleet_report
 from fdi_host.quality.fleet import MODEL, TRUTH, quick_config, run_fleet_suite
 from fdi_host.sim.faults import FaultSpec
 from fdi_host.sim.scenario import load_scenario
@@ -24,7 +28,7 @@ def test_fault_case_from_a_snapshot_equals_the_whole_faulty_drive() -> None:
             np.testing.assert_allclose(case.measured[name], whole.measured[name], rtol=0, atol=1e-9)
 
 
-def test_quick_fleet_suite_scores_both_plants() -> None:
+def test_quick_fleet_suite_scores_both_plants(tmp_path: Path) -> None:
     cfg = quick_config("romo", faults=("f1", "f4", "f10", "f22"), scenarios=("cornering",), workers=1)
     result = run_fleet_suite(cfg)
     assert not result.errors
@@ -38,3 +42,22 @@ def test_quick_fleet_suite_scores_both_plants() -> None:
     assert "truth plant" in md.lower() and "model plant" in md.lower()
     for c in truth:  # a masked case is never counted as detected
         assert not (c.outcome == "masked" and c.detected_in_time)
+    # its report redraws from the saved JSON alone (fdi-quality --replot), every panel titled with its plant
+    report = tmp_path / "fleet.json"
+    fleet_report.write_json(result, report)
+    assert cli.main(["--replot", str(report), "--out", str(tmp_path / "plots")]) == 0
+    png = tmp_path / "plots" / "fleet.png"
+    fig = fleet_plots.figure(fleet_plots.load(report))
+    titles = [ax.get_title() for ax in fig.axes]
+    assert len(titles) == 4 and all("truth plant, 2 vehicles" in t for t in titles)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
+
+
+def test_replot_refuses_a_file_that_is_not_a_fleet_report(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    bad = tmp_path / "quality.json"
+    bad.write_text(json.dumps({"table": "romo", "cases": []}), encoding="utf-8")
+    assert cli.main(["--replot", str(bad)]) != 0
+    assert "not a fleet report" in capsys.readouterr().err
+    with pytest.raises(fleet_plots.FleetReportError, match="not JSON"):
+        (tmp_path / "x.json").write_text("{", encoding="utf-8")
+        fleet_plots.load(tmp_path / "x.json")

@@ -36,6 +36,7 @@ EXAMPLES = """examples:
   fdi-quality --fleet 25 --out out/fleet      # truth-plant fleet: 25 vehicles x 8 scenarios, the model plant beside,
                                               # false alarms per hour, minimum detectable faults (about 40 min)
   fdi-quality --fleet 2 --quick --out out/fleet-quick   # CI size: 2 vehicles, cornering and the wet patch
+  fdi-quality --replot out/fleet/fleet.json   # redraw a saved fleet run's plots (fleet.png beside it)
 """
 
 
@@ -99,10 +100,14 @@ def main(argv: list[str] | None = None) -> int:
                         "departures exceed the rule's margin (linearity.json, .md and .png in --out)")
     p.add_argument("--fleet", type=int, metavar="N", default=None,
                    help="instead of the model-plant suite: the fleet suite on N truth-plant vehicles drawn from the "
-                        "envelope (all eight scenarios, the model plant's figures beside; fleet.json, fleet.md)")
+                        "envelope (all eight scenarios, the model plant's figures beside; fleet.json, fleet.md and "
+                        "fleet.png in --out)")
     p.add_argument("--workers", type=int, default=None, help="with --fleet: local processes (default one per core)")
     p.add_argument("--scheduler", default=None, help="with --fleet: a Dask scheduler (tcp://host:8786) instead")
     p.add_argument("--no-sweep", action="store_true", help="with --fleet: no minimum-detectable-fault search")
+    p.add_argument("--replot", type=Path, metavar="FLEET_JSON", default=None,
+                   help="instead of a run: redraw the plots of a saved fleet run (its fleet.json) into --out "
+                        "(default: beside it)")
     p.add_argument("-o", "--out", type=Path, default=None,
                    help="folder for quality.json and quality.md (with --trace or --linearity: their files)")
     args = p.parse_args(argv)
@@ -110,6 +115,8 @@ def main(argv: list[str] | None = None) -> int:
         args.ecu = parse_ecu_settings(args.table, args.ecu)
     except ValueError as exc:
         return fail("fdi-quality", exc)
+    if args.replot is not None:
+        return _replot(args.replot, args.out)
     if args.trace is not None:
         return _trace(args)
     if args.fleet is not None:
@@ -162,7 +169,7 @@ def _config(args: argparse.Namespace) -> SuiteConfig:
 
 
 def _fleet(args: argparse.Namespace) -> int:
-    from fdi_host.quality import fleet, fleet_report
+    from fdi_host.quality import fleet, fleet_plots, fleet_report
 
     try:
         base = fleet.quick_config(args.table) if args.quick else fleet.FleetConfig(table=args.table)
@@ -180,8 +187,23 @@ def _fleet(args: argparse.Namespace) -> int:
         args.out.mkdir(parents=True, exist_ok=True)
         fleet_report.write_json(result, args.out / "fleet.json")
         (args.out / "fleet.md").write_text(fleet_report.markdown(result), encoding="utf-8")
-        print(f"wrote {args.out / 'fleet.json'} and {args.out / 'fleet.md'}")
+        png = fleet_plots.plot(fleet_report.to_dict(result), args.out / "fleet.png")
+        print(f"wrote {args.out / 'fleet.json'}, {args.out / 'fleet.md'} and {png}")
     return 1 if result.errors else 0
+
+
+def _replot(report: Path, out: Path | None) -> int:
+    from fdi_host.quality import fleet_plots
+
+    try:
+        data = fleet_plots.load(report)
+        folder = report.parent if out is None else out
+        folder.mkdir(parents=True, exist_ok=True)
+        png = fleet_plots.plot(data, folder / "fleet.png")
+    except (fleet_plots.FleetReportError, OSError) as exc:
+        return fail("fdi-quality", exc)
+    print(f"wrote {png}")
+    return 0
 
 
 def _survey(cfg: SuiteConfig, out: Path | None) -> int:
