@@ -18,10 +18,10 @@ ROOTS = {"fdi_analysis": REPO / "analysis", "fdi_host": REPO / "host_tools"}
 LAYERS: tuple[tuple[str, int], ...] = (
     ("fdi_analysis", 0),
     ("fdi_analysis.model", 0), ("fdi_analysis.model_loader", 0), ("fdi_analysis.expressions", 0),
-    ("fdi_analysis.structure", 0), ("fdi_analysis.random_structures", 0),
+    ("fdi_analysis.structure", 0), ("fdi_analysis.random_structures", 0), ("fdi_analysis.uncertainty", 0),
     ("fdi_analysis.dm", 1), ("fdi_analysis.isolability", 1), ("fdi_analysis.fault_matrix", 1),
     ("fdi_analysis.summary", 1), ("fdi_analysis.interpretation", 1), ("fdi_analysis.report", 1),
-    ("fdi_analysis.plots", 1), ("fdi_analysis.mso", 1),
+    ("fdi_analysis.plots", 1), ("fdi_analysis.mso", 1), ("fdi_analysis.robustness", 1),
     ("fdi_analysis.selection", 2),
     ("fdi_analysis.residuals", 3),
     ("fdi_analysis.export", 4),

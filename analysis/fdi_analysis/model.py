@@ -19,6 +19,7 @@ from fdi_analysis.structure import DIFF_DERIVATIVE, DIFF_INTEGRATED, INCIDENCE, 
 
 Role = Literal["unknown", "known", "fault"]
 EquationKind = Literal["normal", "differential", "measurement"]
+NuisanceKind = Literal["constant", "slow", "input"]
 
 
 class ModelError(ValueError):
@@ -47,10 +48,34 @@ class Variable:
 
 @dataclass(frozen=True)
 class Parameter:
+    """A model constant. With `range` it is an uncertain parameter: the model uses `value`, the vehicle's lies
+    anywhere in [lo, hi] (the residuals stay coupled to it; their spread over the range bounds the thresholds)."""
+
     name: str
     value: float
     unit: str = ""
     desc: str = ""
+    range: tuple[float, float] | None = None
+
+
+@dataclass(frozen=True)
+class Nuisance:
+    """Something the model does not know and the diagnosis must not mistake for a fault.
+
+    * ``constant``: an unknown constant parameter (a sensor bias); ``slow``: one that varies slowly, at most
+      `drift` units per second (a bias with drift, the payload). Decoupled as an unknown with a zero derivative.
+    * ``input``: an unknown input (road grade, bank, driving resistance). Decoupled as an unknown without an
+      equation of its own.
+
+    The nominal model sets it to `value`; `range` is what a vehicle may hold."""
+
+    name: str
+    kind: NuisanceKind
+    range: tuple[float, float]
+    value: float = 0.0
+    unit: str = ""
+    desc: str = ""
+    drift: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -108,6 +133,10 @@ class Model:
     parameters: dict[str, Parameter] = field(default_factory=dict)
     description: str = ""
     source: Path | None = None
+    nuisances: tuple[Nuisance, ...] = ()
+    # the equations with the nuisances as symbols (`equations` holds them at their nominal values); empty when the
+    # model declares no nuisance. `fdi_analysis.uncertainty.decoupled` makes them unknowns.
+    nuisance_equations: tuple[Equation, ...] = ()
 
     @property
     def symbolic(self) -> bool:
@@ -126,6 +155,10 @@ class Model:
 
     def parameter_values(self) -> dict[str, float]:
         return {p.name: p.value for p in self.parameters.values()}
+
+    def uncertain_parameters(self) -> dict[str, Parameter]:
+        """The parameters declared with a range."""
+        return {n: p for n, p in self.parameters.items() if p.range is not None}
 
     def counts(self) -> dict[str, int]:
         kinds = [e.kind for e in self.equations]

@@ -24,6 +24,15 @@ TOML layout (see the ROMO files under analysis/models/ for complete examples)::
     [[eliminate]]                     # step-4 grouping: solve `equation` for `variable`, substitute
     variable = "vL1"
     equation = "W1.vL"
+    # what the model does not know (fdi_analysis.uncertainty decouples it):
+    # m = { value = 1046.0, range = [1046.0, 1307.5] }   in [parameters]: an uncertain parameter
+    [[unknown_parameter]]             # an unknown constant (or, with drift, slowly varying) parameter
+    name = "b_ax"
+    range = [-0.15, 0.15]
+    drift = 0.005                     # optional: at most this many units per second
+    [[unknown_input]]                 # an unknown input (a disturbance)
+    name = "grade"
+    range = [-0.08, 0.08]
 
 Any table in a ``[[...]]`` list may carry ``foreach = { i = [1, 2], x = ["a", "b"] }``: the entry is
 repeated once per position of the (equal-length) lists with ``{i}``, ``{x}`` substituted in every string.
@@ -42,10 +51,11 @@ from typing import Any
 import sympy
 
 from fdi_analysis.expressions import ExpressionError, der, derivative_symbols, parse_equation, parse_side
-from fdi_analysis.model import Equation, Model, ModelError, Parameter, Role, Variable
+from fdi_analysis.model import Equation, Model, ModelError, Nuisance, NuisanceKind, Parameter, Role, Variable
 from fdi_analysis.structure import Structure, StructureError, warn_structure
 
 _ROLES: tuple[Role, ...] = ("unknown", "known", "fault")
+_NUISANCE_TABLES = ("unknown_parameter", "unknown_input")
 
 
 def load_model(path: str | Path) -> Model:
@@ -170,7 +180,8 @@ class _ModelBuilder:
             if key not in known_meta:
                 raise ModelError(f"unknown key {key!r} in [model] (expected one of {sorted(known_meta)})",
                                  file=self.file)
-        known_top = {"model", "parameters", "unknown", "known", "fault", "equation", "eliminate"}
+        known_top = {"model", "parameters", "unknown", "known", "fault", "equation", "eliminate",
+                     *_NUISANCE_TABLES}
         for key in doc:
             if key not in known_top:
                 raise ModelError(f"unknown top-level key {key!r} (expected one of {sorted(known_top)})",
@@ -196,14 +207,20 @@ class _ModelBuilder:
                     raise ModelError(f"variable {name!r} declared twice", file=self.file, symbol=name)
                 variables[name] = Variable(name, role, str(raw.get("unit", "")), str(raw.get("desc", "")),
                                            bool(raw.get("input", False)) and role == "known")
-        equations: list[Equation] = list(base.equations) if base else []
+        nuisances: dict[str, Nuisance] = {n.name: n for n in base.nuisances} if base else {}
+        for n in self._nuisances(variables, params):
+            if n.name in nuisances:
+                raise ModelError(f"{n.name!r} declared twice", file=self.file, symbol=n.name)
+            nuisances[n.name] = n
+        # the base's equations with its nuisances still symbols, so that eliminations carry them along
+        equations: list[Equation] = list((base.nuisance_equations or base.equations) if base else [])
         removed = self.meta.get("remove_equations", [])
         for eid in removed:
             if not any(e.id == eid for e in equations):
                 raise ModelError(f"remove_equations names {eid!r}, which the base model does not have",
                                  file=self.file, equation=eid)
         equations = [e for e in equations if e.id not in removed]
-        symbols = {n: sympy.Symbol(n) for n in (*variables, *params)}
+        symbols = {n: sympy.Symbol(n) for n in (*variables, *params, *nuisances)}
         for raw in self._entries("equation"):
             eq = self._equation(raw, variables, symbols)
             if any(e.id == eq.id for e in equations):
@@ -215,18 +232,53 @@ class _ModelBuilder:
             equations, variables = _eliminate(
                 equations, variables, str(raw.get("variable", "")), str(raw.get("equation", "")), self.file
             )
+        nominal = _at_nominal(equations, nuisances, variables, self.file) if nuisances else equations
         model = Model(
             name=str(self.meta.get("name", self.path.stem)),
             description=str(self.meta.get("description", "")),
             unknowns=tuple(v for v in variables.values() if v.role == "unknown"),
             knowns=tuple(v for v in variables.values() if v.role == "known"),
             faults=tuple(v for v in variables.values() if v.role == "fault"),
-            equations=tuple(equations),
+            equations=tuple(nominal),
             parameters=params,
             source=self.path,
+            nuisances=tuple(nuisances.values()),
+            nuisance_equations=tuple(equations) if nuisances else (),
         )
         _check_usage(model, self.file)
         return model
+
+    # ---- what the model does not know ---------------------------------------------------------------
+    def _nuisances(self, variables: Mapping[str, Variable], params: Mapping[str, Parameter]) -> list[Nuisance]:
+        out: list[Nuisance] = []
+        for table in _NUISANCE_TABLES:
+            allowed = {"name", "unit", "desc", "value", "range"}
+            if table == "unknown_parameter":
+                allowed.add("drift")
+            for raw in self._entries(table):
+                name = raw.get("name")
+                if not isinstance(name, str) or not name.isidentifier():
+                    raise ModelError(f"[[{table}]] entry needs a valid 'name', got {name!r}", file=self.file)
+                for key in raw:
+                    if key not in allowed:
+                        raise ModelError(f"[[{table}]] {name!r}: unknown key {key!r} (expected one of "
+                                         f"{sorted(allowed)})", file=self.file, symbol=name)
+                if name in variables or name in params or any(n.name == name for n in out):
+                    raise ModelError(f"{name!r} declared twice", file=self.file, symbol=name)
+                where = f"[[{table}]] {name!r}"
+                value = _finite(raw.get("value", 0.0), f"{where}: 'value'", self.file, name)
+                if "range" not in raw:
+                    raise ModelError(f"{where} needs a 'range' = [lo, hi]: what a vehicle may hold", file=self.file,
+                                     symbol=name)
+                lo, hi = _range(raw["range"], value, where, self.file, name)
+                drift = _finite(raw.get("drift", 0.0), f"{where}: 'drift'", self.file, name)
+                if drift < 0.0:
+                    raise ModelError(f"{where}: 'drift' must be >= 0 (units per second), got {drift}",
+                                     file=self.file, symbol=name)
+                kind: NuisanceKind = "input" if table == "unknown_input" else ("slow" if drift > 0.0 else "constant")
+                out.append(Nuisance(name, kind, (lo, hi), value, str(raw.get("unit", "")), str(raw.get("desc", "")),
+                                    drift))
+        return out
 
     def _entries(self, key: str) -> list[dict[str, Any]]:
         raw = self.doc.get(key, [])
@@ -251,14 +303,20 @@ class _ModelBuilder:
             if not isinstance(spec, dict) or ("value" in spec) == ("expr" in spec):
                 raise ModelError(f"parameter {name!r} needs exactly one of 'value' or 'expr'",
                                  file=self.file, symbol=name)
+            unexpected = set(spec) - {"value", "expr", "unit", "desc", "range"}
+            if unexpected:
+                raise ModelError(f"parameter {name!r}: unknown key {sorted(unexpected)[0]!r} (expected value or "
+                                 "expr, unit, desc, range)", file=self.file, symbol=name)
             if "value" in spec:
-                value = spec["value"]
-                if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-                    raise ModelError(f"parameter {name!r}: 'value' must be a finite number, got {value!r}",
-                                     file=self.file, symbol=name)
-                values[name] = float(value)
-                out[name] = Parameter(name, float(value), str(spec.get("unit", "")), str(spec.get("desc", "")))
+                value = _finite(spec["value"], f"parameter {name!r}: 'value'", self.file, name)
+                rng = _range(spec["range"], value, f"parameter {name!r}", self.file, name) if "range" in spec else None
+                values[name] = value
+                out[name] = Parameter(name, value, str(spec.get("unit", "")), str(spec.get("desc", "")), rng)
             else:
+                if "range" in spec:
+                    raise ModelError(f"parameter {name!r}: a 'range' belongs to a parameter with a 'value'; an "
+                                     "'expr' parameter follows the ranges of the parameters it uses",
+                                     file=self.file, symbol=name)
                 pending[name] = (str(spec["expr"]), spec)
         while pending:
             progressed = False
@@ -345,7 +403,7 @@ class _ModelBuilder:
                 lhs, rhs = parse_equation(raw["expr"], symbols)
             except ExpressionError as exc:
                 raise ModelError(str(exc), file=self.file, equation=eid, symbol=exc.symbol) from exc
-            eq = _with_expression(Equation(id=eid, unknowns=(), knowns=(), faults=(), desc=desc, group=group),
+            eq = with_expression(Equation(id=eid, unknowns=(), knowns=(), faults=(), desc=desc, group=group),
                                   lhs, rhs, variables, self.file)
         nsf = tuple(str(n) for n in raw.get("not_solvable_for", []))
         for n in nsf:
@@ -358,7 +416,7 @@ class _ModelBuilder:
         return eq
 
 
-def _with_expression(eq: Equation, lhs: sympy.Expr, rhs: sympy.Expr, variables: Mapping[str, Variable],
+def with_expression(eq: Equation, lhs: sympy.Expr, rhs: sympy.Expr, variables: Mapping[str, Variable],
                      file: str) -> Equation:
     """Set the expression and derive the variable lists from it."""
     order = {n: i for i, n in enumerate(variables)}
@@ -401,7 +459,7 @@ def _make_derivatives_explicit(equations: list[Equation], variables: dict[str, V
             new_diff.append(Equation(id=f"D.{x}", unknowns=(dname, x), knowns=(), faults=(),
                                      lhs=sympy.Symbol(dname), rhs=der(sympy.Symbol(x)), differential=(dname, x),
                                      desc=f"{dname} = d/dt {x} (made explicit from {eq.id})", group=eq.group))
-        out.append(_with_expression(eq, eq.lhs.xreplace(subs), eq.rhs.xreplace(subs), variables, file))
+        out.append(with_expression(eq, eq.lhs.xreplace(subs), eq.rhs.xreplace(subs), variables, file))
         out.extend(new_diff)
     return out, variables
 
@@ -445,7 +503,7 @@ def _eliminate(equations: list[Equation], variables: dict[str, Variable], var: s
             continue
         merged = tuple(dict.fromkeys([*(e.merged_from or (e.id,)), *(src.merged_from or (src.id,))]))
         if symbolic and e.lhs is not None and e.rhs is not None and sol is not None:
-            ne = _with_expression(e, e.lhs.subs(s, sol), e.rhs.subs(s, sol),
+            ne = with_expression(e, e.lhs.subs(s, sol), e.rhs.subs(s, sol),
                                   {n: v for n, v in variables.items() if n != var}, file)
         else:
             def merge(a: Iterable[str], b: Iterable[str]) -> tuple[str, ...]:
@@ -467,6 +525,51 @@ def _merged_not_solvable(merged: Equation, receiving: Equation, src: Equation, v
         blocked |= set(src.unknowns)
     blocked.discard(var)
     return tuple(u for u in merged.unknowns if u in blocked)
+
+
+def _finite(value: Any, what: str, file: str, symbol: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise ModelError(f"{what} must be a finite number, got {value!r}", file=file, symbol=symbol)
+    return float(value)
+
+
+def _range(raw: Any, value: float, where: str, file: str, symbol: str) -> tuple[float, float]:
+    """[lo, hi] with lo < hi and the nominal value inside."""
+    if not isinstance(raw, list) or len(raw) != 2:
+        raise ModelError(f"{where}: 'range' must be [lo, hi], got {raw!r}", file=file, symbol=symbol)
+    lo = _finite(raw[0], f"{where}: 'range' lower bound", file, symbol)
+    hi = _finite(raw[1], f"{where}: 'range' upper bound", file, symbol)
+    if not lo < hi:
+        raise ModelError(f"{where}: 'range' [{lo:g}, {hi:g}] is empty (lo must be below hi)", file=file, symbol=symbol)
+    if not lo <= value <= hi:
+        raise ModelError(f"{where}: the nominal value {value:g} lies outside its range [{lo:g}, {hi:g}]", file=file,
+                         symbol=symbol)
+    return lo, hi
+
+
+def _at_nominal(equations: list[Equation], nuisances: Mapping[str, Nuisance], variables: Mapping[str, Variable],
+                file: str) -> list[Equation]:
+    """The equations with every nuisance at its nominal value (the model as it was before they were declared);
+    an error names a nuisance that no equation holds."""
+    subs = {sympy.Symbol(n.name): (sympy.Integer(0) if n.value == 0.0 else sympy.Float(n.value))
+            for n in nuisances.values()}
+    used: set[str] = set()
+    out = []
+    for e in equations:
+        if e.lhs is None or e.rhs is None or e.differential is not None:
+            out.append(e)
+            continue
+        held = {str(s) for s in (e.lhs.free_symbols | e.rhs.free_symbols)} & set(nuisances)
+        if not held:
+            out.append(e)
+            continue
+        used |= held
+        out.append(with_expression(e, e.lhs.xreplace(subs), e.rhs.xreplace(subs), variables, file))
+    for name, n in nuisances.items():
+        if name not in used:
+            kind = "unknown input" if n.kind == "input" else "unknown parameter"
+            raise ModelError(f"{kind} {name!r} appears in no equation", file=file, symbol=name)
+    return out
 
 
 def _check_usage(model: Model, file: str) -> None:

@@ -1,7 +1,8 @@
 """Pictures of the structure: the DM-ordered incidence matrix, the single-fault isolability matrix, the paper's
-fault matrix (Fig. 4) and selected-faults chart (Fig. 5), and the structural next to the practical isolability
-of a selection. Each function draws into a given Axes (`ax=`, for notebooks) or a new figure, and returns the
-figure; `save` writes it to a file. No backend is chosen here."""
+fault matrix (Fig. 4) and selected-faults chart (Fig. 5), the structural next to the practical isolability of a
+selection, and the cost of decoupling the residuals from a model's nuisances. Each function draws into a given
+Axes (`ax=`, for notebooks) or a new figure, and returns the figure; `save` writes it to a file. No backend is
+chosen here."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from fdi_analysis.robustness import RobustnessReport
 from fdi_analysis.summary import Summary
 
 
@@ -177,5 +179,29 @@ def plot_budget_sweep(costs: Sequence[int], detections: Sequence[int], separatio
     ax.set_title(title, fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    return fig
+
+
+def plot_decoupling_cost(report: RobustnessReport, ax: Axes | None = None) -> Figure:
+    """What decoupling each nuisance costs, per fault: a dark cell where the fault loses detectability, a light
+    one where it loses isolability from some fault (rows: each nuisance alone, the strict rows of the constant and
+    slow parameters, every nuisance, the chosen set)."""
+    rows = [(f"{c.nuisances[0]}", c) for c in report.each]
+    rows += [(f"{c.nuisances[0]} strict", c) for c in report.each_strict]
+    rows += [("every nuisance", report.everything), ("chosen: " + ", ".join(report.chosen.nuisances), report.chosen)]
+    faults = list(report.nominal.detectable)
+    M = np.zeros((len(rows), len(faults)))
+    for r, (_, c) in enumerate(rows):
+        for f in {a for a, _ in c.lost_isolability}:
+            M[r, faults.index(f)] = 1.0
+        for f in c.lost_detectability:
+            M[r, faults.index(f)] = 2.0
+    fig, ax = _figure(ax, (max(6.0, 0.3 * len(faults) + 3.0), max(3.0, 0.3 * len(rows) + 1.5)))
+    ax.imshow(M, cmap="Reds", vmin=0, vmax=2.4, aspect="auto")
+    ax.set_xticks(range(len(faults)), faults, fontsize=6, rotation=90)
+    ax.set_yticks(range(len(rows)), [label for label, _ in rows], fontsize=6)
+    ax.set_title(f"{report.model}: cost of decoupling (dark: detectability lost, light: isolability lost)",
+                 fontsize=8)
     fig.tight_layout()
     return fig

@@ -1,6 +1,6 @@
-"""`fdi-analyze`: the command line of the offline analysis. One module per subcommand (report, mso, select,
-practical, export, convert); `common` is what every command line of the project shares (the `fdi_host` programs
-import it too).
+"""`fdi-analyze`: the command line of the offline analysis. One module per subcommand (report, mso, robustness,
+select, practical, export, convert); `common` is what every command line of the project shares (the `fdi_host`
+programs import it too).
 
 The subcommands are imported when `main` builds the parser, not with this package: importing
 `fdi_analysis.cli.common` runs this file first, and a host program's start must not load the analysis (sympy,
@@ -18,6 +18,7 @@ from fdi_analysis.resources import shipped_models
 EPILOG = """examples:
   fdi-analyze report analysis/models/romo_quasistatic.toml -o out/romo
   fdi-analyze mso analysis/models/romo_grouped.toml
+  fdi-analyze robustness analysis/models/romo_grouped.toml --mso -o out/robustness
   fdi-analyze select analysis/models/romo_grouped.toml -o out/grouped
   fdi-analyze export-c analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \
       --fault-sizes host_tools/scenarios/fault_sizes.toml --out fw/generated
@@ -35,10 +36,10 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     add_version(parser)
-    from fdi_analysis.cli import convert, export, mso, practical, report, select
+    from fdi_analysis.cli import convert, export, mso, practical, report, robustness, select
 
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for mod in (report, mso, select, practical, export, convert):
+    for mod in (report, mso, robustness, select, practical, export, convert):
         mod.register(sub)
     return parser
 

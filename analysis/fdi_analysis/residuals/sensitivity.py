@@ -96,16 +96,22 @@ def faulty_residual(model: Model, g: Generator, solver: Solver | None = None,
     zero = _zero(faults)
     seq = sequence_values(model, solver, p)
     expr = residual_value(model, solver, p, seq)
-    if seq.inverses:
-        nominal = {k: v.xreplace(zero) for k, v in seq.inverses.items()}
-        expr = cleared(expr, seq.inverses, division_degrees(p, expr.xreplace(zero), nominal))
+    # A divisor that is a number at f = 0 (a kept symbol in a coefficient: the perturbation of a parameter, e.g.
+    # FL = .../(R0 + dR)) is no division by a signal in the generator, which divides by the number: keep it
+    # a division here too, or the residual would come out scaled by it (and its derivative with it).
+    inverses = {k: v for k, v in seq.inverses.items() if v.xreplace(zero).free_symbols}
+    numbers = {k: 1 / v for k, v in seq.inverses.items() if k not in inverses}
+    expr = expr.xreplace(numbers)
+    if inverses:
+        nominal = {k: v.xreplace(zero) for k, v in inverses.items()}
+        expr = cleared(expr, inverses, division_degrees(p, expr.xreplace(zero), nominal))
     steps = {} if rates else dict.fromkeys(map(rate_symbol, faults), sympy.Integer(0))
     lifted = _at_level(expr.xreplace(steps), g.level)
     update = None
     if g.observer is not None:
         pair = model.equation(g.observer.equation).differential
         assert pair is not None
-        update = _at_level(seq.value[sympy.Symbol(pair[0])].xreplace(steps), g.level)
+        update = _at_level(seq.value[sympy.Symbol(pair[0])].xreplace(numbers).xreplace(steps), g.level)
         if update is None:
             return None
     return FaultyResidual(faults, lifted, update) if lifted is not None else None

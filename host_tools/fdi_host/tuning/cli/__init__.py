@@ -9,9 +9,9 @@ import sys
 from collections.abc import Sequence
 
 from fdi_analysis.cli.common import add_version, run_subcommand
-from fdi_host.tuning.cli import calibrate, kin, residuals, screen
+from fdi_host.tuning.cli import calibrate, kin, residuals, screen, uncertainty
 
-SUBCOMMANDS = (screen, calibrate, residuals, kin)
+SUBCOMMANDS = (screen, calibrate, residuals, uncertainty, kin)
 
 EPILOG = """examples:
   fdi-tune screen analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \\
@@ -21,6 +21,8 @@ EPILOG = """examples:
       --sizes host_tools/scenarios/fault_sizes.toml
   fdi-tune residuals analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \\
       --log out/drive.blf --plot out/residuals.png --compare-ecu
+  fdi-tune uncertainty analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \\
+      --sizes host_tools/scenarios/fault_sizes.toml --out out/uncertainty
   fdi-tune kin-calibration --out fw/vehicles/romo/generated/fdi_kin_calibration.h
 """
 
@@ -29,7 +31,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="fdi-tune",
         description="Closed-loop tuning of the diagnosis on simulated drives: gates, fault sizes, added tests, "
-        "residuals on a log.",
+        "residuals on a log, residual spread over the uncertainty envelope.",
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
