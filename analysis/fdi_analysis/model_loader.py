@@ -547,12 +547,16 @@ def _range(raw: Any, value: float, where: str, file: str, symbol: str) -> tuple[
     return lo, hi
 
 
+def nominal_number(value: float) -> sympy.Expr:
+    """A nuisance's value as it enters an equation: an exact 0 (the term vanishes), else a float."""
+    return sympy.Integer(0) if value == 0.0 else sympy.Float(value)
+
+
 def _at_nominal(equations: list[Equation], nuisances: Mapping[str, Nuisance], variables: Mapping[str, Variable],
                 file: str) -> list[Equation]:
     """The equations with every nuisance at its nominal value (the model as it was before they were declared);
     an error names a nuisance that no equation holds."""
-    subs = {sympy.Symbol(n.name): (sympy.Integer(0) if n.value == 0.0 else sympy.Float(n.value))
-            for n in nuisances.values()}
+    subs = {sympy.Symbol(n.name): nominal_number(n.value) for n in nuisances.values()}
     used: set[str] = set()
     out = []
     for e in equations:

@@ -23,7 +23,7 @@ import sympy
 
 from fdi_analysis.expressions import der
 from fdi_analysis.model import Equation, Model, ModelError, Nuisance, Variable
-from fdi_analysis.model_loader import with_expression
+from fdi_analysis.model_loader import nominal_number, with_expression
 
 
 def derivative_name(n: Nuisance) -> str:
@@ -65,7 +65,7 @@ def decoupled(model: Model, names: Iterable[str] | None = None, *, strict: bool 
     order = {v.name: i for i, v in enumerate((*model.unknowns, *new_unknowns, *model.knowns, *model.faults))}
     variables = dict(sorted(variables.items(), key=lambda kv: order[kv[0]]))
     left = tuple(n for n in model.nuisances if n.name not in chosen)
-    rest = {sympy.Symbol(n.name): _number(n.value) for n in left}
+    rest = {sympy.Symbol(n.name): nominal_number(n.value) for n in left}
     nominal = _rewritten(model, rest, variables)
     raw = _rewritten(model, {}, variables) if left else []  # the others still symbols: a later decoupling
     return replace(model, unknowns=(*model.unknowns, *new_unknowns), equations=(*nominal, *extra),
@@ -82,17 +82,12 @@ def _rewritten(model: Model, subs: Mapping[sympy.Symbol, sympy.Expr], variables:
         if e.lhs is None or e.rhs is None or e.differential is not None:
             out.append(e)
             continue
-        out.append(replace(with_expression(e, e.lhs.xreplace(subs), e.rhs.xreplace(subs), variables, file),
-                           not_solvable_for=e.not_solvable_for))
+        out.append(with_expression(e, e.lhs.xreplace(subs), e.rhs.xreplace(subs), variables, file))
     return out
 
 
 def _variables(model: Model) -> dict[str, Variable]:
     return {v.name: v for v in (*model.unknowns, *model.knowns, *model.faults)}
-
-
-def _number(v: float) -> sympy.Expr:
-    return sympy.Integer(0) if v == 0.0 else sympy.Float(v)
 
 
 def _check_names(model: Model, names: Iterable[str], allowed: Iterable[str], what: str) -> None:
@@ -115,7 +110,7 @@ def at_values(model: Model, values: Mapping[str, float]) -> Model:
         if name in params:
             params[name] = replace(params[name], value=float(v))
     nuisances = tuple(replace(n, value=float(values[n.name])) if n.name in values else n for n in model.nuisances)
-    subs = {sympy.Symbol(n.name): _number(n.value) for n in nuisances}
+    subs = {sympy.Symbol(n.name): nominal_number(n.value) for n in nuisances}
     equations = _rewritten(model, subs, _variables(model)) if nuisances else list(model.equations)
     return replace(model, parameters=params, nuisances=nuisances, equations=tuple(equations))
 
@@ -147,8 +142,8 @@ def perturbed(model: Model, name: str) -> Model:
     perturbation = Variable(pname, "fault", unit, f"perturbation of {name} ({desc})")
     variables[pname] = perturbation
     subs: dict[sympy.Symbol, sympy.Expr] = {sympy.Symbol(f.name): sympy.Integer(0) for f in model.faults}
-    subs |= {sympy.Symbol(n.name): _number(n.value) for n in model.nuisances if n.name != name}
-    subs[sympy.Symbol(name)] = sympy.Add(_number(value), sympy.Symbol(pname))
+    subs |= {sympy.Symbol(n.name): nominal_number(n.value) for n in model.nuisances if n.name != name}
+    subs[sympy.Symbol(name)] = sympy.Add(nominal_number(value), sympy.Symbol(pname))
     equations = _rewritten(model, subs, variables)
     params = {k: p for k, p in model.parameters.items() if k != name}
     return replace(model, faults=(perturbation,), equations=tuple(equations), parameters=params, nuisances=(),

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 from typing import Any
 
@@ -83,7 +82,7 @@ def generate_all(model_path: Path, thresholds_path: Path, out: Path, name: str, 
     header, source = emit_table.render_file(emit_table.table_file(model, tests, thresholds, names, top, sizes=sizes,
                                                                   response_s=response))
     if report_dir is not None:
-        sigmas = [math.sqrt(thresholds.generated[" ".join(g.equations)]) for g in gens]
+        sigmas = thresholds.sigmas(gens)
         rows = report.rows(gens, sigmas, thresholds.gate, sizes, sizes.limits if sizes is not None else {})
         for path in report.write(report_dir, name, rows, list(model.structure().faults),
                                  sizes_path.as_posix() if sizes_path is not None else "(no fault-size file)"):

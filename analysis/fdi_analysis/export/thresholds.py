@@ -7,12 +7,18 @@ signal, margin times the largest magnitude of the calibration drives), written b
 
 from __future__ import annotations
 
+import math
 import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from fdi_analysis.residuals.generator import Generator
 from fdi_analysis.residuals.observer import ObserverReference
+
+
+class MissingSigmaError(ValueError):
+    """A generator of the table without a calibrated sigma in the thresholds file."""
 
 
 @dataclass(frozen=True)
@@ -66,6 +72,15 @@ class Thresholds:
             observer={str(k): float(v) for k, v in doc.get("observer", {}).items()},
             envelope=(Envelope.of(doc["envelope"], doc.get("envelope_limits", {})) if "envelope" in doc else None),
         )
+
+    def sigmas(self, generators: Sequence[Generator]) -> list[float]:
+        """The calibrated fault-free standard deviation of each generator ([generated], by its equation set);
+        `MissingSigmaError` names the generators without one."""
+        missing = [g.name for g in generators if " ".join(g.equations) not in self.generated]
+        if missing:
+            raise MissingSigmaError(f"{self.source} has no calibrated sigma for {', '.join(missing)}; run "
+                                    "fdi-tune calibrate")
+        return [math.sqrt(self.generated[" ".join(g.equations)]) for g in generators]
 
     def observer_reference(self) -> ObserverReference:
         """The reference of the observer generators' gain design: the [observer] table's c_ref values."""

@@ -161,7 +161,7 @@ def sweep(model: Model, th: Thresholds, sc: Scenario, limits: Mapping[str, float
     plant = GenericPlant(model)
     gens = generators(model, th, reference(plant, sc), workers)
     design = FilterDesign(th.design[0], th.design[1], th.design[2])
-    sigmas = [math.sqrt(th.generated[" ".join(g.equations)]) for g in gens]
+    sigmas = th.sigmas(gens)
     short = replace(sc, duration=SWEEP_LEAD_S + RESPONSE_S)
     skip = round(sc.warmup / design.dt)
     onset = round(SWEEP_LEAD_S / design.dt)

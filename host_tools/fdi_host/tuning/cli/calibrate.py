@@ -153,9 +153,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def run_sizes(args: argparse.Namespace) -> int:
-
-    import numpy as np
-
     from fdi_analysis.export.thresholds import Thresholds
     from fdi_analysis.model_loader import load_model
     from fdi_analysis.residuals.selected import selected_generators
@@ -170,7 +167,7 @@ def run_sizes(args: argparse.Namespace) -> int:
     model = load_model(args.model)
     print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
     _, gens = selected_generators(model, observer_reference(th), workers=args.workers, selection=th.selection)
-    sigmas = [float(np.sqrt(th.generated[" ".join(g.equations)])) for g in gens]
+    sigmas = th.sigmas(gens)
     faults = sorted({f for g in gens for f in g.faults}, key=lambda f: int(f[1:]))
     if args.faults:
         faults = [f for f in faults if f in set(args.faults)]

@@ -51,9 +51,7 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import numpy as np
-
-    from fdi_analysis.export.thresholds import Thresholds
+    from fdi_analysis.export.thresholds import MissingSigmaError, Thresholds
     from fdi_analysis.model_loader import load_model
     from fdi_analysis.residuals.evaluate import FilterDesign
     from fdi_analysis.residuals.selected import selected_generators
@@ -87,12 +85,11 @@ def run(args: argparse.Namespace) -> int:
     model = load_model(args.model)
     print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
     _, gens = selected_generators(model, th.observer_reference(), workers=args.workers, selection=th.selection)
-    missing = [g.name for g in gens if " ".join(g.equations) not in th.generated]
-    if missing:
-        print(f"fdi-tune: error: {args.thresholds} has no calibrated sigma for {', '.join(missing)}; run "
-              "fdi-tune calibrate", file=sys.stderr)
+    try:
+        sigmas = th.sigmas(gens)
+    except MissingSigmaError as exc:
+        print(f"fdi-tune: error: {exc}", file=sys.stderr)
         return EXIT_ERROR
-    sigmas = [float(np.sqrt(th.generated[" ".join(g.equations)])) for g in gens]
     t, sig = ecu_view(frames, design.dt, align=args.align)
     warmup = round(args.warmup / design.dt)
     try:

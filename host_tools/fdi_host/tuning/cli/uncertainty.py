@@ -43,10 +43,8 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import numpy as np
-
     from fdi_analysis.export.fault_sizes import FaultSizes
-    from fdi_analysis.export.thresholds import Thresholds
+    from fdi_analysis.export.thresholds import MissingSigmaError, Thresholds
     from fdi_analysis.model_loader import load_model
     from fdi_analysis.residuals.evaluate import FilterDesign
     from fdi_analysis.residuals.selected import selected_generators
@@ -73,12 +71,11 @@ def run(args: argparse.Namespace) -> int:
                   f"{', '.join(g.name for g in gens)})", file=sys.stderr)
             return EXIT_ERROR
         gens = [g for g in gens if g.name in set(args.only)]
-    missing = [g.name for g in gens if " ".join(g.equations) not in th.generated]
-    if missing:
-        print(f"fdi-tune: error: {args.thresholds} has no calibrated sigma for {', '.join(missing)}; run "
-              "fdi-tune calibrate", file=sys.stderr)
+    try:
+        sigmas = th.sigmas(gens)
+    except MissingSigmaError as exc:
+        print(f"fdi-tune: error: {exc}", file=sys.stderr)
         return EXIT_ERROR
-    sigmas = [float(np.sqrt(th.generated[" ".join(g.equations)])) for g in gens]
     drives = {}
     for sc in args.scenarios:
         print(f"fault-free drive {sc} (model plant, its own seed) ...", file=sys.stderr)
