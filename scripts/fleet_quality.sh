@@ -9,7 +9,8 @@
 #   (fleet.png: detection/isolation per fault, minimum detectable fault against the required size, false alarms
 #   per vehicle, alarm share per scenario; `fdi-quality --replot out/fleet/fleet.json` draws it again.
 #   docs/fleet_quality.md and docs/fleet_quality.png are the committed copies of a run.)
-# Usage: scripts/fleet_quality.sh [N] [TABLE]   (N: vehicles, default 27, which drives > 2 h fault-free; TABLE: romo)
+# Usage: scripts/fleet_quality.sh [N] [TABLE] [fdi-quality options...]   (N: vehicles, default 27, which drives > 2 h
+#   fault-free; TABLE: romo; e.g. `scripts/fleet_quality.sh 27 romo --ecu adaptive=true --out out/fleet_adaptive`)
 # Time: about 2 min of one core per vehicle, plus the size sweep where a fault is not masked.
 set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -19,7 +20,7 @@ table="${2:-romo}"
 case "$n" in ''|*[!0-9]*) echo "N: the number of vehicles, a whole number" >&2; exit 2 ;; esac
 [ -x .venv/bin/python ] || bash scripts/bootstrap.sh
 .venv/bin/python -m pip install -q --no-deps --no-build-isolation -e .
-args=(--fleet "$n" --table "$table" --out out/fleet)
+args=(--fleet "$n" --table "$table" --out out/fleet "${@:3}")
 if [ -n "${FDI_SCHEDULER:-}" ]; then args+=(--scheduler "$FDI_SCHEDULER"); fi
 if [ -n "${FDI_JOBS:-}" ]; then args+=(--workers "$FDI_JOBS"); fi
 .venv/bin/fdi-quality "${args[@]}"

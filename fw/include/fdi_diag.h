@@ -76,6 +76,17 @@
  * point, FDI_DIAG_SETTLE_TAUS time constants of every filter stage (2 stages: 2 * 6 / (zeta * W)) and
  * of the observer (6 / L), rounded up to whole steps.
  *
+ * Adaptive thresholds (cfg->adaptive): a generated generator whose residual depends on the table's uncertain
+ * quantities (parameters known within a range, unknown parameters and inputs the residual is not decoupled from:
+ * the model's declarations) computes at every step its worst-case spread a_i = sum |d r_i / d theta| * dtheta from
+ * its operating point (fdi_gen.h); test i then alarms where the residual exceeds gate_i * sigma_i + a_i
+ * (fdi_eval.h), so a vehicle anywhere in the envelope stays quiet however far its residual sits from 0 where the
+ * sensitivity is large, and the test keeps its full resolution where it is small. The exoneration counts the spread
+ * as unexplained-by-the-fault: an alarmed test's implied sizes and drifts are those of the residual beyond noise
+ * allowance plus spread, and a quiet test clears a fault only where its response would exceed margin * gate * sigma
+ * + 2 a_i (the uncertainty may hide up to a_i of it and has raised the threshold by as much). Without
+ * cfg->adaptive, or for hand-written generators, a_i = 0: the fixed gates.
+ *
  * Fault sensitivities: at every step with cfg->sensitivities the diagnoser asks every generator for d r / d f_j
  * of the faults of its sens_mask (fdi_gen.h) and keeps the last ones: the result lists them per test (sens_offset,
  * sens; all offsets 0 without cfg->sensitivities). Without cfg->sensitivities they are computed only during an
@@ -93,8 +104,8 @@
  * simulated drive on x86-64 with callgrind and on Cortex-M4F under qemu -icount (fault-free, in an episode with one
  * class left, in one with several (undecided), largest step), and on the Cortex-M4F per function: instructions per
  * step, calls per step and instructions a call (its profile, scripts/profile_m4.sh).
- * Memory: sizeof(fdi_diag_t) <= 192 + 2 * sizeof(void *) + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) +
- * sizeof(fdi_obs_t) + 33) + 12 * FDI_DIAG_MAX_FILTERS + 4 * FDI_DIAG_MAX_SENS + 10 * FDI_TABLE_MAX_FAULTS +
+ * Memory: sizeof(fdi_diag_t) <= 200 + 2 * sizeof(void *) + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) +
+ * sizeof(fdi_obs_t) + 37) + 12 * FDI_DIAG_MAX_FILTERS + 4 * FDI_DIAG_MAX_SENS + 10 * FDI_TABLE_MAX_FAULTS +
  * 2 * FDI_GEN_MAX_SLOTS + 4 * FDI_DIAG_MAX_SENS_EVERY bytes (asserted below; scripts/bench_fw.sh prints the
  * value), caller-owned (static or stack); the library itself has no .data/.bss.
  */
@@ -157,6 +168,9 @@ typedef struct
     uint16_t sens_every;          /* without `sensitivities`: during an episode, steps between two computations of
                                      a test's sensitivities, the tests in turn (<= FDI_DIAG_MAX_SENS_EVERY; 0 and 1:
                                      at every step) */
+    bool adaptive;                /* adaptive thresholds: each test of the set alarms beyond gate * sigma plus its
+                                     generator's spread over the table's uncertainty at the step (fdi_gen.h); false:
+                                     the fixed gates */
 } fdi_diag_config_t;
 
 typedef struct
@@ -178,6 +192,7 @@ typedef struct
     uint16_t calm;        /* consecutive steps without an alarm during the episode */
     uint8_t n_tests;
     bool sensitivities;
+    bool adaptive;      /* fdi_diag_config_t.adaptive */
     uint8_t sens_every; /* fdi_diag_config_t.sens_every */
     uint8_t n_domains;  /* runs of consecutive tests whose generators share a domain function (runnable()) */
     uint32_t signals;   /* signals read by some test (finiteness checked once per step) */
@@ -210,6 +225,7 @@ typedef struct
     uint32_t domain_tests[FDI_DIAG_MAX_TESTS]; /* run k: its tests */
     float residual[FDI_DIAG_MAX_TESTS];
     float ratio[FDI_DIAG_MAX_TESTS];
+    float spread[FDI_DIAG_MAX_TESTS]; /* test i's adaptive threshold term at the step (0: the fixed gate) */
     uint16_t warm[FDI_DIAG_MAX_TESTS];
     uint16_t quiet_run[FDI_DIAG_MAX_TESTS]; /* consecutive evaluable steps without alarm (saturating) */
     uint16_t alarm_run[FDI_DIAG_MAX_TESTS]; /* consecutive steps in alarm (saturating) */
@@ -230,8 +246,8 @@ typedef struct
 } fdi_diag_t; /* opaque by convention */
 
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
-FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (192U + (sizeof(void *) * 2U) +
-                                         (FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 33U)) +
+FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (200U + (sizeof(void *) * 2U) +
+                                         (FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 37U)) +
                                          (sizeof(fdi_svf_t) * FDI_DIAG_MAX_FILTERS) +
                                          (sizeof(float) * FDI_DIAG_MAX_SENS) +
                                          (((2U * sizeof(float)) + sizeof(uint16_t)) * FDI_TABLE_MAX_FAULTS) +
@@ -246,7 +262,10 @@ typedef struct
     uint32_t evaluable_mask; /* bit i: test i evaluable */
     fdi_test_status_t status[FDI_DIAG_MAX_TESTS];
     float residual[FDI_DIAG_MAX_TESTS]; /* last residual (0 while not evaluable for lack of inputs) */
-    float ratio[FDI_DIAG_MAX_TESTS];    /* last test ratio (0 while not evaluable) */
+    float ratio[FDI_DIAG_MAX_TESTS];    /* last test ratio (0 while not evaluable): of the residual's excess over its
+                                           spread, with an adaptive threshold */
+    float spread[FDI_DIAG_MAX_TESTS];   /* last adaptive threshold term: the residual's worst-case spread over the
+                                           table's uncertainty (units of r; 0 with the fixed gate) */
     uint32_t accused_mask;              /* tests accused in the current isolation episode */
     fdi_iso_result_t iso;               /* candidates and isolability class (detected: episode active) */
     bool in_envelope;                   /* the frame was inside the table's calibrated envelope (or it has none):
@@ -259,7 +278,9 @@ typedef struct
 
 /* Defaults for `table`: CUSUM k 1.5, h 150 (as validated in tests/fw/test_fdi_diag.c), set 3, clear 100,
    warm-up = the design point's settling time + 20 steps, exoneration, episodes ending after 3 s without alarm,
-   noise allowance 3 sigma, generator parameters 0, no reported sensitivities, each test's sensitivities every 4th
+   noise allowance 3 sigma, generator parameters 0, no reported sensitivities, the fixed gates (adaptive thresholds
+   are opt-in: over the whole declared envelope they hide most faults at their required sizes, README "Robust
+   diagnosis"), each test's sensitivities every 4th
    step of an episode. BAD_ARG on NULL; BAD_TABLE when
    the design point has no finite settling time (the table itself is checked by fdi_diag_init). */
 fdi_status_t fdi_diag_config_default(fdi_diag_config_t *cfg, const fdi_table_t *table);

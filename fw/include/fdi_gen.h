@@ -16,8 +16,10 @@
  *    bank[k].x1 = y, bank[k].x2 = dy, fdi_svf.h) and the frame: the subexpressions the slots share (sin/cos of a
  *    steering angle, tyre-law terms) once per step, then each slot's own terms; a slot with an observer advances
  *    its estimate io->obs[io->at[k]] (fdi_gen_impl.h), restarting it from the current inputs for the slots of
- *    io->restart. It writes io->r[io->at[k]], sets bit k of io->failed when a value is not finite (residual or the
- *    observer's next state: the caller restarts the slot), and for the slots of io->sens_mask the sensitivities
+ *    io->restart. It writes io->r[io->at[k]], with io->spread the residual's worst-case spread over the model's
+ *    uncertainty at io->spread[io->at[k]] (from the same shared terms: the adaptive threshold, fdi_diag.h), sets bit
+ *    k of io->failed when a value is not finite (residual, spread or the observer's next state: the caller restarts
+ *    the slot), and for the slots of io->sens_mask the sensitivities
  *    d r / d f_j of the faults of the slot's sens_mask, ascending, at io->sens[io->sens_at[k]] (the linearisation
  *    of the residual in the faults at the current operating point, the steady-state value for an observer slot),
  *    from the same shared terms; the residual is the same with or without them.
@@ -186,7 +188,11 @@ typedef struct
     uint32_t run;               /* slots to compute (their inputs usable and finite, in their domain) */
     uint32_t restart;           /* slots of run to restart: observer estimate from the current inputs */
     uint32_t sens_mask;         /* slots of run whose sensitivities to compute */
-    uint32_t failed;            /* out (the caller sets 0): slots of run with a non-finite residual or state */
+    float *spread;              /* out, NULL: not computed: each slot of run whose residual depends on the
+                                   vehicle's uncertain quantities writes at spread[at[k]] its worst-case spread over
+                                   them, sum |d r / d theta| * dtheta (the adaptive threshold's term, >= 0; a slot
+                                   without one leaves its entry as it is: the caller sets 0) */
+    uint32_t failed;            /* out (the caller sets 0): slots of run with a non-finite residual, state or spread */
 } fdi_gen_io_t;
 
 typedef void (*fdi_gen_set_step_fn_t)(fdi_gen_io_t *io);

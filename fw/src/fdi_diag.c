@@ -144,6 +144,7 @@ fdi_status_t fdi_diag_config_default(fdi_diag_config_t *cfg, const fdi_table_t *
             cfg->noise_allowance = NOISE_ALLOWANCE_SIGMA;
             cfg->sensitivities = false;
             cfg->sens_every = SENS_EVERY;
+            cfg->adaptive = false; /* opt-in until on-line estimators narrow the envelope (fdi_diag.h) */
             st = FDI_OK;
         }
     }
@@ -426,6 +427,7 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             st = fdi_eval_init(&self->eval[i], &ecfg);
             self->residual[i] = 0.0f;
             self->ratio[i] = 0.0f;
+            self->spread[i] = 0.0f;
             self->warm[i] = cfg->warmup_steps;
             self->quiet_run[i] = 0U;
             self->alarm_run[i] = 0U;
@@ -459,6 +461,7 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             self->accused = 0U;
             self->n_tests = t->n_tests;
             self->sensitivities = cfg->sensitivities;
+            self->adaptive = cfg->adaptive;
             self->sens_every = (cfg->sens_every > 1U) ? (uint8_t)cfg->sens_every : 1U;
             sens_turns(self, (uint32_t)self->sens_every);
             self->sens_known = 0U;
@@ -582,6 +585,10 @@ static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t
     const uint32_t set = run & self->set_tests;
     uint32_t ok = 0U;
     uint32_t i;
+    for (i = 0U; i < (uint32_t)self->n_tests; ++i)
+    {
+        self->spread[i] = 0.0f; /* hand-written generators and tests that do not run: the fixed gate */
+    }
     if (hand != 0U)
     {
         for (i = 0U; i < (uint32_t)self->n_tests; ++i)
@@ -616,6 +623,7 @@ static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t
         io.run = slots_of(self, set);
         io.restart = slots_of(self, set & self->rearm);
         io.sens_mask = slots_of(self, with_sens);
+        io.spread = self->adaptive ? self->spread : NULL; /* slots without an uncertainty term keep 0 */
         io.failed = 0U;
         self->set->step(&io);
         failed = tests_of(self, io.failed & io.run);
@@ -673,8 +681,9 @@ static uint32_t sens_turn(const fdi_diag_t *self)
     return self->turns[(uint32_t)sat_inc(self->episode_age) % (uint32_t)self->sens_every];
 }
 
-/* Evaluation of test i after its generator ran (ok: a finite residual r); true if it is evaluable this step (then
-   *alarm is set). */
+/* Evaluation of test i after its generator ran (ok: a finite residual r and spread) against its gate widened by the
+   spread (the adaptive threshold, fdi_eval.h; 0 without one); true if it is evaluable this step (then *alarm is
+   set). */
 static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r, bool *alarm)
 {
     const uint32_t bit = (uint32_t)1U << i;
@@ -704,7 +713,7 @@ static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r, bool *alarm
     {
         float ratio = 0.0f;
         evaluable = true;
-        *alarm = fdi_eval_update(&self->eval[i], r, &ratio);
+        *alarm = fdi_eval_update(&self->eval[i], r, self->spread[i], &ratio);
         self->residual[i] = r;
         self->ratio[i] = ratio;
     }
@@ -756,7 +765,8 @@ static void raise_implied(fdi_diag_t *self, uint32_t i, uint32_t undecided)
     const bool settled = (fabsf(r - fast) <= ((SETTLE_REL * fabsf(fast)) + (SETTLE_NOISE_SIGMA * sigma))) &&
                          (fabsf(r - slow) <= ((SETTLE_REL * fabsf(slow)) + (SETTLE_NOISE_SIGMA * sigma)));
     const float least = smaller(fabsf(r), fabsf(fast));
-    const float excess = least - (self->noise_allowance * sigma);
+    /* the part of the residual neither noise nor the model's uncertainty (its spread) explains */
+    const float excess = least - (self->noise_allowance * sigma) - self->spread[i];
     if ((g != NULL) && (g->sens_mask != 0U) && settled && (excess > 0.0f))
     {
         uint32_t left = g->sens_mask & undecided;
@@ -796,7 +806,7 @@ static void raise_drift(fdi_diag_t *self, uint32_t tests, uint32_t undecided)
         if (((tests & ((uint32_t)1U << i)) != 0U) && (g != NULL) && ((g->rate_mask & undecided) != 0U))
         {
             const float r = self->residual[i];
-            const float above = fabsf(r) - (self->noise_allowance * test_sigma(self, i));
+            const float above = fabsf(r) - (self->noise_allowance * test_sigma(self, i)) - self->spread[i];
             const float excess = (r < 0.0f) ? -above : above;
             uint32_t left = (above > 0.0f) ? g->rate_mask : 0U; /* gains ascend by fault */
             uint32_t k = 0U;
@@ -827,14 +837,15 @@ static void raise_drift(fdi_diag_t *self, uint32_t tests, uint32_t undecided)
 }
 
 /* The undecided faults a settled quiet test i clears with its fresh sensitivities: |s_ij| F_j >= margin * gate *
-   sigma. */
+   sigma + 2 spread (with an adaptive threshold, the uncertainty may both hide up to a spread of the fault's
+   response and have raised the threshold by as much). */
 static uint32_t quiet_clears(const fdi_diag_t *self, uint32_t i, uint32_t undecided)
 {
     const fdi_test_desc_t *d = &self->table->tests[i];
     uint32_t out = 0U;
     if (d->gen != NULL)
     {
-        const float need = self->table->sensitivity_margin * d->gate * test_sigma(self, i);
+        const float need = (self->table->sensitivity_margin * d->gate * test_sigma(self, i)) + (2.0f * self->spread[i]);
         uint32_t left = d->gen->sens_mask & undecided;
         while (left != 0U)
         {
@@ -874,7 +885,8 @@ static uint32_t joint_clears(const fdi_diag_t *self, uint32_t settled, uint32_t 
             if (((settled & ((uint32_t)1U << i)) != 0U) && (d->gen != NULL) && ((d->gen->sens_mask & faults) != 0U))
             {
                 const float per_gate = 1.0f / (d->gate * test_sigma(self, i));
-                const float seen = larger(fabsf(self->residual[i]), fabsf(self->r_fast[i]));
+                /* with an adaptive threshold, the response the uncertainty may hide and the threshold's rise */
+                const float seen = larger(fabsf(self->residual[i]), fabsf(self->r_fast[i])) + (2.0f * self->spread[i]);
                 uint32_t wanted = d->gen->sens_mask & faults;
                 while (wanted != 0U)
                 {
@@ -1284,6 +1296,7 @@ fdi_status_t fdi_diag_result(const fdi_diag_t *self, fdi_diag_result_t *out)
             }
             out->residual[i] = used ? self->residual[i] : 0.0f;
             out->ratio[i] = used ? self->ratio[i] : 0.0f;
+            out->spread[i] = used ? self->spread[i] : 0.0f;
         }
         out->accused_mask = self->accused;
         out->iso = self->iso;

@@ -77,22 +77,37 @@ fdi_status_t fdi_eval_reset(fdi_eval_t *self)
     return st;
 }
 
-fdi_status_t fdi_eval_step(fdi_eval_t *self, float r, fdi_eval_out_t *out)
+/* The checked step of both entry points (one body: fdi_eval_step is fdi_eval_step_adaptive at allowance 0). */
+static fdi_status_t eval_step(fdi_eval_t *self, float r, float allowance, fdi_eval_out_t *out)
 {
     fdi_status_t st = FDI_OK;
     if ((self == NULL) || (out == NULL))
     {
         st = FDI_BAD_ARG;
     }
-    else if (!fdi_float_is_finite(r))
+    else if (!fdi_float_is_finite(r) || !fdi_float_is_finite(allowance))
     {
         st = FDI_NOT_FINITE;
+    }
+    else if (allowance < 0.0f)
+    {
+        st = FDI_BAD_ARG;
     }
     else
     {
         float ratio = 0.0f;
-        out->status = fdi_eval_update(self, r, &ratio) ? FDI_TEST_ALARM : FDI_TEST_OK;
+        out->status = fdi_eval_update(self, r, allowance, &ratio) ? FDI_TEST_ALARM : FDI_TEST_OK;
         out->ratio = ratio;
     }
     return st;
+}
+
+fdi_status_t fdi_eval_step(fdi_eval_t *self, float r, fdi_eval_out_t *out)
+{
+    return eval_step(self, r, 0.0f, out);
+}
+
+fdi_status_t fdi_eval_step_adaptive(fdi_eval_t *self, float r, float allowance, fdi_eval_out_t *out)
+{
+    return eval_step(self, r, allowance, out);
 }

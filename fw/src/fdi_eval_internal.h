@@ -1,7 +1,8 @@
 /*
  * fdi_eval_internal.h - internal: one evaluation step for callers that have already checked the inputs
  * (fdi_diag evaluates every test of a step in one loop; inline there, it saves the call and the argument checks of
- * fdi_eval_step() per test). self must be non-NULL and initialised, r finite; the step is exactly fdi_eval_step()'s.
+ * fdi_eval_step() per test). self must be non-NULL and initialised, r finite, a finite and >= 0; the step is exactly
+ * fdi_eval_step_adaptive()'s.
  */
 #ifndef FDI_EVAL_INTERNAL_H
 #define FDI_EVAL_INTERNAL_H
@@ -22,10 +23,31 @@ static inline uint16_t fdi_eval_count_up(uint16_t n)
     return (n < UINT16_MAX) ? (uint16_t)(n + 1U) : n;
 }
 
-/* The test ratio r^2 / (gate^2 sigma^2) into *ratio, the CUSUM and the hysteresis; true while the test is in alarm. */
-static inline bool fdi_eval_update(fdi_eval_t *self, float r, float *ratio)
+/* The part of r beyond the allowance a >= 0 (the adaptive threshold's model-uncertainty term, fdi_eval.h): r shrunk
+   towards 0 by a, 0 inside [-a, a]; exactly r for a = 0. */
+static inline float fdi_eval_excess(float r, float a)
 {
-    const float z = r * self->inv_sigma;
+    float e = 0.0f;
+    if (r > a)
+    {
+        e = r - a;
+    }
+    else if (r < -a)
+    {
+        e = r + a;
+    }
+    else
+    {
+        e = 0.0f;
+    }
+    return e;
+}
+
+/* The test ratio e^2 / (gate^2 sigma^2) of the excess e of r beyond the allowance a into *ratio, the CUSUM of e and
+   the hysteresis; true while the test is in alarm. */
+static inline bool fdi_eval_update(fdi_eval_t *self, float r, float a, float *ratio)
+{
+    const float z = fdi_eval_excess(r, a) * self->inv_sigma;
     const float q = z * z * self->inv_gate2; /* may be +Inf for huge r: still an alarm */
     const float h2 = 2.0f * self->h;
     bool raw;

@@ -31,8 +31,9 @@ HARNESS = r"""
 #include "fdi_gen.h"
 extern const fdi_gen_desc_t *const harness_gens[];
 extern const int harness_n_gens;
-/* argv: n_signals, sensitivities (0/1), 4 generator parameters; stdin: n_signals values per line;
-   stdout per line: for each generator its residual, then (with sensitivities) its sensitivities.
+/* argv: n_signals, sensitivities (0/1), 4 generator parameters, spread (0/1); stdin: n_signals values per line;
+   stdout per line: for each generator its residual, then (with sensitivities) its sensitivities, then (with spread)
+   its adaptive threshold's spread (0 for a hand-written generator).
    Hand-written generators run on their own instance; the slots of a generator set run through the set's bank and
    step (every signal usable, all restarted at the first frame); residual and sensitivities 0 at the first frame. */
 int main(int argc, char **argv) {
@@ -42,18 +43,20 @@ int main(int argc, char **argv) {
     static fdi_obs_t set_obs[FDI_GEN_MAX_SLOTS];
     static float set_r[FDI_GEN_MAX_SLOTS];
     static float set_sens[256];
+    static float set_spread[FDI_GEN_MAX_SLOTS];
     static unsigned counts[FDI_GEN_MAX_SLOTS];
     static uint8_t at[FDI_GEN_MAX_SLOTS], sens_at[FDI_GEN_MAX_SLOTS];
     fdi_gen_param_t par;
     fdi_gen_t gen[32];
     const fdi_gen_set_t *set = NULL;
     uint32_t run = 0U, live = 0U;
-    int k, first = 1, i, ns, with_sens;
+    int k, first = 1, i, ns, with_sens, with_spread;
     fdi_gen_config_t cfg = {0.01f, 1.0f, 0.7071f, 2.0f, {0.0f, 0.0f, 0.0f, 0.0f}};
     float sens[32];
-    if (argc != 7) return 1;
+    if (argc != 8) return 1;
     ns = atoi(argv[1]);
     with_sens = atoi(argv[2]);
+    with_spread = atoi(argv[7]);
     for (i = 0; i < 4; ++i) cfg.param[i] = strtof(argv[3 + i], NULL);
     if (fdi_gen_param_init(&par, &cfg) != FDI_OK) return 2;
     for (k = 0; k < harness_n_gens; ++k) {
@@ -91,18 +94,22 @@ int main(int argc, char **argv) {
             io.sens = set_sens; io.sens_at = at; io.run = run; io.restart = first ? run : 0U;
             io.sens_mask = with_sens ? run : 0U; io.failed = 0U;
             io.sens_at = sens_at;
+            for (i = 0; i < (int)FDI_GEN_MAX_SLOTS; ++i) set_spread[i] = 0.0f;
+            io.spread = with_spread ? set_spread : NULL;
             set->step(&io);
             if ((failed != 0U) || (io.failed != 0U)) return 4;
         }
         for (k = 0; k < harness_n_gens; ++k) {
             const fdi_gen_desc_t *d = harness_gens[k];
             float r = 0.0f;
+            float spread = 0.0f;
             unsigned j, n = with_sens ? fdi_gen_sens_count(d) : 0U;
             fdi_status_t st = FDI_OK;
             for (j = 0U; j < n; ++j) sens[j] = 0.0f;
             if (d->set != NULL) {
                 if (!first) {
                     r = set_r[d->slot];
+                    spread = set_spread[d->slot];
                     for (j = 0U; j < n; ++j) sens[j] = set_sens[sens_at[d->slot] + j];
                 }
             } else if (first) {
@@ -113,6 +120,7 @@ int main(int argc, char **argv) {
             if (st != FDI_OK) return 4;
             printf("%.9g", (double)r);
             for (j = 0U; j < n; ++j) printf(" %.9g", (double)sens[j]);
+            if (with_spread) printf(" %.9g", (double)spread);
             printf("%s", (k + 1 < harness_n_gens) ? " " : "\n");
         }
         first = 0;
@@ -162,22 +170,25 @@ def build_harness(repo: Path, folder: Path, descriptors: Sequence[str], *, sourc
 class HarnessRun:
     residuals: np.ndarray  # [sample, generator]
     sensitivities: list[np.ndarray]  # per generator [sample, sensitivity]
+    spreads: np.ndarray | None = None  # [sample, generator] with `spread`: the adaptive threshold's term
 
 
 def run_harness(h: Harness, signals: Mapping[str, np.ndarray], params: Sequence[float] = (0.0, 0.0, 0.0, 0.0),
-                sens: bool = False) -> HarnessRun:
+                sens: bool = False, spread: bool = False) -> HarnessRun:
     """Every generator of the harness over the samples of `signals` (frame signals by name; missing ones 0)."""
     n = len(next(iter(signals.values())))
     data = np.column_stack([np.asarray(signals[s], dtype=float) if s in signals else np.zeros(n)
                             for s in h.signals]).astype(np.float32)
     text = "\n".join(" ".join(f"{x:.9g}" for x in row) for row in data.tolist()) + "\n"
-    args = [str(len(h.signals)), "1" if sens else "0", *(repr(float(p)) for p in (list(params) + [0.0] * 4)[:4])]
+    args = [str(len(h.signals)), "1" if sens else "0", *(repr(float(p)) for p in (list(params) + [0.0] * 4)[:4]),
+            "1" if spread else "0"]
     res = subprocess.run([str(h.exe), *args], input=text, capture_output=True, text=True, check=True)
     out = np.loadtxt(res.stdout.splitlines(), ndmin=2)
-    widths = [1 + (c if sens else 0) for c in h.sens_counts]
+    widths = [1 + (c if sens else 0) + (1 if spread else 0) for c in h.sens_counts]
     starts = np.cumsum([0, *widths])
-    sens = [out[:, a + 1:b] for a, b in itertools.pairwise(starts)]
-    return HarnessRun(out[:, starts[:-1]], sens)
+    cut = 1 if spread else 0
+    sens_cols = [out[:, a + 1:b - cut] for a, b in itertools.pairwise(starts)]
+    return HarnessRun(out[:, starts[:-1]], sens_cols, out[:, starts[1:] - 1] if spread else None)
 
 
 def romo_table_c(repo: Path) -> Path:

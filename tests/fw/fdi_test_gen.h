@@ -39,9 +39,10 @@ static inline void test_set_init(test_set_t *t, const fdi_gen_set_t *set, const 
 }
 
 /* One step of every slot of `run` at frame `in` (restart: the first step); r[slot], sens at sens_at[slot] when
-   `sens` is non-NULL. Returns the failed slots. */
-static inline uint32_t test_set_step(test_set_t *t, const fdi_gen_param_t *par, const fdi_frame_t *in, uint32_t run,
-                                     bool restart, float *r, float *sens)
+   `sens` is non-NULL, the spread at spread[slot] when `spread` is non-NULL (the caller zeroes it). Returns the
+   failed slots. */
+static inline uint32_t test_set_step_spread(test_set_t *t, const fdi_gen_param_t *par, const fdi_frame_t *in,
+                                            uint32_t run, bool restart, float *r, float *sens, float *spread)
 {
     fdi_gen_io_t io;
     fdi_frame_t frame = *in;
@@ -59,9 +60,17 @@ static inline uint32_t test_set_step(test_set_t *t, const fdi_gen_param_t *par, 
     io.run = run;
     io.restart = restart ? run : 0U;
     io.sens_mask = (sens != NULL) ? run : 0U;
+    io.spread = spread;
     io.failed = 0U;
     t->set->step(&io);
     return io.failed | ((failed != 0U) ? run : 0U);
+}
+
+/* test_set_step_spread() without the spread. */
+static inline uint32_t test_set_step(test_set_t *t, const fdi_gen_param_t *par, const fdi_frame_t *in, uint32_t run,
+                                     bool restart, float *r, float *sens)
+{
+    return test_set_step_spread(t, par, in, run, restart, r, sens, NULL);
 }
 
 #endif /* FDI_TEST_GEN_H */

@@ -1,7 +1,9 @@
 /*
  * test_fdi_eval.c - residual evaluation: arguments, NaN rejection, the test ratio formula, gate with
  * set/clear hysteresis (exact step counts), two-sided CUSUM on a small bias (exact step counts from its
- * recursion), clamp-bounded clearing, false alarms on white noise.
+ * recursion), clamp-bounded clearing, false alarms on white noise; the adaptive threshold (allowance: its
+ * arguments, the gate widened by exactly the allowance, no CUSUM from an offset the allowance explains, the fixed
+ * gate bit for bit at allowance 0).
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -176,12 +178,83 @@ static void test_false_alarms(void **state)
     assert_int_equal(onsets2, 0);
 }
 
+/*
+ * Adaptive threshold: the allowance a widens the gate to 4 sigma + a = 0.4 + a. With a = 0.3, a residual of 0.69 is
+ * quiet and 0.71 alarms after 3 samples (the fixed gate alarms on both); a constant offset of 0.3 + 2 sigma builds
+ * the CUSUM of 2 sigma (g grows by 1.5 per step, exceeds h = 8 at step 6: the alarm at step 6 + 3 - 1 = 8), and 0.3
+ * builds none in 1000 steps. Allowance 0 gives fdi_eval_step()'s states and ratios bit for bit on noise.
+ */
+static void test_adaptive(void **state)
+{
+    fdi_eval_t e;
+    fdi_eval_t f;
+    fdi_eval_out_t o = {FDI_TEST_OK, 0.0f};
+    fdi_eval_out_t p = {FDI_TEST_OK, 0.0f};
+    test_rng_t rng = {7ULL};
+    int k;
+    int set_at = -1;
+    (void)state;
+    init(&e);
+    assert_int_equal(fdi_eval_step_adaptive(NULL, 0.0f, 0.0f, &o), FDI_BAD_ARG);
+    assert_int_equal(fdi_eval_step_adaptive(&e, 0.0f, 0.0f, NULL), FDI_BAD_ARG);
+    assert_int_equal(fdi_eval_step_adaptive(&e, 0.0f, -0.1f, &o), FDI_BAD_ARG);
+    assert_int_equal(fdi_eval_step_adaptive(&e, 0.0f, NAN, &o), FDI_NOT_FINITE);
+    assert_int_equal(fdi_eval_step_adaptive(&e, 0.0f, INFINITY, &o), FDI_NOT_FINITE);
+    assert_int_equal(fdi_eval_step_adaptive(&e, NAN, 0.1f, &o), FDI_NOT_FINITE);
+    /* inside the widened gate (the CUSUM is cleared between the two cases by the reset) */
+    for (k = 0; k < 3; ++k)
+    {
+        assert_int_equal(fdi_eval_step_adaptive(&e, -0.69f, 0.3f, &o), FDI_OK);
+        assert_int_equal(o.status, FDI_TEST_OK);
+    }
+    assert_near(o.ratio, (0.39 / 0.4) * (0.39 / 0.4), 1e-5);
+    assert_int_equal(fdi_eval_reset(&e), FDI_OK);
+    for (k = 0; k < 3; ++k)
+    {
+        assert_int_equal(fdi_eval_step_adaptive(&e, -0.71f, 0.3f, &o), FDI_OK);
+    }
+    assert_int_equal(o.status, FDI_TEST_ALARM);
+    /* an offset the allowance explains builds no CUSUM; beyond it, the CUSUM of the excess */
+    init(&e);
+    for (k = 0; k < 1000; ++k)
+    {
+        assert_int_equal(fdi_eval_step_adaptive(&e, 0.3f, 0.3f, &o), FDI_OK);
+        assert_int_equal(o.status, FDI_TEST_OK);
+    }
+    assert_true((e.g_pos <= 0.0f) && (e.g_neg <= 0.0f));
+    init(&e);
+    for (k = 1; k <= 40; ++k)
+    {
+        assert_int_equal(fdi_eval_step_adaptive(&e, 0.5f, 0.3f, &o), FDI_OK);
+        if ((set_at < 0) && (o.status == FDI_TEST_ALARM))
+        {
+            set_at = k;
+        }
+    }
+    assert_int_equal(set_at, 8);
+    /* allowance 0: the fixed gate, bit for bit */
+    init(&e);
+    init(&f);
+    for (k = 0; k < 20000; ++k)
+    {
+        const float r = (float)(0.3 * test_normal(&rng));
+        assert_int_equal(fdi_eval_step_adaptive(&e, r, 0.0f, &o), FDI_OK);
+        assert_int_equal(fdi_eval_step(&f, r, &p), FDI_OK);
+        assert_int_equal(o.status, p.status);
+        assert_memory_equal(&o.ratio, &p.ratio, sizeof(float));
+        assert_memory_equal(&e.g_pos, &f.g_pos, sizeof(float));
+        assert_memory_equal(&e.g_neg, &f.g_neg, sizeof(float));
+        assert_int_equal(e.n_raw, f.n_raw);
+        assert_int_equal(e.n_quiet, f.n_quiet);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_bad_args),         cmocka_unit_test(test_ratio_and_nan),
         cmocka_unit_test(test_hysteresis),       cmocka_unit_test(test_cusum_small_bias),
-        cmocka_unit_test(test_false_alarms),
+        cmocka_unit_test(test_false_alarms),     cmocka_unit_test(test_adaptive),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

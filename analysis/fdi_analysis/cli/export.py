@@ -68,13 +68,14 @@ def generate_all(model_path: Path, thresholds_path: Path, out: Path, name: str, 
     generator report in `report_dir`)."""
     from fdi_analysis.residuals.evaluate import FilterDesign, response_time
     from fdi_analysis.residuals.selected import selected_generators
+    from fdi_analysis.residuals.uncertainty_sensitivity import half_widths
 
     model = load_model(model_path)
     command = command_line(model_path, thresholds_path, out, name, sizes_path)
     sizes = FaultSizes.load(sizes_path) if sizes_path is not None else None
     thresholds = Thresholds.load(thresholds_path)
     tests, gens = selected_generators(model, thresholds.observer_reference(), workers=workers, progress=progress,
-                                      selection=thresholds.selection, sensitivities=True)
+                                      selection=thresholds.selection, sensitivities=True, uncertainty=True)
     names = VehicleNames.of_table(name)
     top = banner(command)
     design = FilterDesign(*thresholds.design[:3])
@@ -88,7 +89,8 @@ def generate_all(model_path: Path, thresholds_path: Path, out: Path, name: str, 
                                  sizes_path.as_posix() if sizes_path is not None else "(no fault-size file)"):
             print(f"wrote {path}")
     faults = [f.name for f in model.faults]
-    gh, gc = emit_c.render(emit_c.generators_file(gens, names, faults, top, signals=[k.name for k in model.knowns]))
+    gh, gc = emit_c.render(emit_c.generators_file(gens, names, faults, top, signals=[k.name for k in model.knowns],
+                                                  widths=half_widths(model)))
     sh, sc = emit_signals.render(emit_signals.signals_file(model, names, top))
     return {f"{name}.h": header, f"{name}.c": source, f"{names.generators}.h": gh, f"{names.generators}.c": gc,
             f"{names.signals}.h": sh, f"{names.signals}.c": sc}

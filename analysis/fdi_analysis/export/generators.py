@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import re
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from string import Template
 
@@ -174,7 +174,7 @@ ${own}        const float value = ${value};
         {
             io->failed |= 0x${bit}U;
         }
-${sens}""")
+${spread}${sens}""")
 
 OBSERVER_FMT = Template("""\
         fdi_obs_t *const o = &io->obs[io->at[${slot}]];
@@ -199,13 +199,24 @@ ${at_new}
             {
                 io->failed |= 0x${bit}U;
             }
-${sens}
+${spread}${sens}
         }""")
 
 RESET_SENSOR_FMT = Template("""\
             const float x0 = ${x0}; /* ${state} from its sensor outside the MSO set */
             xp = fdi_float_is_finite(x0) ? x0 : 0.0f;""")
 RESET_CONST_FMT = Template("            xp = ${x0};")
+
+SPREAD_FMT = Template("""\
+${indent}if (io->spread != NULL) /* worst-case spread: sum |d r / d theta| * dtheta over ${quantities} */
+${indent}{
+${lines}
+${indent}    io->spread[io->at[${slot}]] = spread;
+${indent}    if (!fdi_float_is_finite(spread))
+${indent}    {
+${indent}        io->failed |= 0x${bit}U;
+${indent}    }
+${indent}}""")
 
 SENS_FMT = Template("""\
 #if FDI_GEN_SENSITIVITIES
@@ -244,6 +255,7 @@ class SlotCode:
     n_obs: int
     rate_gains: tuple[tuple[str, float], ...]  # (fault, gain), ascending by fault
     rate_mask: int
+    spread: tuple[tuple[str, float], ...] = ()  # (uncertain quantity, its half-width) the spread weighs, model order
 
 
 @dataclass(frozen=True)
@@ -489,11 +501,34 @@ def _sens_block(k: int, g: Generator, name: _Names, faults: Sequence[str], temps
                                bit=f"{1 << k:08X}", slot=k)
 
 
+def _spread_block(k: int, g: Generator, name: _Names, widths: Mapping[str, float], temps: Sequence[_Temp],
+                  indent: str) -> str:
+    """The adaptive threshold's term of slot k: sum over `g.uncertainty` of |d r / d theta| * w_theta (`widths`),
+    from the temporaries in scope `temps` and common subexpressions of its own; an observer slot's at the estimate
+    its step predicted from (xp), as its sensitivities. "" for a generator without uncertainty sensitivities."""
+    if not g.uncertainty:
+        return ""
+    terms = _reusing([_renamed(e, XHAT, _xp(k)) for _, e in g.uncertainty], temps)
+    subs, red = sympy.cse(terms, symbols=sympy.numbered_symbols("u"), order="canonical")
+    uname = replace(name, temps=name.temps | {str(s) for s, _ in subs})
+    lines = [f"{indent}    const float {s} = {to_c(e, uname)};" for s, e in subs]
+    # the terms of constant sensitivity (an unknown input entering linearly) add up to one constant; one statement
+    # a line (c_order.defined_before_use moves each temporary to just before its first use)
+    fixed = [(q, widths[q] * abs(float(e))) for (q, _), e in zip(g.uncertainty, red, strict=True) if e.is_Number]
+    lines.append(f"{indent}    float spread = {c_float(sum(v for _, v in fixed))}; /* "
+                 + (" ".join(q for q, _ in fixed) or "no constant term") + " */")
+    lines += [f"{indent}    spread += ({c_float(widths[q])} * fabsf({to_c(e, uname)})); /* {q} */"
+              for (q, _), e in zip(g.uncertainty, red, strict=True) if not e.is_Number]
+    return SPREAD_FMT.substitute(indent=indent, quantities=" ".join(q for q, _ in g.uncertainty),
+                                 lines="\n".join(lines), slot=k, bit=f"{1 << k:08X}") + "\n"
+
+
 def _const_lines(temps: Sequence[_Temp], name: _Names, indent: str) -> str:
     return "".join(f"{indent}const float {t.symbol} = {to_c(t.expr, name)};\n" for t in temps)
 
 
-def _slot_body(k: int, g: Generator, p: _Pass, name: _Names, faults: Sequence[str]) -> str:
+def _slot_body(k: int, g: Generator, p: _Pass, name: _Names, faults: Sequence[str],
+               widths: Mapping[str, float]) -> str:
     """Slot k's block: the temporaries only it uses, its residual (and observer step), its sensitivities."""
     own = [t for t in p.temps if t.symbol not in p.owner and p.mask[t.symbol] == 1 << k]
     pre = [t for t in p.temps if p.owner.get(t.symbol) == (k, "pre")]
@@ -504,6 +539,7 @@ def _slot_body(k: int, g: Generator, p: _Pass, name: _Names, faults: Sequence[st
     bit = f"{1 << k:08X}"
     if g.observer is None:
         return PLAIN_FMT.substitute(own=_const_lines(own, name, "        "), value=to_c(red[0], name), slot=k, bit=bit,
+                                    spread=_spread_block(k, g, name, widths, scope, "        "),
                                     sens=_sens_block(k, g, name, faults, scope, "        "))
     o = g.observer
     if o.initial.free_symbols:
@@ -520,6 +556,7 @@ def _slot_body(k: int, g: Generator, p: _Pass, name: _Names, faults: Sequence[st
                                                                           strict=True))
     return OBSERVER_FMT.substitute(slot=k, bit=bit, own=_const_lines(own, name, "        "), restart=restart,
                                    predict=predict.rstrip("\n"), at_new=at_new.rstrip("\n"),
+                                   spread=_spread_block(k, g, name, widths, scope, "            "),
                                    sens=_sens_block(k, g, name, faults, scope, "            "))
 
 
@@ -548,7 +585,7 @@ def _shared_text(p: _Pass, name: _Names, all_slots: int, slots_text: str) -> str
 
 
 def _slot_code(k: int, g: Generator, p: _Pass, name: _Names, names: VehicleNames,
-               faults: Sequence[str]) -> SlotCode:
+               faults: Sequence[str], widths: Mapping[str, float]) -> SlotCode:
     unknown = [f for f, _ in g.sensitivities if f not in faults]
     if unknown:
         raise EmitError(f"{g.name}: sensitivities to {unknown}, not faults of the model")
@@ -561,20 +598,26 @@ def _slot_code(k: int, g: Generator, p: _Pass, name: _Names, names: VehicleNames
     if unknown:
         raise EmitError(f"{g.name}: rate gains of {unknown}, not faults of the model without a sensitivity")
     rates = tuple(sorted(g.rate_gains, key=lambda fg: faults.index(fg[0])))
+    unknown = [q for q, _ in g.uncertainty if q not in widths]
+    if unknown:
+        raise EmitError(f"{g.name}: sensitivities to {unknown}, not uncertain quantities of the model")
     body = SLOT_FMT.substitute(bit=f"{1 << k:08X}", name=g.name, equations=" ".join(g.equations),
-                               lines=_slot_body(k, g, p, name, faults).rstrip("\n"))
+                               lines=_slot_body(k, g, p, name, faults, widths).rstrip("\n"))
     return SlotCode(slot=k, name=g.name, equations=" ".join(g.equations), causality=g.causality(), body=body,
                     domain_condition=domain, domain_note=g.domain(), inputs=names.mask_expr(inputs(g)),
                     sens_faults=sens_faults, sens_mask=sum(1 << faults.index(f) for f in sens_faults),
                     n_obs=0 if g.observer is None else 1,
-                    rate_gains=rates, rate_mask=sum(1 << faults.index(f) for f, _ in rates))
+                    rate_gains=rates, rate_mask=sum(1 << faults.index(f) for f, _ in rates),
+                    spread=tuple((q, widths[q]) for q, _ in g.uncertainty))
 
 
 def generators_file(generators: Sequence[Generator], names: VehicleNames, faults: Sequence[str],
-                    banner: str, signals: Sequence[str]) -> GeneratorsFile:
+                    banner: str, signals: Sequence[str], widths: Mapping[str, float] | None = None) -> GeneratorsFile:
     """What goes into the generator files: the set of `generators` (slot = position), for the model's fault list
     `faults` (bit j of a sensitivity mask = faults[j]); `signals`: the frame's signals in index order (the bank's
-    order; the derived signals take the places after them), every signal the generators read among them."""
+    order; the derived signals take the places after them), every signal the generators read among them;
+    `widths`: the half-width of every uncertain quantity the generators' `uncertainty` names (the spread of the
+    adaptive threshold, fdi_gen.h)."""
     if not 0 < len(generators) <= MAX_GENERATORS:
         raise EmitError(f"{len(generators)} generators; the firmware holds 1..{MAX_GENERATORS}")
     order = list(signals)
@@ -590,7 +633,7 @@ def generators_file(generators: Sequence[Generator], names: VehicleNames, faults
     p = _global_pass(generators)
     name = _Names(names, {n: k for k, n in enumerate(nodes)}, frozenset(str(t.symbol) for t in p.temps))
     all_slots = (1 << len(generators)) - 1
-    slots = tuple(_slot_code(k, g, p, name, names, faults) for k, g in enumerate(generators))
+    slots = tuple(_slot_code(k, g, p, name, names, faults, widths or {}) for k, g in enumerate(generators))
     derived = tuple(DerivedSignal(len(order) + k, c.signal, gname, to_c(c.expr, name), c.sources,
                                   readable(c.expr)) for k, (gname, c) in enumerate(composites))
     return GeneratorsFile(banner, names, bank_of(nodes), derived, _shared_text(p, name, all_slots,
@@ -659,7 +702,8 @@ def render(f: GeneratorsFile) -> tuple[str, str]:
         rate_mask=f"{c.rate_mask:08X}",
         rate_ref=f"&{n.vehicle}_rate_gain[{rate_at[c.slot]}]" if c.rate_gains else "NULL",
         sens_note=(("sensitivities " + " ".join(c.sens_faults)) if c.sens_faults else "no sensitivities")
-        + ("; rate gains " + " ".join(f for f, _ in c.rate_gains) if c.rate_gains else ""))
+        + ("; rate gains " + " ".join(f for f, _ in c.rate_gains) if c.rate_gains else "")
+        + ("; adaptive threshold over " + " ".join(q for q, _ in c.spread) if c.spread else ""))
         for c in f.slots)
     all_rates = [(c, fg) for c in f.slots for fg in c.rate_gains]
     rates = RATES_FMT.substitute(

@@ -94,6 +94,10 @@ class Generator:
     # with a constant rate gain d r / d (df_j/dt): the steady residual of a drift of rate rho is gain * rho
     # (`residuals.sensitivity.rate_gains`); the diagnoser bounds how far such a fault has moved with it
     rate_gains: tuple[tuple[str, float], ...] = ()
+    # d r / d theta of each uncertain quantity of the model the residual depends on (parameters with a range,
+    # nuisances not decoupled), over the same symbols as `sensitivities` (`residuals.uncertainty_sensitivity`):
+    # what the generated step weighs with the quantities' half-widths into the adaptive threshold's spread
+    uncertainty: tuple[tuple[str, sympy.Expr], ...] = ()
     # the residual's derivative-free nonlinear terms, computed from raw samples and filtered as one derived signal
     # (`residuals.whole_terms`); None when it has none
     composite: Composite | None = None

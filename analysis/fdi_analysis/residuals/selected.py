@@ -17,6 +17,7 @@ from fdi_analysis.residuals.observer import ObserverReference
 from fdi_analysis.residuals.realizability import realizable_candidates
 from fdi_analysis.residuals.sensitivity import with_sensitivities
 from fdi_analysis.residuals.solvability import Solver
+from fdi_analysis.residuals.uncertainty_sensitivity import UncertaintySolver, uncertainties, with_uncertainty
 from fdi_analysis.selection import optimal
 from fdi_analysis.selection.candidates import mso_candidates
 
@@ -29,26 +30,39 @@ class SelectionError(ValueError):
 
 def selected_generators(model: Model, reference: ObserverReference | None, workers: int = 2,
                         progress: bool = False, selection: Sequence[str] = (),
-                        sensitivities: bool = False) -> tuple[list[Candidate], list[Generator]]:
+                        sensitivities: bool = False, uncertainty: bool = False
+                        ) -> tuple[list[Candidate], list[Generator]]:
     """The tests on board and their synthesised generators: the `selection` (equation sets of realizable
     candidates, the thresholds file's [selection] table) in that order, or without one the optimal method-B
     selection among the realizable candidates (one smallest MSO per signature, the non-realizable ones
-    dropped); with `sensitivities` each generator also carries its fault sensitivities."""
+    dropped); with `sensitivities` each generator also carries its fault sensitivities, with `uncertainty` its
+    sensitivities to the model's uncertain quantities."""
     solver = Solver(model)
     keep = realizable(model, workers, progress, solver)
     tests = chosen_tests(model, keep, selection) if selection else structural_selection(model, keep)
-    return tests, generators(model, tests, reference, solver, sensitivities)
+    return tests, generators(model, tests, reference, solver, sensitivities, uncertainty, progress)
 
 
 def generators(model: Model, tests: Sequence[Candidate], reference: ObserverReference | None,
-               solver: Solver | None = None, sensitivities: bool = False) -> list[Generator]:
-    """The synthesised residual generator of each test (named by its label)."""
+               solver: Solver | None = None, sensitivities: bool = False, uncertainty: bool = False,
+               progress: bool = False) -> list[Generator]:
+    """The synthesised residual generator of each test (named by its label), with `uncertainty` carrying
+    its uncertainty sensitivities (`residuals.uncertainty_sensitivity`; ~1-20 s per generator)."""
     solver = solver or Solver(model)
     names = [e.id for e in model.equations]
     gens = [synthesize(model, [names[i] for i in bits(t.equations)], t.label, solver, reference) for t in tests]
     if sensitivities:
         keep_faults = Solver(model, keep_faults=True)
         gens = [with_sensitivities(model, g, keep_faults) for g in gens]
+    if uncertainty and uncertainties(model):
+        us = UncertaintySolver(model)
+        out = []
+        for k, g in enumerate(gens):
+            out.append(with_uncertainty(model, g, us))
+            if progress:
+                print(f"  uncertainty sensitivities: {k + 1}/{len(gens)} ({g.name}: {len(out[-1].uncertainty)})",
+                      flush=True)
+        gens = out
     return gens
 
 

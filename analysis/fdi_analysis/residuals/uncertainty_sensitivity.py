@@ -101,6 +101,17 @@ def uncertainty_sensitivities(model: Model, g: Generator, solver: UncertaintySol
     return tuple(out)
 
 
+def with_uncertainty(model: Model, g: Generator, solver: UncertaintySolver | None = None) -> Generator:
+    """`g` carrying its uncertainty sensitivities (`Generator.uncertainty`, what the generated step turns into
+    the adaptive threshold's spread)."""
+    return replace(g, uncertainty=uncertainty_sensitivities(model, g, solver))
+
+
+def half_widths(model: Model) -> dict[str, float]:
+    """w_theta of every uncertain quantity of `model` (`Uncertainty.half_width`), by name."""
+    return {u.name: u.half_width for u in uncertainties(model)}
+
+
 def spread_series(g: Generator, sensitivities: tuple[tuple[str, sympy.Expr], ...],
                   widths: Mapping[str, float], signals: Mapping[str, FloatArray],
                   design: FilterDesign | None = None) -> tuple[FloatArray, dict[str, FloatArray]]:

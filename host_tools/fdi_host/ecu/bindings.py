@@ -86,7 +86,7 @@ def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
             ("cusum_k", ctypes.c_float), ("cusum_h", ctypes.c_float), ("set_count", ctypes.c_uint16),
             ("clear_count", ctypes.c_uint16), ("warmup_steps", ctypes.c_uint16), ("mode", ctypes.c_int),
             ("episode_clear_steps", ctypes.c_uint16), ("noise_allowance", ctypes.c_float),
-            ("sensitivities", ctypes.c_bool), ("sens_every", ctypes.c_uint16),
+            ("sensitivities", ctypes.c_bool), ("sens_every", ctypes.c_uint16), ("adaptive", ctypes.c_bool),
         ]
 
     class Config(ctypes.Structure):
@@ -119,7 +119,8 @@ def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
         _fields_ = [
             ("n_tests", ctypes.c_uint8), ("alarm_mask", ctypes.c_uint32), ("evaluable_mask", ctypes.c_uint32),
             ("status", ctypes.c_int * c.max_tests), ("residual", ctypes.c_float * c.max_tests),
-            ("ratio", ctypes.c_float * c.max_tests), ("accused_mask", ctypes.c_uint32), ("iso", IsoResult),
+            ("ratio", ctypes.c_float * c.max_tests), ("spread", ctypes.c_float * c.max_tests),
+            ("accused_mask", ctypes.c_uint32), ("iso", IsoResult),
             ("in_envelope", ctypes.c_bool), ("sens_offset", ctypes.c_uint8 * (c.max_tests + 1)),
             ("sens", ctypes.c_float * c.max_sens),
         ]
@@ -360,8 +361,9 @@ def _apply_diag(d: Any, ov: dict[str, Any]) -> None:
         if mode not in _MODES:
             raise ValueError(f"mode {mode!r}: use one of {tuple(_MODES)}")
         d.mode = _MODES[mode]
-    if "sensitivities" in ov:
-        d.sensitivities = bool(ov.pop("sensitivities"))
+    for key in ("sensitivities", "adaptive"):
+        if key in ov:
+            setattr(d, key, bool(ov.pop(key)))
 
 
 def _sensitivities(d: Any, n_tests: int) -> tuple[tuple[float, ...], ...]:
@@ -415,6 +417,9 @@ class EcuResult:
     test_names: tuple[str, ...]
     sensitivities: tuple[tuple[float, ...], ...] = ()  # per test: d r / d f of its sens faults (with sensitivities)
     in_envelope: bool = True  # inside the table's calibrated envelope (outside, the isolation holds: fdi_diag.h)
+    # per test: the adaptive threshold's term, the residual's worst-case spread over the model's uncertainty at the
+    # step (units of r; the test alarms beyond gate * sigma + spread; 0 with the fixed gate)
+    spreads: tuple[float, ...] = ()
 
     @property
     def status_name(self) -> str:
@@ -449,7 +454,8 @@ class Ecu:
 
     Overrides: ``d_x``, ``d_y`` (the ROMO kinematic generators' parameters), ``cusum_k``, ``cusum_h``,
     ``set_count``, ``clear_count``, ``warmup_steps``, ``mode`` ("exoneration" | "no_exoneration"),
-    ``episode_clear_steps``, ``noise_allowance``, ``sensitivities``, ``sens_every`` (fdi_diag.h), ``timeout_s``
+    ``episode_clear_steps``, ``noise_allowance``, ``sensitivities``, ``sens_every``, ``adaptive`` (fdi_diag.h),
+    ``timeout_s``
     (one value for all messages or a mapping message name -> seconds), ``max_delta_counter``,
     ``max_catchup_steps``, ``align_s`` (a step's signals are those of the instant ``align_s`` before it, fdi_ecu.h;
     0: sample-and-hold).
@@ -615,6 +621,7 @@ class Ecu:
             test_status=tuple(TEST_STATUS_NAMES[int(d.status[i])] for i in range(n)),
             residuals=tuple(float(d.residual[i]) for i in range(n)),
             ratios=tuple(float(d.ratio[i]) for i in range(n)),
+            spreads=tuple(float(d.spread[i]) for i in range(n)),
             test_names=self.table.test_names,
             sensitivities=_sensitivities(d, n),
             in_envelope=bool(d.in_envelope),
@@ -679,6 +686,7 @@ class Diagnoser:
             detected=bool(r.iso.detected), isolated=bool(r.iso.isolated), iso_class=0,
             test_status=tuple(TEST_STATUS_NAMES[int(r.status[i])] for i in range(n)),
             residuals=tuple(float(r.residual[i]) for i in range(n)), ratios=tuple(float(r.ratio[i]) for i in range(n)),
+            spreads=tuple(float(r.spread[i]) for i in range(n)),
             test_names=self.table.test_names, sensitivities=_sensitivities(r, n), in_envelope=bool(r.in_envelope))
 
     def step(self, values: Mapping[str, float], validity: int | None = None) -> EcuResult:

@@ -82,40 +82,40 @@ static void romo_gen_step(fdi_gen_io_t *io);
 const fdi_gen_desc_t fdi_romo_generators[FDI_ROMO_N_GENERATORS] = {
     {"MSO1", NULL, NULL, ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
      FDI_GEN_SENS_MASK(0x00000015U), 0U, 0U, &fdi_romo_gen_set, 0U,
-     FDI_GEN_SENS_MASK(0x00000008U), &romo_rate_gain[0]}, /* sensitivities f1 f3 f5; rate gains f4 */
+     FDI_GEN_SENS_MASK(0x00000008U), &romo_rate_gain[0]}, /* sensitivities f1 f3 f5; rate gains f4; adaptive threshold over b_ax b_r g_x */
     {"MSO2", NULL, NULL, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
      FDI_GEN_SENS_MASK(0x0000000EU), 0U, 0U, &fdi_romo_gen_set, 1U,
-     FDI_GEN_SENS_MASK(0x00000010U), &romo_rate_gain[1]}, /* sensitivities f2 f3 f4; rate gains f5 */
+     FDI_GEN_SENS_MASK(0x00000010U), &romo_rate_gain[1]}, /* sensitivities f2 f3 f4; rate gains f5; adaptive threshold over b_ay b_r g_y */
     {"MSO12", NULL, romo_gen_3_in_domain, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M,
      FDI_GEN_SENS_MASK(0x0022223BU), 0U, 1U, &fdi_romo_gen_set, 2U,
-     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f1 f2 f4 f5 f6 f10 f14 f18 f22 */
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f1 f2 f4 f5 f6 f10 f14 f18 f22; adaptive threshold over m h_CoG R mu_max k_t K_TM mu_DB b_ax b_ay g_x g_y M_rr1 */
     {"MSO39", NULL, romo_gen_3_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M,
      FDI_GEN_SENS_MASK(0x0022223CU), 0U, 0U, &fdi_romo_gen_set, 3U,
-     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f3 f4 f5 f6 f10 f14 f18 f22 */
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f3 f4 f5 f6 f10 f14 f18 f22; adaptive threshold over m h_CoG R mu_max k_t K_TM mu_DB b_r M_rr1 */
     {"MSO49", NULL, romo_gen_3_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M,
      FDI_GEN_SENS_MASK(0x0044445CU), 0U, 0U, &fdi_romo_gen_set, 4U,
-     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f3 f4 f5 f7 f11 f15 f19 f23 */
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f3 f4 f5 f7 f11 f15 f19 f23; adaptive threshold over m h_CoG R mu_max k_t K_TM mu_DB b_r M_rr2 */
     {"MSO1379", NULL, romo_gen_3_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA4_M,
      FDI_GEN_SENS_MASK(0x017EEFFEU), 0U, 1U, &fdi_romo_gen_set, 5U,
-     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f2 f3 f4 f5 f6 f7 f8 f9 f10 f11 f12 f14 f15 f16 f18 f19 f20 f21 f22 f23 f25 */
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f2 f3 f4 f5 f6 f7 f8 f9 f10 f11 f12 f14 f15 f16 f18 f19 f20 f21 f22 f23 f25; adaptive threshold over m h_CoG R mu_max k_t K_TM mu_DB b_ay b_r g_x g_y F_res M_rr1 M_rr2 M_rr3 */
     {"MSO2137", NULL, romo_gen_3_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M,
      FDI_GEN_SENS_MASK(0x00DD11DCU), 0U, 1U, &fdi_romo_gen_set, 6U,
-     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f3 f4 f5 f7 f8 f9 f13 f17 f19 f20 f21 f23 f24 */
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f3 f4 f5 f7 f8 f9 f13 f17 f19 f20 f21 f23 f24; adaptive threshold over m Iz h_CoG R mu_max k_t K_TM mu_DB b_r g_x g_y F_res M_rr4 */
     {"MSO2142", NULL, romo_gen_3_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M,
      FDI_GEN_SENS_MASK(0x00CE22FEU), 0U, 1U, &fdi_romo_gen_set, 7U,
-     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f2 f3 f4 f5 f6 f7 f8 f10 f14 f18 f19 f20 f23 f24 */
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f2 f3 f4 f5 f6 f7 f8 f10 f14 f18 f19 f20 f23 f24; adaptive threshold over m Iz h_CoG R mu_max k_t K_TM mu_DB b_ay b_r g_x g_y F_res M_rr1 */
     {"MSO2374", NULL, romo_gen_3_in_domain, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA4_M,
      FDI_GEN_SENS_MASK(0x013A89BFU), 0U, 1U, &fdi_romo_gen_set, 8U,
-     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f1 f2 f3 f4 f5 f6 f8 f9 f12 f16 f18 f20 f21 f22 f25 */
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f1 f2 f3 f4 f5 f6 f8 f9 f12 f16 f18 f20 f21 f22 f25; adaptive threshold over m Iz h_CoG R mu_max k_t K_TM mu_DB b_ax b_ay b_r g_x g_y F_res M_rr3 */
     {"MSO3146", NULL, romo_gen_3_in_domain, ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M,
      FDI_GEN_SENS_MASK(0x0077557CU), 0U, 1U, &fdi_romo_gen_set, 9U,
-     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f3 f4 f5 f6 f7 f9 f11 f13 f15 f17 f18 f19 f21 f22 f23 */
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f3 f4 f5 f6 f7 f9 f11 f13 f15 f17 f18 f19 f21 f22 f23; adaptive threshold over m Iz h_CoG R mu_max k_t K_TM mu_DB b_r g_x g_y F_res M_rr2 M_rr4 */
     {"MSO3480", NULL, romo_gen_3_in_domain, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M,
      FDI_GEN_SENS_MASK(0x00EEAAEEU), 0U, 1U, &fdi_romo_gen_set, 10U,
-     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f2 f3 f4 f6 f7 f8 f10 f12 f14 f16 f18 f19 f20 f22 f23 f24 */
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f2 f3 f4 f6 f7 f8 f10 f12 f14 f16 f18 f19 f20 f22 f23 f24; adaptive threshold over m Iz h_CoG R mu_max k_t K_TM mu_DB b_ay b_r g_x g_y F_res M_rr1 M_rr3 */
     {"MSO4785", NULL, romo_gen_3_in_domain, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA3_M,
      FDI_GEN_SENS_MASK(0x00AEEEFFU), 0U, 1U, &fdi_romo_gen_set, 11U,
-     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f1 f2 f3 f4 f5 f6 f7 f8 f10 f11 f12 f14 f15 f16 f18 f19 f20 f22 f24 */
+     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities f1 f2 f3 f4 f5 f6 f7 f8 f10 f11 f12 f14 f15 f16 f18 f19 f20 f22 f24; adaptive threshold over m Iz h_CoG R mu_max k_t K_TM mu_DB b_ax b_ay b_r g_x g_y F_res M_rr1 M_rr2 M_rr3 */
 };
 
 const fdi_gen_set_t fdi_romo_gen_set = {"romo", romo_gen_step, romo_bank, 23U, FDI_ROMO_N_GENERATORS,
@@ -656,6 +656,16 @@ static void romo_gen_step(fdi_gen_io_t *io)
         {
             io->failed |= 0x00000001U;
         }
+        if (io->spread != NULL) /* worst-case spread: sum |d r / d theta| * dtheta over b_ax b_r g_x */
+        {
+            float spread = 0.9324f; /* b_ax g_x */
+            spread += (0.006f * fabsf(((-2.0f * b[2].x1) + b[4].x1))); /* b_r */
+            io->spread[io->at[0]] = spread;
+            if (!fdi_float_is_finite(spread))
+            {
+                io->failed |= 0x00000001U;
+            }
+        }
 #if FDI_GEN_SENSITIVITIES
         if ((io->sens_mask & 0x00000001U) != 0U) /* d r / d f: f1 f3 f5 */
         {
@@ -673,6 +683,16 @@ static void romo_gen_step(fdi_gen_io_t *io)
         if (!fdi_float_is_finite(value))
         {
             io->failed |= 0x00000002U;
+        }
+        if (io->spread != NULL) /* worst-case spread: sum |d r / d theta| * dtheta over b_ay b_r g_y */
+        {
+            float spread = 0.6399f; /* b_ay g_y */
+            spread += (0.006f * fabsf(((-0.6f * b[2].x1) + (-b[3].x1)))); /* b_r */
+            io->spread[io->at[1]] = spread;
+            if (!fdi_float_is_finite(spread))
+            {
+                io->failed |= 0x00000002U;
+            }
         }
 #if FDI_GEN_SENSITIVITIES
         if ((io->sens_mask & 0x00000002U) != 0U) /* d r / d f: f2 f3 f4 */
@@ -748,6 +768,51 @@ static void romo_gen_step(fdi_gen_io_t *io)
             {
                 io->failed |= 0x00000004U;
             }
+            if (io->spread != NULL) /* worst-case spread: sum |d r / d theta| * dtheta over m h_CoG R mu_max k_t K_TM mu_DB b_ax b_ay g_x g_y M_rr1 */
+            {
+                float spread = 0.0f; /* no constant term */
+                const float u0 = (1.0f / (t15));
+                const float u1 = (t22 * u0);
+                const float u2 = (t26 * u1);
+                const float u3 = (19.5f * u2);
+                const float u5 = (19.5f * t26);
+                const float u8 = (1.0f / (t21 * sqrtf(t21)));
+                const float u9 = (t19 * u0 * u5 * u8);
+                const float u7 = (190.125f * t16);
+                const float u4 = (t16 * t19);
+                const float u6 = (t22 * u4 * u5);
+                const float u10 = ((t5 * u3) + (-(u9 * ((t11 * t34) + (t20 * t34) + (-(t10 * u7 * ((2.8333333f * t3) + (1.3266667f * t4)))) + (-(t19 * u7 * ((-1.3266667f * t3) + (2.8333333f * t4))))))) + (t30 * t32 * t5 * u6));
+                const float u11 = (u10 * u10);
+                const float u12 = (1.0f / (fdi_gen_min(-0.1f, (t2 + (-(u11 * (1.0f / (191844.0f + u11)) * fdi_gen_max(0.0f, (12.566371f + t2))))))));
+                const float u13 = (t2 * u12);
+                const float u14 = (t19 * u1 * u13);
+                const float u15 = (19.5f * u14);
+                spread += (261.5f * fabsf((u15 * (2.4525f + (-0.104253545f * b[0].x1) + (-0.1724138f * b[1].x1))))); /* m */
+                spread += (0.075f * fabsf((u15 * ((-218.09842f * b[0].x1) + (-360.68967f * b[1].x1))))); /* h_CoG */
+                const float u16 = fdi_gen_tanh((2.0f * b[15].x1));
+                const float u17 = (b[13].x1 * u16);
+                const float u18 = (fdi_gen_heaviside((t12 + (-fdi_gen_max(0.5f, t14)))) * fdi_gen_sign(b[15].x1));
+                const float u19 = (380.25f * b[15].x1);
+                const float u20 = ((1.0f / (t15 * t15 * t15)) * u18 * u19);
+                spread += (0.00405f * fabsf((-(u13 * ((-21.947874f * b[9].x1) + (12.345679f * b[15].x2) + (0.0013168724f * u17) + (-(b[15].x1 * u3)) + (-(u9 * ((t11 * u20) + (t20 * u20) + (-(u19 * u4))))) + (b[15].x1 * u18 * u6)))))); /* R */
+                spread += (0.5f * fabsf((t19 * u13 * u3))); /* mu_max */
+                spread += (2.925f * fabsf((-(u13 * ((-1.0f * t19 * u2) + (380.25f * t19 * t26 * u0 * u8 * ((t11 * t16) + (t16 * t20)))))))); /* k_t */
+                const float u21 = (3.7037036f * u13);
+                spread += (0.064f * fabsf((-(b[9].x1 * u21)))); /* K_TM */
+                spread += (0.04f * fabsf((0.0008888889f * u13 * u17))); /* mu_DB */
+                const float u22 = (u12 * ((-u10) + (2126.4595f * t19 * t2 * t22 * u0)));
+                spread += (0.15f * fabsf(u22)); /* b_ax */
+                const float u23 = (3516.724f * u14);
+                spread += (0.15f * fabsf(u23)); /* b_ay */
+                spread += (0.7824f * fabsf(u22)); /* g_x */
+                spread += (0.4899f * fabsf(u23)); /* g_y */
+                spread += (20.0f * fabsf((u16 * u21))); /* M_rr1 */
+                io->spread[io->at[2]] = spread;
+                if (!fdi_float_is_finite(spread))
+                {
+                    io->failed |= 0x00000004U;
+                }
+            }
 #if FDI_GEN_SENSITIVITIES
             if ((io->sens_mask & 0x00000004U) != 0U) /* d r / d f: f1 f2 f4 f5 f6 f10 f14 f18 f22 */
             {
@@ -805,6 +870,48 @@ static void romo_gen_step(fdi_gen_io_t *io)
         {
             io->failed |= 0x00000008U;
         }
+        if (io->spread != NULL) /* worst-case spread: sum |d r / d theta| * dtheta over m h_CoG R mu_max k_t K_TM mu_DB b_r M_rr1 */
+        {
+            float spread = 0.0f; /* no constant term */
+            const float u0 = (t59 * t63);
+            spread += (261.5f * fabsf((u0 * (2.4525f + (0.14113773f * b[2].x2) + (-0.1724138f * t66) + (-0.104253545f * b[3].x2) + (-0.1724138f * b[4].x2) + (0.104253545f * b[2].x1 * t71))))); /* m */
+            spread += (0.075f * fabsf((u0 * ((295.26013f * b[2].x2) + (-360.68967f * t66) + (-218.09842f * b[3].x2) + (-360.68967f * b[4].x2) + (218.09842f * b[2].x1 * t71))))); /* h_CoG */
+            const float u1 = fdi_gen_tanh((2.0f * b[15].x1));
+            const float u2 = (b[13].x1 * u1);
+            const float u6 = (t59 * t59);
+            const float u7 = (1.0f / ((1.0f + (t50 * t55) + (t55 * u6)) * sqrtf((1.0f + (t50 * t55) + (t55 * u6)))));
+            const float u5 = (fdi_gen_heaviside((t12 + (-fdi_gen_max(0.5f, t53)))) * fdi_gen_sign(b[15].x1));
+            const float u8 = (380.25f * b[15].x1);
+            const float u9 = ((1.0f / (t54 * t54 * t54)) * u5 * u8);
+            const float u3 = (1.0f / (t54 * t54));
+            const float u4 = (19.5f * t77);
+            spread += (0.00405f * fabsf(((21.947874f * b[9].x1) + (-12.345679f * b[15].x2) + (-0.0013168724f * u2) + (b[15].x1 * t63 * t76) + (19.5f * t61 * t77 * u7 * ((t50 * u9) + (u6 * u9) + (-(t59 * u3 * u8)))) + (-(b[15].x1 * t60 * u3 * u4 * u5))))); /* R */
+            spread += (0.5f * fabsf((t76 * u0))); /* mu_max */
+            spread += (2.925f * fabsf(((1.0f * t62 * t77) + (-380.25f * t61 * t77 * u7 * ((t50 * u3) + (u3 * u6)))))); /* k_t */
+            spread += (0.064f * fabsf((-3.7037036f * b[9].x1))); /* K_TM */
+            spread += (0.04f * fabsf((0.0008888889f * u2))); /* mu_DB */
+            const float u11 = fabsf(t58);
+            const float u12 = fdi_gen_max(0.5f, fdi_gen_max(t12, u11));
+            const float u13 = (1.0f / (u12 * u12));
+            const float u14 = (380.25f * u13);
+            const float u15 = (1.0f + (t50 * u14) + (u14 * u6));
+            const float u16 = (1.0f / (sqrtf(u15)));
+            const float u17 = (1.0f / (u12));
+            const float u18 = (19.5f * u16 * u17);
+            const float u10 = ((0.199f * t3) + (-0.425f * t4));
+            const float u22 = (190.125f * u13);
+            const float u19 = (-u10);
+            const float u20 = fdi_gen_heaviside((u11 + (-fdi_gen_max(0.5f, t12))));
+            const float u21 = fdi_gen_sign(t58);
+            const float u23 = (1.0f / (u12 * u12 * u12));
+            spread += (0.006f * fabsf(((t59 * u18 * ((326.3053f * b[2].x1) + (180.34483f * b[3].x1) + (-109.04921f * b[4].x1))) + (t76 * u10 * u18) + ((1.0f / (u15 * sqrtf(u15))) * u17 * u4 * ((-(t49 * u22 * ((-0.85f * t3) + (-0.398f * t4)))) + (-(t59 * u22 * ((0.398f * t3) + (-0.85f * t4)))) + (380.25f * t50 * u19 * u20 * u21 * u23) + (380.25f * u19 * u20 * u21 * u23 * u6))) + (-(u13 * u16 * u19 * u20 * u21 * u4))))); /* b_r */
+            spread += (20.0f * fabsf((3.7037036f * u1))); /* M_rr1 */
+            io->spread[io->at[3]] = spread;
+            if (!fdi_float_is_finite(spread))
+            {
+                io->failed |= 0x00000008U;
+            }
+        }
 #if FDI_GEN_SENSITIVITIES
         if ((io->sens_mask & 0x00000008U) != 0U) /* d r / d f: f3 f4 f5 f6 f10 f14 f18 f22 */
         {
@@ -855,6 +962,43 @@ static void romo_gen_step(fdi_gen_io_t *io)
         if (!fdi_float_is_finite(value))
         {
             io->failed |= 0x00000010U;
+        }
+        if (io->spread != NULL) /* worst-case spread: sum |d r / d theta| * dtheta over m h_CoG R mu_max k_t K_TM mu_DB b_r M_rr2 */
+        {
+            float spread = 0.0f; /* no constant term */
+            const float u1 = (t94 * t98);
+            const float u0 = (b[2].x1 * t71);
+            spread += (261.5f * fabsf((u1 * (2.4525f + (-0.20368986f * b[2].x2) + (0.1724138f * t66) + (0.104253545f * u0) + (-0.104253545f * b[3].x2) + (0.1724138f * b[4].x2))))); /* m */
+            spread += (0.075f * fabsf((u1 * ((-426.11917f * b[2].x2) + (360.68967f * t66) + (218.09842f * u0) + (-218.09842f * b[3].x2) + (360.68967f * b[4].x2))))); /* h_CoG */
+            const float u2 = fdi_gen_tanh((2.0f * b[16].x1));
+            const float u3 = (b[13].x1 * u2);
+            const float u4 = (fdi_gen_heaviside((t86 + (-fdi_gen_max(0.5f, t90)))) * fdi_gen_sign(b[16].x1));
+            const float u5 = (1.0f / (t91 * t91));
+            const float u6 = (19.5f * t102);
+            const float u7 = (t95 * u5 * u6);
+            const float u8 = (t94 * t94);
+            const float u9 = (1.0f / ((1.0f + (t85 * t92) + (t92 * u8)) * sqrtf((1.0f + (t85 * t92) + (t92 * u8)))));
+            const float u10 = (t94 * u5);
+            const float u11 = (380.25f * b[16].x1);
+            const float u12 = (1.0f / (t91 * t91 * t91));
+            const float u13 = (u11 * u4);
+            spread += (0.00405f * fabsf(((21.947874f * b[10].x1) + (-12.345679f * b[16].x2) + (-0.0013168724f * u3) + (b[16].x1 * t101 * t98) + (-(b[16].x1 * u4 * u7)) + (19.5f * t102 * t96 * u9 * ((-(u10 * u11)) + (t85 * u12 * u13) + (u12 * u13 * u8)))))); /* R */
+            spread += (0.5f * fabsf((t101 * u1))); /* mu_max */
+            const float u14 = (t96 * u9);
+            spread += (2.925f * fabsf(((1.0f * t102 * t97) + (-380.25f * t102 * u14 * ((t85 * u5) + (u5 * u8)))))); /* k_t */
+            spread += (0.064f * fabsf((-3.7037036f * b[10].x1))); /* K_TM */
+            spread += (0.04f * fabsf((0.0008888889f * u3))); /* mu_DB */
+            const float u15 = ((1.025f * t79) + (0.199f * t80));
+            const float u16 = (-u15);
+            const float u17 = fdi_gen_heaviside((t90 + (-fdi_gen_max(0.5f, t86))));
+            const float u18 = fdi_gen_sign(t89);
+            spread += (0.006f * fabsf(((u1 * ((109.89152f * b[2].x1) + (-180.34483f * b[3].x1) + (-109.04921f * b[4].x1))) + (t101 * t98 * u15) + (u14 * u6 * ((-190.125f * u10 * ((2.05f * t79) + (0.398f * t80))) + (-190.125f * t84 * u5 * ((-0.398f * t79) + (2.05f * t80))) + (380.25f * t85 * u12 * u16 * u17 * u18) + (380.25f * u12 * u16 * u17 * u18 * u8))) + (-(u16 * u17 * u18 * u7))))); /* b_r */
+            spread += (20.0f * fabsf((3.7037036f * u2))); /* M_rr2 */
+            io->spread[io->at[4]] = spread;
+            if (!fdi_float_is_finite(spread))
+            {
+                io->failed |= 0x00000010U;
+            }
         }
 #if FDI_GEN_SENSITIVITIES
         if ((io->sens_mask & 0x00000010U) != 0U) /* d r / d f: f3 f4 f5 f7 f11 f15 f19 f23 */
@@ -956,6 +1100,165 @@ static void romo_gen_step(fdi_gen_io_t *io)
             if (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK)
             {
                 io->failed |= 0x00000020U;
+            }
+            if (io->spread != NULL) /* worst-case spread: sum |d r / d theta| * dtheta over m h_CoG R mu_max k_t K_TM mu_DB b_ay b_r g_x g_y F_res M_rr1 M_rr2 M_rr3 */
+            {
+                float spread = 0.0f; /* no constant term */
+                const float u0 = (2.0f + (-2.0f * (t104 * t104)));
+                const float u1 = (b[14].x1 * u0);
+                const float u2 = (t122 * t141);
+                const float u3 = (t135 * t137);
+                const float u4 = (t117 * t122);
+                const float u5 = (t125 * t131);
+                const float u6 = (u3 * u4 * u5);
+                const float u7 = ((1.5795f * t133) + (5.85f * u2) + (-1.5795f * u6));
+                const float u8 = ((0.00010666667f * u1) + u7);
+                const float u9 = (19.5f * t144);
+                const float u10 = (19.5f * t106);
+                const float u11 = ((-5.265f * t143) + (-(t141 * u9)) + (-(u10 * u2)) + (5.265f * t117 * t125 * t131 * t135 * t137 * t144) + (5.265f * t106 * t117 * t122 * t125 * t131 * t135 * t137));
+                const float u12 = (u11 * u11);
+                const float u13 = (1.0f / (fdi_gen_min(-0.1f, ((-u8) + (-(u12 * (1.0f / (7225.0f + u12)) * fdi_gen_max(0.0f, (12.566371f + (-u8)))))))));
+                const float u14 = (5.85f * u11);
+                const float u15 = (0.1724138f * b[1].x1);
+                const float u16 = (0.104253545f * b[3].x2);
+                const float u17 = (0.031276062f * b[2].x2);
+                const float u18 = (b[2].x1 * t71);
+                const float u19 = (0.104253545f * u18);
+                const float u20 = (u16 + u17 + (-u19));
+                const float u21 = (2.4525f + (-u15) + u20);
+                const float u22 = ((1.0f / (t116)) * t125);
+                const float u23 = (t122 * u22);
+                const float u24 = (u21 * u23);
+                const float u25 = (-u8);
+                const float u37 = (u22 * u9);
+                const float u27 = (t154 * t62);
+                const float u28 = (19.5f * u27);
+                const float u26 = (u15 + u20);
+                const float u29 = (t159 * t97);
+                const float u30 = (19.5f * u29);
+                const float u31 = (2.4525f + u26);
+                const float u32 = (t163 * t174);
+                const float u33 = (19.5f * u32);
+                const float u34 = (t161 * t174);
+                const float u35 = (t171 * u34);
+                const float u36 = (19.5f * u35);
+                spread += (261.5f * fabsf((u13 * ((-(u14 * u24)) + (-(u25 * ((0.3f * b[2].x2) + (-u18) + b[3].x2 + (-(u10 * u24)) + (-(u21 * u37)) + (-(u28 * (2.4525f + (-u26)))) + (-(u30 * (2.4525f + u15 + (-u16) + (-u17) + u19))) + (-(u31 * u33)) + (-(u31 * u36))))))))); /* m */
+                const float u38 = (360.68967f * b[1].x1);
+                const float u39 = (65.42953f * b[2].x2);
+                const float u40 = (218.09842f * b[3].x2);
+                const float u41 = (218.09842f * u18);
+                const float u42 = (u38 + (-u39) + (-u40) + u41);
+                const float u43 = (-u42);
+                const float u44 = (u23 * u43);
+                const float u45 = (u38 + u39 + u40 + (-u41));
+                spread += (0.075f * fabsf((u13 * ((-(u14 * u44)) + (-(u25 * ((-(u10 * u44)) + (u28 * u45) + (-(u30 * u42)) + (-(u33 * u45)) + (-(u36 * u45)) + (-(u37 * u43))))))))); /* h_CoG */
+                const float u46 = (t122 * t133);
+                const float u47 = (5.85f * t133);
+                const float u48 = (5.85f * t122);
+                const float u51 = (1.0f / (t124 * sqrtf(t124)));
+                const float u52 = (t132 * u51);
+                const float u49 = (380.25f * xp);
+                const float u50 = (t140 * u49);
+                const float u53 = (u52 * ((t112 * u50) + (t123 * u50) + (-(u4 * u49))));
+                const float u55 = (2565.315f + t130 + t23);
+                const float u56 = (19.5f * u55);
+                const float u57 = (u34 * u56);
+                const float u58 = fdi_gen_tanh((2.0f * b[15].x1));
+                const float u59 = (9.6e-05f * b[13].x1);
+                const float u60 = fdi_gen_tanh((2.0f * b[16].x1));
+                const float u68 = (t122 * u10);
+                const float u54 = (19.5f * t143);
+                const float u66 = (19.5f * t158);
+                const float u67 = (t159 * u66);
+                const float u83 = (t94 * t94);
+                const float u84 = (t96 * (1.0f / ((1.0f + (t85 * t92) + (t92 * u83)) * sqrtf((1.0f + (t85 * t92) + (t92 * u83))))));
+                const float u85 = (u67 * u84);
+                const float u65 = (1.0f / (t91 * t91));
+                const float u79 = (t94 * u65);
+                const float u80 = (380.25f * b[16].x1);
+                const float u81 = (1.0f / (t91 * t91 * t91));
+                const float u64 = (fdi_gen_heaviside((t86 + (-fdi_gen_max(0.5f, t90)))) * fdi_gen_sign(b[16].x1));
+                const float u82 = (u64 * u80);
+                const float u69 = (1.0f / (t167 * t167));
+                const float u74 = (t171 * u69);
+                const float u86 = (380.25f * b[18].x1);
+                const float u87 = (1.0f / (t167 * t167 * t167));
+                const float u71 = (0.27f * fabsf(b[18].x1));
+                const float u72 = (fdi_gen_heaviside((u71 + (-fdi_gen_max(0.5f, t166)))) * fdi_gen_sign(b[18].x1));
+                const float u88 = (u72 * u86);
+                const float u89 = (t171 * t171);
+                const float u90 = ((-(u74 * u86)) + (t164 * u87 * u88) + (u87 * u88 * u89));
+                const float u70 = (t163 * u56);
+                const float u91 = (t173 * (1.0f / ((1.0f + (t164 * t168) + (t168 * u89)) * sqrtf((1.0f + (t164 * t168) + (t168 * u89))))));
+                const float u92 = (u70 * u91);
+                const float u93 = (t161 * t171);
+                const float u94 = (u56 * u91 * u93);
+                const float u62 = (19.5f * t155);
+                const float u77 = (t59 * t59);
+                const float u78 = (t61 * (1.0f / ((1.0f + (t50 * t55) + (t55 * u77)) * sqrtf((1.0f + (t50 * t55) + (t55 * u77))))));
+                const float u63 = (fdi_gen_heaviside((t12 + (-fdi_gen_max(0.5f, t53)))) * fdi_gen_sign(b[15].x1));
+                const float u75 = (380.25f * b[15].x1);
+                const float u76 = ((1.0f / (t54 * t54 * t54)) * u63 * u75);
+                const float u61 = (1.0f / (t54 * t54));
+                const float u73 = (b[18].x1 * u72);
+                spread += (0.00405f * fabsf((u13 * ((u11 * ((-21.666666f * u46) + (-(u47 * xp)) + (-(u48 * u53)) + (5.85f * t117 * t122 * t125 * t131 * t135 * t137 * xp))) + (-(u25 * ((-(b[18].x1 * u57)) + (13.717422f * t4 * ((1.6f * b[9].x1) + (-0.9f * b[15].x2) + (-(u58 * u59)))) + (13.717422f * t79 * ((1.6f * b[10].x1) + (-0.9f * b[16].x2) + (-(u59 * u60)))) + (-(u53 * u68)) + (-(u53 * u9)) + (-(u54 * xp)) + (-(u85 * ((-(u79 * u80)) + (t85 * u81 * u82) + (u81 * u82 * u83)))) + (-(u90 * u92)) + (-(u90 * u94)) + (u10 * u6 * xp) + (-(u62 * u78 * ((t50 * u76) + (u76 * u77) + (-(t59 * u61 * u75))))) + (t172 * u69 * u70 * u73) + (b[15].x1 * t60 * u61 * u62 * u63) + (b[16].x1 * t95 * u64 * u65 * u67) + (t117 * t145 * u3 * u5 * xp) + (t161 * t172 * u56 * u73 * u74)))))))); /* R */
+                const float u95 = (t155 * t62);
+                spread += (0.5f * fabsf((u13 * ((-(u14 * u46)) + (-(u25 * ((-19.5f * u95) + (-(t122 * u54)) + (-(t133 * u9)) + (-(t158 * u30)) + (-(u33 * u55)) + (-(u36 * u55))))))))); /* mu_max */
+                const float u96 = ((t112 * t117) + (t117 * t123));
+                const float u98 = (u52 * u96);
+                const float u99 = (380.25f * u55 * u91 * ((t164 * u69) + (u69 * u89)));
+                const float u97 = (1.0f * u55);
+                spread += (2.925f * fabsf((u13 * ((u11 * ((-0.3f * u46) + (114.075f * t122 * t132 * u51 * u96))) + (-(u25 * ((-1.0f * u95) + (-1.0f * t122 * t143) + (-1.0f * t133 * t144) + (380.25f * t144 * u98) + (-1.0f * t158 * u29) + (t163 * u99) + (-(u32 * u97)) + (-(u35 * u97)) + (u93 * u99) + (380.25f * t106 * t122 * u98) + (380.25f * t155 * u78 * ((t50 * u61) + (u61 * u77))) + (380.25f * t158 * t159 * u84 * ((t85 * u65) + (u65 * u83)))))))))); /* k_t */
+                const float u100 = (1.1111112f * u11);
+                const float u101 = (3.7037036f * t4);
+                const float u102 = (3.7037036f * t79);
+                spread += (0.064f * fabsf((u13 * ((b[11].x1 * u100) + (-(u25 * ((-(b[9].x1 * u101)) + (-(b[10].x1 * u102))))))))); /* K_TM */
+                const float u103 = (0.0008888889f * b[13].x1);
+                spread += (0.04f * fabsf((u13 * ((-(u25 * ((t4 * u103 * u58) + (t79 * u103 * u60)))) + (-0.00026666667f * b[14].x1 * t104 * u11))))); /* mu_DB */
+                const float u104 = (3516.724f * u22);
+                const float u105 = (u13 * ((-1055.0172f * u11 * u23) + (-(u25 * ((-3516.724f * u27) + (-(t144 * u104)) + (3516.724f * t159 * t97) + (3516.724f * t163 * t174) + (-(t106 * t122 * u104)) + (3516.724f * t161 * t171 * t174))))));
+                spread += (0.15f * fabsf(u105)); /* b_ay */
+                const float u106 = ((0.425f * t106) + (2.199f * t109));
+                const float u107 = (-u106);
+                const float u110 = fdi_gen_sign(t121);
+                const float u111 = fdi_gen_heaviside((t115 + (-fdi_gen_max(0.5f, t113))));
+                const float u112 = (1.0f / (t116 * t116 * t116));
+                const float u113 = (u52 * ((-190.125f * u4 * ((-0.85f * t106) + (-4.398f * t109))) + (-190.125f * t111 * t117 * ((4.398f * t106) + (-0.85f * t109))) + (380.25f * t112 * u106 * u110 * u111 * u112) + (380.25f * t123 * u106 * u110 * u111 * u112)));
+                const float u108 = ((218.09842f * b[2].x1) + (-109.04921f * b[4].x1));
+                const float u109 = (-u108);
+                const float u114 = ((2.199f * t160) + (-1.025f * t161));
+                const float u118 = fdi_gen_sign((t165 + (-(t107 * t160))));
+                const float u119 = fdi_gen_heaviside((t166 + (-fdi_gen_max(0.5f, u71))));
+                const float u131 = ((-190.125f * u74 * ((-4.398f * t160) + (2.05f * t161))) + (-190.125f * t162 * u69 * ((2.05f * t160) + (4.398f * t161))) + (380.25f * t164 * u114 * u118 * u119 * u87) + (380.25f * u114 * u118 * u119 * u87 * u89));
+                const float u115 = fdi_gen_sign(t89);
+                const float u116 = ((-1.025f * t79) + (-0.199f * t80));
+                const float u117 = fdi_gen_heaviside((t90 + (-fdi_gen_max(0.5f, t86))));
+                const float u120 = fabsf(t58);
+                const float u121 = fdi_gen_max(0.5f, fdi_gen_max(t12, u120));
+                const float u122 = (1.0f / (u121 * u121));
+                const float u123 = (380.25f * u122);
+                const float u124 = (1.0f + (t50 * u123) + (u123 * u77));
+                const float u125 = (1.0f / (sqrtf(u124)));
+                const float u126 = (1.0f / (u121));
+                const float u127 = (19.5f * u125 * u126);
+                const float u132 = (190.125f * u122);
+                const float u128 = fdi_gen_sign(t58);
+                const float u129 = ((-0.199f * t3) + (0.425f * t4));
+                const float u130 = fdi_gen_heaviside((u120 + (-fdi_gen_max(0.5f, t12))));
+                const float u133 = (1.0f / (u121 * u121 * u121));
+                spread += (0.006f * fabsf((u13 * ((u11 * ((-(u107 * u47)) + (-(u113 * u48)) + (-(u109 * u22 * u48)) + (5.85f * t117 * t122 * t125 * t131 * u106 * u110 * u111))) + (-(u25 * ((-2092.0f * b[2].x1) + (1046.0f * b[4].x1) + (-(u107 * u54)) + (-(u108 * u30)) + (-(u109 * u33)) + (-(u109 * u36)) + (-(u109 * u37)) + (-(u113 * u68)) + (-(u113 * u9)) + (u114 * u57) + (-(u131 * u92)) + (-(u131 * u94)) + (-(u85 * ((-190.125f * u79 * ((2.05f * t79) + (0.398f * t80))) + (-190.125f * t84 * u65 * ((-0.398f * t79) + (2.05f * t80))) + (380.25f * t85 * u115 * u116 * u117 * u81) + (380.25f * u115 * u116 * u117 * u81 * u83)))) + (-19.5f * t109 * t133 * ((2.199f * t106) + (-0.425f * t109))) + (-(t154 * u108 * u127)) + (-(u10 * u109 * u23)) + (-(t153 * t3 * u127 * ((-0.425f * t3) + (-0.199f * t4)))) + (-(t160 * t174 * u56 * ((1.025f * t160) + (2.199f * t161)))) + (-(t80 * t97 * u66 * ((-0.199f * t79) + (1.025f * t80)))) + (-((1.0f / (u124 * sqrtf(u124))) * u126 * u62 * ((-(t49 * u132 * ((-0.85f * t3) + (-0.398f * t4)))) + (-(t59 * u132 * ((0.398f * t3) + (-0.85f * t4)))) + (380.25f * t50 * u128 * u129 * u130 * u133) + (380.25f * u128 * u129 * u130 * u133 * u77)))) + (19.5f * t155 * u122 * u125 * u128 * u129 * u130) + (t117 * t125 * t131 * t145 * u106 * u110 * u111) + (19.5f * t158 * t159 * t95 * u115 * u116 * u117 * u65) + (19.5f * t163 * t172 * u114 * u118 * u119 * u55 * u69) + (19.5f * t106 * t117 * t122 * t125 * t131 * u106 * u110 * u111) + (19.5f * t161 * t171 * t172 * u114 * u118 * u119 * u55 * u69)))))))); /* b_r */
+                spread += (0.7824f * fabsf((u13 * ((1652.157f * t133) + (0.11157333f * u1) + (6119.1f * u2) + (-1652.157f * u6))))); /* g_x */
+                spread += (0.4899f * fabsf(u105)); /* g_y */
+                spread += (700.0f * fabsf((u13 * (u7 + (t105 * u0))))); /* F_res */
+                const float u134 = (u13 * u25);
+                spread += (20.0f * fabsf((-(u101 * u134 * u58)))); /* M_rr1 */
+                spread += (20.0f * fabsf((-(u102 * u134 * u60)))); /* M_rr2 */
+                spread += (20.0f * fabsf((-(t104 * u100 * u13)))); /* M_rr3 */
+                io->spread[io->at[5]] = spread;
+                if (!fdi_float_is_finite(spread))
+                {
+                    io->failed |= 0x00000020U;
+                }
             }
 #if FDI_GEN_SENSITIVITIES
             if ((io->sens_mask & 0x00000020U) != 0U) /* d r / d f: f2 f3 f4 f5 f6 f7 f8 f9 f10 f11 f12 f14 f15 f16 f18 f19 f20 f21 f22 f23 f25 */
@@ -1215,6 +1518,154 @@ static void romo_gen_step(fdi_gen_io_t *io)
             {
                 io->failed |= 0x00000040U;
             }
+            if (io->spread != NULL) /* worst-case spread: sum |d r / d theta| * dtheta over m Iz h_CoG R mu_max k_t K_TM mu_DB b_r g_x g_y F_res M_rr4 */
+            {
+                float spread = 0.0f; /* no constant term */
+                const float u0 = (2.0f + (-2.0f * (t186 * t186)));
+                const float u1 = (b[14].x1 * u0);
+                const float u2 = (t192 * t208);
+                const float u3 = ((1.5795f * t198) + (-1.5795f * t214) + (5.85f * u2));
+                const float u4 = ((0.00010666667f * u1) + u3);
+                const float u5 = (t160 * t214);
+                const float u6 = (39.0f * t163);
+                const float u8 = (t161 * t162);
+                const float u9 = (64.49793f * u8);
+                const float u10 = (39.0f * t161);
+                const float u7 = (64.49793f * t160);
+                const float u11 = ((17.414442f * t210) + (-10.53f * t220) + (-17.414442f * u5) + (10.53f * t161 * t214) + (10.53f * t163 * t213) + (-(t208 * u6)) + (-(t208 * u9)) + (17.414442f * t213 * u8) + (-(u10 * u2)) + (u2 * u7));
+                const float u12 = (u11 * u11);
+                const float u13 = (1.0f / (fdi_gen_min(-0.1f, ((-u4) + (-(u12 * (1.0f / (73984.0f + u12)) * fdi_gen_max(0.0f, (12.566371f + (-u4)))))))));
+                const float u14 = (5.85f * u11);
+                const float u15 = (0.104253545f * b[3].x2);
+                const float u16 = (b[2].x1 * t71);
+                const float u17 = (0.104253545f * u16);
+                const float u18 = (0.1724138f * t66);
+                const float u19 = (0.1724138f * b[4].x2);
+                const float u20 = (2.4525f + u18 + u19);
+                const float u21 = ((-0.14113773f * b[2].x2) + u15 + (-u17) + u20);
+                const float u22 = (t192 * t197);
+                const float u23 = (u21 * u22);
+                const float u24 = (-u4);
+                const float u29 = (t197 * u6);
+                const float u33 = (t197 * u9);
+                const float u25 = ((-0.20368986f * b[2].x2) + (-u15) + u17);
+                const float u26 = (u20 + u25);
+                const float u27 = (39.0f * t97);
+                const float u28 = (t159 * u27);
+                const float u34 = (t79 * u27);
+                const float u35 = (t94 * u34);
+                const float u30 = (2.4525f + (-u18) + (-u19) + (-u25));
+                const float u31 = (64.49793f * t232);
+                const float u32 = (t106 * t111);
+                spread += (261.5f * fabsf((u13 * ((-(u14 * u23)) + (-(u24 * ((1.953793f * b[2].x2) + (-1.6537931f * t66) + (-u16) + b[3].x2 + (-1.6537931f * b[4].x2) + (-(u10 * u23)) + (-(u21 * u29)) + (-(u21 * u33)) + (-(u26 * u28)) + (-(u26 * u35)) + (-(u30 * u31 * u32)) + (64.49793f * t109 * t229 * t232 * u30) + (64.49793f * t160 * t192 * t197 * u21)))))))); /* m */
+                spread += (169.5f * fabsf((-1.3793104f * b[2].x2 * u13 * u24))); /* Iz */
+                const float u36 = (218.09842f * b[3].x2);
+                const float u37 = (218.09842f * u16);
+                const float u38 = ((360.68967f * t66) + (360.68967f * b[4].x2));
+                const float u39 = ((-295.26013f * b[2].x2) + u36 + (-u37) + u38);
+                const float u40 = (u22 * u39);
+                const float u41 = ((-426.11917f * b[2].x2) + (-u36) + u37 + u38);
+                const float u42 = (-u41);
+                spread += (0.075f * fabsf((u13 * ((-(u14 * u40)) + (-(u24 * ((-(u10 * u40)) + (-(u28 * u41)) + (-(u29 * u39)) + (-(u33 * u39)) + (-(u35 * u41)) + (-(u31 * u32 * u42)) + (64.49793f * t109 * t229 * t232 * u42) + (64.49793f * t160 * t192 * t197 * u39)))))))); /* h_CoG */
+                const float u43 = (t192 * t198);
+                const float u47 = (1.0f / (t194 * sqrtf(t194)));
+                const float u48 = (t196 * u47);
+                const float u44 = (380.25f * xp);
+                const float u45 = (t207 * u44);
+                const float u46 = (t190 * t192);
+                const float u49 = (u48 * ((t164 * u45) + (t193 * u45) + (-(u44 * u46))));
+                const float u50 = (5.85f * t187 * t192);
+                const float u53 = (t101 * u34);
+                const float u52 = (t213 * xp);
+                const float u71 = (t187 * t192);
+                const float u72 = (u49 * u71);
+                const float u70 = (t187 * u6);
+                const float u73 = (t187 * u9);
+                const float u51 = (39.0f * t220);
+                const float u55 = (t101 * t159);
+                const float u56 = (39.0f * u55);
+                const float u78 = (t94 * t94);
+                const float u79 = (t96 * (1.0f / ((1.0f + (t85 * t92) + (t92 * u78)) * sqrtf((1.0f + (t85 * t92) + (t92 * u78))))));
+                const float u57 = (1.0f / (t91 * t91));
+                const float u74 = (t94 * u57);
+                const float u75 = (380.25f * b[16].x1);
+                const float u76 = (1.0f / (t91 * t91 * t91));
+                const float u59 = (fdi_gen_heaviside((t86 + (-fdi_gen_max(0.5f, t90)))) * fdi_gen_sign(b[16].x1));
+                const float u77 = (u59 * u75);
+                const float u80 = (u79 * ((-(u74 * u75)) + (t85 * u76 * u77) + (u76 * u77 * u78)));
+                const float u61 = (t102 * t79);
+                const float u62 = (39.0f * u61);
+                const float u63 = (fdi_gen_heaviside((t225 + (-fdi_gen_max(0.5f, t115)))) * fdi_gen_sign(b[17].x1));
+                const float u64 = (64.49793f * t224 * t230);
+                const float u65 = (b[17].x1 * u63 * u64);
+                const float u66 = (1.0f / (t226 * t226));
+                const float u68 = (t229 * u66);
+                const float u69 = (t109 * u68);
+                const float u81 = (380.25f * b[17].x1);
+                const float u82 = (1.0f / (t226 * t226 * t226));
+                const float u83 = (u63 * u81);
+                const float u84 = (t229 * t229);
+                const float u85 = ((-64.49793f * u68 * u81) + (64.49793f * t112 * u82 * u83) + (64.49793f * u82 * u83 * u84));
+                const float u86 = (t224 * u32);
+                const float u87 = (1.0f / ((1.0f + (t112 * t227) + (t227 * u84)) * sqrtf((1.0f + (t112 * t227) + (t227 * u84)))));
+                const float u88 = (t231 * u87);
+                const float u89 = (u86 * u88);
+                const float u90 = (t109 * t224 * t229);
+                const float u91 = (u88 * u90);
+                const float u54 = (t224 * u31);
+                const float u67 = (t111 * u66);
+                const float u58 = (t95 * u57);
+                const float u60 = (b[16].x1 * u59);
+                spread += (0.00405f * fabsf((u13 * ((u11 * ((-21.666666f * u43) + (-5.85f * t198 * xp) + (5.85f * t214 * xp) + (-(u49 * u50)))) + (-(u24 * ((-(b[16].x1 * u53)) + (64.49793f * t210 * xp) + (t215 * u52) + (-(u10 * u72)) + (-(u49 * u70)) + (-(u49 * u73)) + (-64.49793f * u5 * xp) + (-(u51 * xp)) + (u52 * u9) + (-(u56 * u80)) + (-(u62 * u80)) + (-(u65 * u69)) + (u7 * u72) + (-(u85 * u89)) + (u85 * u91) + (b[17].x1 * t109 * u54) + (t106 * u65 * u67) + (t214 * t244 * xp) + (u56 * u58 * u60) + (u58 * u60 * u62)))))))); /* R */
+                const float u92 = (t162 * t210);
+                const float u93 = (t162 * t220);
+                spread += (0.5f * fabsf((u13 * ((-(u14 * u43)) + (-(u24 * ((-39.0f * u92) + (-64.49793f * u93) + (-(t101 * u28)) + (64.49793f * t192 * t210) + (-(t192 * u51)) + (-(u27 * u61)) + (-(u32 * u54)) + (64.49793f * t109 * t224 * t229 * t232)))))))); /* mu_max */
+                const float u94 = (u48 * ((t164 * t190) + (t190 * t193)));
+                const float u95 = (u71 * u94);
+                const float u98 = (t187 * u94);
+                const float u100 = ((1257.7096f * t112 * u66) + (1257.7096f * u66 * u84));
+                const float u96 = (2.0f * t97);
+                const float u99 = (760.5f * u79 * ((t85 * u57) + (u57 * u78)));
+                const float u97 = (3.3075862f * t232);
+                spread += (2.925f * fabsf((u13 * ((u11 * ((-0.3f * u43) + (114.075f * u95))) + (-(u24 * ((-2.0f * u92) + (-3.3075862f * u93) + (-1257.7096f * t160 * u95) + (760.5f * t161 * u95) + (760.5f * t163 * u98) + (3.3075862f * t192 * t210) + (-2.0f * t192 * t220) + (u100 * u89) + (-(u100 * u91)) + (-(u55 * u96)) + (u55 * u99) + (-(u61 * u96)) + (u61 * u99) + (1257.7096f * u8 * u98) + (-(u86 * u97)) + (u90 * u97)))))))); /* k_t */
+                const float u101 = (u11 * u13);
+                const float u102 = (1.1111112f * u101);
+                spread += (0.064f * fabsf((b[12].x1 * u102))); /* K_TM */
+                spread += (0.04f * fabsf((-0.00026666667f * b[14].x1 * t186 * u101))); /* mu_DB */
+                const float u105 = (180.34483f * b[3].x1);
+                const float u106 = (109.04921f * b[4].x1);
+                const float u107 = ((-326.3053f * b[2].x1) + (-u105) + u106);
+                const float u108 = (u107 * u22);
+                const float u103 = ((2.199f * t160) + (-1.025f * t161));
+                const float u104 = (-u103);
+                const float u109 = fdi_gen_sign((t165 + (-(t107 * t160))));
+                const float u110 = fdi_gen_heaviside((t166 + (-fdi_gen_max(0.5f, t188))));
+                const float u111 = (1.0f / (t189 * t189 * t189));
+                const float u112 = ((-190.125f * u46 * ((-4.398f * t160) + (2.05f * t161))) + (-190.125f * t162 * t190 * ((2.05f * t160) + (4.398f * t161))) + (380.25f * t164 * u103 * u109 * u110 * u111) + (380.25f * t193 * u103 * u109 * u110 * u111));
+                const float u113 = (u112 * u48);
+                const float u114 = ((1.025f * t160) + (2.199f * t161));
+                const float u115 = ((1.025f * t79) + (0.199f * t80));
+                const float u117 = ((-109.89152f * b[2].x1) + u105 + u106);
+                const float u118 = (-u117);
+                const float u119 = fdi_gen_sign(t89);
+                const float u120 = (-u115);
+                const float u121 = fdi_gen_heaviside((t90 + (-fdi_gen_max(0.5f, t86))));
+                const float u124 = (u79 * ((-190.125f * u74 * ((2.05f * t79) + (0.398f * t80))) + (-190.125f * t84 * u57 * ((-0.398f * t79) + (2.05f * t80))) + (380.25f * t85 * u119 * u120 * u121 * u76) + (380.25f * u119 * u120 * u121 * u76 * u78)));
+                const float u116 = ((0.425f * t106) + (2.199f * t109));
+                const float u122 = fdi_gen_sign(t121);
+                const float u123 = fdi_gen_heaviside((t115 + (-fdi_gen_max(0.5f, t225))));
+                const float u125 = ((-190.125f * u67 * ((4.398f * t106) + (-0.85f * t109))) + (-190.125f * u68 * ((-0.85f * t106) + (-4.398f * t109))) + (380.25f * t112 * u116 * u122 * u123 * u82) + (380.25f * u116 * u122 * u123 * u82 * u84));
+                spread += (0.006f * fabsf((u13 * ((u11 * ((-5.85f * u108) + (-5.85f * t198 * u104) + (-(u113 * u50)) + (5.85f * t187 * t190 * t192 * t195 * u103 * u109 * u110))) + (-(u24 * ((-1054.0795f * b[2].x1) + (1729.8676f * b[3].x1) + (1046.0f * b[4].x1) + (64.49793f * t210 * u104) + (-39.0f * t210 * u114) + (-64.49793f * t220 * u114) + (-(u10 * u108)) + (-(u104 * u51)) + (-(u107 * u29)) + (-(u107 * u33)) + (-(u113 * u70)) + (-(u113 * u73)) + (-(u115 * u53)) + (-(u118 * u28)) + (-(u118 * u35)) + (-(u124 * u56)) + (-(u124 * u62)) + (-64.49793f * u125 * u89) + (-(t106 * u54 * ((2.199f * t106) + (-0.425f * t109)))) + (-(u10 * u113 * u71)) + (-(u117 * u31 * u32)) + (-(t101 * t80 * u27 * ((-0.199f * t79) + (1.025f * t80)))) + (-64.49793f * t109 * t224 * t232 * u116) + (64.49793f * t109 * t229 * t232 * u117) + (64.49793f * t160 * t192 * t197 * u107) + (-(u116 * u122 * u123 * u64 * u69)) + (64.49793f * t109 * t224 * t229 * t231 * u125 * u87) + (64.49793f * t160 * t187 * t192 * t196 * u112 * u47) + (39.0f * t101 * t159 * t95 * u119 * u120 * u121 * u57) + (39.0f * t102 * t79 * t95 * u119 * u120 * u121 * u57) + (t187 * t190 * t195 * t215 * u103 * u109 * u110) + (-(t187 * t195 * u103 * u109 * u110 * u46 * u7)) + (64.49793f * t106 * t111 * t224 * t230 * u116 * u122 * u123 * u66) + (64.49793f * t161 * t162 * t187 * t190 * t195 * u103 * u109 * u110) + (t187 * t190 * t192 * t195 * t244 * u103 * u109 * u110)))))))); /* b_r */
+                spread += (0.7824f * fabsf((u13 * ((1652.157f * t198) + (-1652.157f * t214) + (0.11157333f * u1) + (6119.1f * u2))))); /* g_x */
+                spread += (0.4899f * fabsf((u13 * ((-2732.326f * t198) + (2732.326f * t214) + (-0.18451922f * u1) + (-10119.726f * u2))))); /* g_y */
+                spread += (700.0f * fabsf((u13 * (u3 + (t105 * u0))))); /* F_res */
+                spread += (20.0f * fabsf((-(t186 * u102)))); /* M_rr4 */
+                io->spread[io->at[6]] = spread;
+                if (!fdi_float_is_finite(spread))
+                {
+                    io->failed |= 0x00000040U;
+                }
+            }
 #if FDI_GEN_SENSITIVITIES
             if ((io->sens_mask & 0x00000040U) != 0U) /* d r / d f: f3 f4 f5 f7 f8 f9 f13 f17 f19 f20 f21 f23 f24 */
             {
@@ -1473,6 +1924,166 @@ static void romo_gen_step(fdi_gen_io_t *io)
             {
                 io->failed |= 0x00000080U;
             }
+            if (io->spread != NULL) /* worst-case spread: sum |d r / d theta| * dtheta over m Iz h_CoG R mu_max k_t K_TM mu_DB b_ay b_r g_x g_y F_res M_rr1 */
+            {
+                float spread = 0.0f; /* no constant term */
+                const float u0 = (2.0f + (-2.0f * (t246 * t246)));
+                const float u1 = (b[13].x1 * u0);
+                const float u2 = (t252 * t264);
+                const float u3 = ((1.5795f * t258) + (-1.5795f * t270) + (5.85f * u2));
+                const float u4 = ((0.00010666667f * u1) + u3);
+                const float u6 = (t270 * t3);
+                const float u5 = (39.0f * t154);
+                const float u8 = (t4 * t49);
+                const float u9 = (64.49793f * u8);
+                const float u7 = (39.0f * t4);
+                const float u10 = ((17.414442f * t266) + (-10.53f * t267) + (-17.414442f * u6) + (10.53f * t154 * t269) + (-(t264 * u5)) + (-(t264 * u9)) + (10.53f * t270 * t4) + (-(u2 * u7)) + (64.49793f * t252 * t264 * t3) + (17.414442f * t269 * t4 * t49));
+                const float u11 = (u10 * u10);
+                const float u12 = (1.0f / (fdi_gen_min(-0.1f, ((-u4) + (-(u11 * (1.0f / (27225.0f + u11)) * fdi_gen_max(0.0f, (12.566371f + (-u4)))))))));
+                const float u13 = (5.85f * u10);
+                const float u14 = (0.1724138f * b[1].x1);
+                const float u15 = (0.104253545f * b[3].x2);
+                const float u16 = (0.031276062f * b[2].x2);
+                const float u17 = (b[2].x1 * t71);
+                const float u18 = (0.104253545f * u17);
+                const float u19 = (u15 + u16 + (-u18));
+                const float u20 = (2.4525f + (-u14) + (-u19));
+                const float u21 = (t255 * t256);
+                const float u22 = (t252 * u21);
+                const float u23 = (u20 * u22);
+                const float u24 = (-u4);
+                const float u33 = (u21 * u5);
+                const float u34 = (u21 * u9);
+                const float u25 = (2.4525f + (-u14) + u19);
+                const float u26 = (39.0f * t279);
+                const float u30 = (t106 * t232);
+                const float u31 = (t229 * u30);
+                const float u32 = (39.0f * u31);
+                const float u27 = (2.4525f + u14 + (-u15) + (-u16) + u18);
+                const float u28 = (t280 * t97);
+                const float u29 = (64.49793f * u28);
+                spread += (261.5f * fabsf((u12 * ((-(u13 * u23)) + (-(u24 * ((-1.6537931f * b[1].x1) + (0.3f * b[2].x2) + (-u17) + b[3].x2 + (-(u20 * u33)) + (-(u20 * u34)) + (-(u23 * u7)) + (-(u25 * u26)) + (-(u25 * u32)) + (-(u27 * u29)) + (64.49793f * t80 * t94 * t97 * u27) + (64.49793f * t252 * t255 * t256 * t3 * u20)))))))); /* m */
+                spread += (169.5f * fabsf((1.3793104f * b[2].x2 * u12 * u24))); /* Iz */
+                const float u35 = (360.68967f * b[1].x1);
+                const float u36 = (65.42953f * b[2].x2);
+                const float u37 = (218.09842f * b[3].x2);
+                const float u38 = (218.09842f * u17);
+                const float u39 = ((-u35) + (-u36) + (-u37) + u38);
+                const float u40 = (u22 * u39);
+                const float u41 = (u35 + (-u36) + (-u37) + u38);
+                const float u42 = (-u41);
+                spread += (0.075f * fabsf((u12 * ((-(u13 * u40)) + (-(u24 * ((-(u26 * u42)) + (-(u29 * u41)) + (-(u32 * u42)) + (-(u33 * u39)) + (-(u34 * u39)) + (-(u40 * u7)) + (64.49793f * t80 * t94 * t97 * u41) + (64.49793f * t252 * t255 * t256 * t3 * u39)))))))); /* h_CoG */
+                const float u43 = (t252 * t258);
+                const float u44 = (5.85f * t252);
+                const float u45 = (1.0f / (t254 * sqrtf(t254)));
+                const float u46 = (380.25f * xp);
+                const float u47 = ((1.0f / (t249 * t249 * t249)) * t262 * u46);
+                const float u48 = (u45 * ((t253 * u47) + (t50 * u47) + (-(t250 * t252 * u46))));
+                const float u49 = (t257 * u48);
+                const float u54 = (39.0f * t131);
+                const float u55 = (u30 * u54);
+                const float u51 = (t269 * xp);
+                const float u67 = (t155 * t256);
+                const float u50 = (39.0f * t267);
+                const float u58 = (fdi_gen_heaviside((t86 + (-fdi_gen_max(0.5f, t90)))) * fdi_gen_sign(b[16].x1));
+                const float u59 = (b[16].x1 * u58);
+                const float u53 = (64.49793f * t158);
+                const float u56 = (1.0f / (t91 * t91));
+                const float u64 = (t94 * u56);
+                const float u65 = (t80 * t95 * u53 * u64);
+                const float u68 = (64.49793f * t3);
+                const float u69 = (t252 * u49);
+                const float u60 = (1.0f / (t226 * t226));
+                const float u66 = (t229 * u60);
+                const float u70 = (380.25f * b[17].x1);
+                const float u71 = (1.0f / (t226 * t226 * t226));
+                const float u62 = (fdi_gen_heaviside((t225 + (-fdi_gen_max(0.5f, t115)))) * fdi_gen_sign(b[17].x1));
+                const float u72 = (u62 * u70);
+                const float u73 = (t229 * t229);
+                const float u74 = ((-(u66 * u70)) + (t112 * u71 * u72) + (u71 * u72 * u73));
+                const float u61 = (t144 * u54);
+                const float u75 = (t231 * (1.0f / ((1.0f + (t112 * t227) + (t227 * u73)) * sqrtf((1.0f + (t112 * t227) + (t227 * u73))))));
+                const float u76 = (u61 * u75);
+                const float u85 = (t106 * t229);
+                const float u86 = (u54 * u75 * u85);
+                const float u77 = (380.25f * b[16].x1);
+                const float u78 = (1.0f / (t91 * t91 * t91));
+                const float u79 = (u58 * u77);
+                const float u80 = (t94 * t94);
+                const float u81 = ((-(u64 * u77)) + (t85 * u78 * u79) + (u78 * u79 * u80));
+                const float u57 = (t280 * u53);
+                const float u82 = (1.0f / ((1.0f + (t85 * t92) + (t92 * u80)) * sqrtf((1.0f + (t85 * t92) + (t92 * u80)))));
+                const float u83 = (t96 * u82);
+                const float u84 = (u57 * u83);
+                const float u52 = (t80 * t97);
+                const float u63 = (b[17].x1 * u62);
+                const float u87 = (t80 * t94);
+                spread += (0.00405f * fabsf((u12 * ((u10 * ((-21.666666f * u43) + (-5.85f * t258 * xp) + (5.85f * t270 * xp) + (-(u44 * u49)))) + (-(u24 * ((-(b[17].x1 * u55)) + (64.49793f * t266 * xp) + (t271 * u51) + (-39.0f * u48 * u67) + (-(u49 * u9)) + (-(u50 * xp)) + (u51 * u9) + (-(u59 * u65)) + (-64.49793f * u6 * xp) + (u68 * u69) + (-(u69 * u7)) + (-(u74 * u76)) + (-(u74 * u86)) + (-(u81 * u84)) + (b[16].x1 * u52 * u53) + (t270 * t289 * xp) + (t230 * u60 * u61 * u63) + (t95 * u56 * u57 * u59) + (u53 * u81 * u83 * u87) + (t106 * t230 * u54 * u63 * u66)))))))); /* R */
+                const float u88 = (t266 * t49);
+                const float u89 = (t267 * t49);
+                spread += (0.5f * fabsf((u12 * ((-(u13 * u43)) + (-(u24 * ((-39.0f * u88) + (-64.49793f * u89) + (-(t131 * u26)) + (-(t131 * u32)) + (-(t158 * u29)) + (64.49793f * t252 * t266) + (-(t252 * u50)) + (64.49793f * t158 * t80 * t94 * t97)))))))); /* mu_max */
+                const float u90 = ((t250 * t253) + (t250 * t50));
+                const float u97 = (760.5f * t131 * u75 * ((t112 * u60) + (u60 * u73)));
+                const float u91 = (2.0f * t131);
+                const float u98 = (1257.7096f * t158 * u83 * ((t85 * u56) + (u56 * u80)));
+                const float u94 = (u45 * u90);
+                const float u95 = (t257 * u94);
+                const float u96 = (t252 * u95);
+                const float u92 = (3.3075862f * t158);
+                const float u93 = (t94 * u52);
+                spread += (2.925f * fabsf((u12 * ((u10 * ((-0.3f * u43) + (114.075f * t252 * t257 * u45 * u90))) + (-(u24 * ((-2.0f * u88) + (-3.3075862f * u89) + (t144 * u97) + (3.3075862f * t252 * t266) + (-2.0f * t252 * t267) + (-(t279 * u91)) + (t280 * u98) + (-1257.7096f * t3 * u96) + (760.5f * t4 * u96) + (-(u28 * u92)) + (-(u31 * u91)) + (760.5f * u67 * u94) + (1257.7096f * u8 * u95) + (u85 * u97) + (-(u87 * u98)) + (u92 * u93)))))))); /* k_t */
+                const float u99 = (u10 * u12);
+                const float u100 = (1.1111112f * u99);
+                spread += (0.064f * fabsf((b[9].x1 * u100))); /* K_TM */
+                spread += (0.04f * fabsf((-0.00026666667f * b[13].x1 * t246 * u99))); /* mu_DB */
+                const float u101 = (1055.0172f * u10 * u22);
+                const float u102 = (7033.448f * u21);
+                const float u103 = ((7033.448f * t279) + (7033.448f * u31) + (11631.868f * u93) + (t154 * u102) + (-11631.868f * t280 * t97) + (11631.868f * u21 * u8) + (t252 * t4 * u102) + (-11631.868f * t252 * t255 * t256 * t3));
+                spread += (0.15f * fabsf((u12 * ((-u101) + (-(u24 * (1729.8676f + (-u103)))))))); /* b_ay */
+                const float u104 = ((0.199f * t3) + (-0.425f * t4));
+                const float u105 = fabsf(t58);
+                const float u106 = fdi_gen_max(0.5f, fdi_gen_max(t248, u105));
+                const float u107 = (1.0f / (u106 * u106));
+                const float u108 = (380.25f * u107);
+                const float u109 = (1.0f + (t253 * u108) + (t50 * u108));
+                const float u110 = (1.0f / (sqrtf(u109)));
+                const float u111 = (1.0f / (u106));
+                const float u112 = (u110 * u111);
+                const float u113 = (t153 * u112);
+                const float u114 = (u104 * u113);
+                const float u115 = ((218.09842f * b[2].x1) + (-109.04921f * b[4].x1));
+                const float u116 = (u112 * u115);
+                const float u120 = (1.0f / (u109 * sqrtf(u109)));
+                const float u121 = (190.125f * u107);
+                const float u117 = fdi_gen_sign(t58);
+                const float u118 = (-u104);
+                const float u119 = fdi_gen_heaviside((u105 + (-fdi_gen_max(0.5f, t248))));
+                const float u122 = (1.0f / (u106 * u106 * u106));
+                const float u123 = ((-(t252 * u121 * ((0.398f * t3) + (-0.85f * t4)))) + (-(t49 * u121 * ((-0.85f * t3) + (-0.398f * t4)))) + (380.25f * t253 * u117 * u118 * u119 * u122) + (380.25f * t50 * u117 * u118 * u119 * u122));
+                const float u124 = (u111 * u120 * u123);
+                const float u125 = (t153 * u124);
+                const float u134 = (u113 * ((-0.425f * t3) + (-0.199f * t4)));
+                const float u126 = (-u115);
+                const float u127 = ((0.425f * t106) + (2.199f * t109));
+                const float u129 = fdi_gen_sign(t121);
+                const float u130 = fdi_gen_heaviside((t115 + (-fdi_gen_max(0.5f, t225))));
+                const float u135 = ((-190.125f * u66 * ((-0.85f * t106) + (-4.398f * t109))) + (-190.125f * t111 * u60 * ((4.398f * t106) + (-0.85f * t109))) + (380.25f * t112 * u127 * u129 * u130 * u71) + (380.25f * u127 * u129 * u130 * u71 * u73));
+                const float u131 = fdi_gen_sign(t89);
+                const float u128 = ((1.025f * t79) + (0.199f * t80));
+                const float u132 = (-u128);
+                const float u133 = fdi_gen_heaviside((t90 + (-fdi_gen_max(0.5f, t86))));
+                const float u136 = ((-190.125f * u64 * ((2.05f * t79) + (0.398f * t80))) + (-190.125f * t84 * u56 * ((-0.398f * t79) + (2.05f * t80))) + (380.25f * t85 * u131 * u132 * u133 * u78) + (380.25f * u131 * u132 * u133 * u78 * u80));
+                spread += (0.006f * fabsf((u12 * ((u10 * ((-5.85f * u114) + (-(u116 * u44)) + (-(u125 * u44)) + (5.85f * t153 * t252 * u107 * u110 * u117 * u118 * u119))) + (-(u24 * ((-2092.0f * b[2].x1) + (1046.0f * b[4].x1) + (-39.0f * t155 * u124) + (-39.0f * t3 * u134) + (-64.49793f * t4 * u134) + (-(u114 * u7)) + (-(u115 * u29)) + (-(u116 * u5)) + (-(u116 * u9)) + (-(u125 * u9)) + (-(u126 * u26)) + (-(u126 * u32)) + (u127 * u55) + (-(u135 * u76)) + (-(u135 * u86)) + (-(u136 * u84)) + (-(t252 * u116 * u7)) + (-(t252 * u125 * u7)) + (-(t109 * t232 * u54 * ((2.199f * t106) + (-0.425f * t109)))) + (64.49793f * t158 * t80 * t97 * u128) + (-(t79 * t97 * u53 * ((-0.199f * t79) + (1.025f * t80)))) + (64.49793f * t80 * t94 * t97 * u115) + (-(u131 * u132 * u133 * u65)) + (64.49793f * t153 * t3 * u104 * u110 * u111) + (64.49793f * t252 * t3 * u110 * u111 * u115) + (64.49793f * t153 * t252 * t3 * u111 * u120 * u123) + (39.0f * t155 * u107 * u110 * u117 * u118 * u119) + (64.49793f * t158 * t80 * t94 * t96 * u136 * u82) + (39.0f * t131 * t144 * t230 * u127 * u129 * u130 * u60) + (64.49793f * t158 * t280 * t95 * u131 * u132 * u133 * u56) + (39.0f * t106 * t131 * t229 * t230 * u127 * u129 * u130 * u60) + (t153 * t252 * t289 * u107 * u110 * u117 * u118 * u119) + (-(t153 * t252 * u107 * u110 * u117 * u118 * u119 * u68)) + (64.49793f * t153 * t4 * t49 * u107 * u110 * u117 * u118 * u119)))))))); /* b_r */
+                spread += (0.7824f * fabsf((u12 * ((1652.157f * t258) + (-1652.157f * t270) + (0.11157333f * u1) + (6119.1f * u2))))); /* g_x */
+                spread += (0.4899f * fabsf((u12 * ((-u101) + (u103 * u24))))); /* g_y */
+                spread += (700.0f * fabsf((u12 * (u3 + (t247 * u0))))); /* F_res */
+                spread += (20.0f * fabsf((-(t246 * u100)))); /* M_rr1 */
+                io->spread[io->at[7]] = spread;
+                if (!fdi_float_is_finite(spread))
+                {
+                    io->failed |= 0x00000080U;
+                }
+            }
 #if FDI_GEN_SENSITIVITIES
             if ((io->sens_mask & 0x00000080U) != 0U) /* d r / d f: f2 f3 f4 f5 f6 f7 f8 f10 f14 f18 f19 f20 f23 f24 */
             {
@@ -1723,6 +2334,156 @@ static void romo_gen_step(fdi_gen_io_t *io)
             {
                 io->failed |= 0x00000100U;
             }
+            if (io->spread != NULL) /* worst-case spread: sum |d r / d theta| * dtheta over m Iz h_CoG R mu_max k_t K_TM mu_DB b_ax b_ay b_r g_x g_y F_res M_rr3 */
+            {
+                float spread = 0.0f; /* no constant term */
+                const float u1 = (t295 * t310);
+                const float u2 = (t293 * t295);
+                const float u3 = (t298 * t300);
+                const float u4 = (t307 * u3);
+                const float u5 = ((1.5795f * t302) + (5.85f * u1) + (-1.5795f * u2 * u4));
+                const float u0 = (2.0f + (-2.0f * (t290 * t290)));
+                const float u6 = (u5 + (0.00010666667f * b[14].x1 * u0));
+                const float u7 = (39.0f * t144);
+                const float u8 = (39.0f * t106);
+                const float u9 = (64.49793f * t109);
+                const float u10 = (t106 * t111);
+                const float u11 = (t293 * u4);
+                const float u12 = ((-17.414442f * t312) + (-10.53f * t313) + (-(t310 * u7)) + (-(u1 * u8)) + (-(u1 * u9)) + (-17.414442f * u10 * u11) + (64.49793f * t106 * t111 * t310) + (10.53f * t144 * t293 * t298 * t300 * t307) + (10.53f * t106 * t293 * t295 * t298 * t300 * t307) + (17.414442f * t109 * t293 * t295 * t298 * t300 * t307));
+                const float u13 = (u12 * u12);
+                const float u14 = (1.0f / (fdi_gen_min(-0.1f, ((-u6) + (-(u13 * (1.0f / (25600.0f + u13)) * fdi_gen_max(0.0f, (12.566371f + (-u6)))))))));
+                const float u15 = (5.85f * u12);
+                const float u16 = (0.104253545f * b[0].x1);
+                const float u17 = (0.1724138f * b[1].x1);
+                const float u18 = (2.4525f + u16 + (-u17));
+                const float u19 = (t298 * t299);
+                const float u20 = (t295 * u19);
+                const float u21 = (u18 * u20);
+                const float u22 = (-u6);
+                const float u27 = (u19 * u7);
+                const float u23 = (u16 + u17);
+                const float u24 = (2.4525f + (-u23));
+                const float u25 = (t154 * t62);
+                const float u26 = (39.0f * u25);
+                const float u31 = (t4 * t59);
+                const float u32 = (t62 * u31);
+                const float u33 = (39.0f * u32);
+                const float u28 = (t160 * t171);
+                const float u29 = (2.4525f + u23);
+                const float u30 = (64.49793f * t174);
+                spread += (261.5f * fabsf((u14 * ((-(u15 * u21)) + (-(u22 * (b[0].x1 + (1.6537931f * b[1].x1) + (-(u18 * u27)) + (-(u21 * u8)) + (-(u21 * u9)) + (-(u24 * u26)) + (-(u24 * u33)) + (-(u28 * u29 * u30)) + (64.49793f * t161 * t162 * t174 * u29) + (64.49793f * t106 * t111 * t298 * t299 * u18)))))))); /* m */
+                spread += (169.5f * fabsf((1.3793104f * b[2].x2 * u14 * u22))); /* Iz */
+                const float u34 = (218.09842f * b[0].x1);
+                const float u35 = (360.68967f * b[1].x1);
+                const float u36 = (u34 + (-u35));
+                const float u37 = (u20 * u36);
+                const float u38 = (u34 + u35);
+                const float u39 = (-u38);
+                spread += (0.075f * fabsf((u14 * ((-(u15 * u37)) + (-(u22 * ((-(u26 * u39)) + (-(u27 * u36)) + (-(u33 * u39)) + (-(u37 * u8)) + (-(u37 * u9)) + (-(u28 * u30 * u38)) + (64.49793f * t161 * t162 * t174 * u38) + (64.49793f * t106 * t111 * t298 * t299 * u36)))))))); /* h_CoG */
+                const float u40 = (t295 * t302);
+                const float u41 = (5.85f * t302);
+                const float u42 = (380.25f * xp);
+                const float u43 = (t308 * u42);
+                const float u44 = ((t112 * u43) + (t296 * u43) + (-(u2 * u42)));
+                const float u45 = (t301 * t306);
+                const float u46 = (u44 * u45);
+                const float u47 = (5.85f * t295);
+                const float u50 = (t318 * t4);
+                const float u51 = (39.0f * u50);
+                const float u52 = (t319 * u30);
+                const float u53 = (t160 * u52);
+                const float u48 = (64.49793f * t312);
+                const float u49 = (39.0f * t313);
+                const float u58 = (t295 * u46);
+                const float u67 = (39.0f * t26);
+                const float u68 = (t154 * u67);
+                const float u71 = (t59 * t59);
+                const float u72 = (1.0f / ((1.0f + (t50 * t55) + (t55 * u71)) * sqrtf((1.0f + (t50 * t55) + (t55 * u71)))));
+                const float u55 = fdi_gen_sign(b[15].x1);
+                const float u57 = fdi_gen_heaviside((t12 + (-fdi_gen_max(0.5f, t53))));
+                const float u69 = (380.25f * b[15].x1);
+                const float u70 = ((1.0f / (t54 * t54 * t54)) * u55 * u57 * u69);
+                const float u56 = (1.0f / (t54 * t54));
+                const float u73 = (t61 * u72 * ((t50 * u70) + (u70 * u71) + (-(t59 * u56 * u69))));
+                const float u74 = (u31 * u67);
+                const float u54 = (64.49793f * u10);
+                const float u60 = (1.0f / (t167 * t167));
+                const float u75 = (t171 * u60);
+                const float u76 = (380.25f * b[18].x1);
+                const float u77 = (1.0f / (t167 * t167 * t167));
+                const float u59 = fdi_gen_sign(b[18].x1);
+                const float u61 = (0.27f * fabsf(b[18].x1));
+                const float u62 = fdi_gen_heaviside((u61 + (-fdi_gen_max(0.5f, t166))));
+                const float u63 = (u59 * u62);
+                const float u78 = (u63 * u76);
+                const float u79 = (t171 * t171);
+                const float u80 = ((-(u75 * u76)) + (t164 * u77 * u78) + (u77 * u78 * u79));
+                const float u81 = (1.0f / ((1.0f + (t164 * t168) + (t168 * u79)) * sqrtf((1.0f + (t164 * t168) + (t168 * u79)))));
+                const float u82 = (t173 * u81);
+                const float u83 = (t319 * u28);
+                const float u84 = (64.49793f * u83);
+                const float u64 = (t161 * t162);
+                const float u65 = (t319 * u64);
+                const float u66 = (64.49793f * u60 * u65);
+                spread += (0.00405f * fabsf((u14 * ((u12 * ((-21.666666f * u40) + (-(u41 * xp)) + (-(u46 * u47)) + (5.85f * t293 * t295 * t298 * t300 * t307 * xp))) + (-(u22 * ((-(b[15].x1 * u51)) + (-(b[18].x1 * u53)) + (-(u46 * u7)) + (-(u48 * xp)) + (-(u49 * xp)) + (-(u58 * u8)) + (-(u58 * u9)) + (-(u68 * u73)) + (-(u73 * u74)) + (-(u11 * u54 * xp)) + (-(u80 * u82 * u84)) + (-(b[18].x1 * t172 * u63 * u66)) + (64.49793f * t106 * t111 * t301 * t306 * u44) + (64.49793f * t161 * t162 * t173 * t319 * u80 * u81) + (t293 * t298 * t300 * t307 * t314 * xp) + (b[15].x1 * t26 * t271 * t60 * u55 * u56 * u57) + (t293 * t295 * t298 * t300 * t307 * t315 * xp) + (t293 * t295 * t298 * t300 * t307 * t329 * xp) + (b[15].x1 * t26 * t289 * t59 * t60 * u55 * u56 * u57) + (64.49793f * b[18].x1 * t160 * t171 * t172 * t319 * u59 * u60 * u62)))))))); /* R */
+                const float u85 = (t111 * t312);
+                const float u86 = (t154 * t318);
+                spread += (0.5f * fabsf((u14 * ((-(u15 * u40)) + (-(u22 * ((-39.0f * u85) + (-39.0f * u86) + (64.49793f * t111 * t313) + (-(t295 * u48)) + (-(t295 * u49)) + (-(t59 * u51)) + (-(u28 * u52)) + (64.49793f * t161 * t162 * t174 * t319)))))))); /* mu_max */
+                const float u87 = ((t112 * t293) + (t293 * t296));
+                const float u88 = (u45 * u87);
+                const float u90 = ((t164 * u60) + (u60 * u79));
+                const float u89 = ((t50 * u56) + (u56 * u71));
+                spread += (2.925f * fabsf((u14 * ((u12 * ((-0.3f * u40) + (114.075f * t295 * u88))) + (-(u22 * ((-2.0f * u85) + (-2.0f * u86) + (3.3075862f * t111 * t313) + (-3.3075862f * t174 * u83) + (-3.3075862f * t295 * t312) + (-2.0f * t295 * t313) + (-2.0f * t59 * u50) + (-1257.7096f * u10 * u88) + (-1257.7096f * u65 * u82 * u90) + (760.5f * t144 * t301 * t306 * u87) + (3.3075862f * t161 * t162 * t174 * t319) + (760.5f * t106 * t295 * t301 * t306 * u87) + (1257.7096f * t109 * t295 * t301 * t306 * u87) + (760.5f * t154 * t26 * t61 * u72 * u89) + (1257.7096f * t160 * t171 * t173 * t319 * u81 * u90) + (760.5f * t26 * t4 * t59 * t61 * u72 * u89)))))))); /* k_t */
+                const float u91 = (u12 * u14);
+                const float u92 = (1.1111112f * u91);
+                spread += (0.064f * fabsf((b[11].x1 * u92))); /* K_TM */
+                spread += (0.04f * fabsf((-0.00026666667f * b[14].x1 * t290 * u91))); /* mu_DB */
+                const float u93 = (u12 * u20);
+                const float u94 = (637.93787f * u93);
+                const float u95 = ((4252.919f * u25) + (4252.919f * u32) + (7033.448f * t174 * u64) + (7033.448f * u10 * u19) + (-4252.919f * t144 * t298 * t299) + (-7033.448f * t160 * t171 * t174) + (-4252.919f * t106 * t295 * t298 * t299) + (-7033.448f * t109 * t295 * t298 * t299));
+                spread += (0.15f * fabsf((u14 * (u94 + (-(u22 * (-1046.0f + (-u95)))))))); /* b_ax */
+                const float u96 = (1055.0172f * u93);
+                const float u97 = ((7033.448f * u25) + (7033.448f * u32) + (7033.448f * t106 * u20) + (11631.868f * t109 * u20) + (7033.448f * t144 * u19) + (11631.868f * t174 * u64) + (-11631.868f * t160 * t171 * t174) + (-11631.868f * t106 * t111 * t298 * t299));
+                spread += (0.15f * fabsf((u14 * ((-u96) + (-(u22 * (-1729.8676f + (-u97)))))))); /* b_ay */
+                const float u100 = fdi_gen_sign(t121);
+                const float u101 = fdi_gen_heaviside((t115 + (-fdi_gen_max(0.5f, t291))));
+                const float u102 = (1.0f / (t292 * t292 * t292));
+                const float u98 = ((0.425f * t106) + (2.199f * t109));
+                const float u103 = ((-190.125f * u2 * ((-0.85f * t106) + (-4.398f * t109))) + (-190.125f * t111 * t293 * ((4.398f * t106) + (-0.85f * t109))) + (380.25f * t112 * u100 * u101 * u102 * u98) + (380.25f * t296 * u100 * u101 * u102 * u98));
+                const float u104 = (u103 * u45);
+                const float u99 = (-u98);
+                const float u105 = ((2.199f * t106) + (-0.425f * t109));
+                const float u106 = ((2.199f * t160) + (-1.025f * t161));
+                const float u121 = (t295 * u104);
+                const float u109 = fabsf(t58);
+                const float u110 = fdi_gen_max(0.5f, fdi_gen_max(t12, u109));
+                const float u111 = (1.0f / (u110));
+                const float u112 = (1.0f / (u110 * u110));
+                const float u113 = (380.25f * u112);
+                const float u114 = (1.0f + (t50 * u113) + (u113 * u71));
+                const float u123 = (190.125f * u112);
+                const float u118 = fdi_gen_sign(t58);
+                const float u117 = ((0.199f * t3) + (-0.425f * t4));
+                const float u119 = (-u117);
+                const float u120 = fdi_gen_heaviside((u109 + (-fdi_gen_max(0.5f, t12))));
+                const float u124 = (1.0f / (u110 * u110 * u110));
+                const float u125 = (u111 * (1.0f / (u114 * sqrtf(u114))) * ((-(t49 * u123 * ((-0.85f * t3) + (-0.398f * t4)))) + (-(t59 * u123 * ((0.398f * t3) + (-0.85f * t4)))) + (380.25f * t50 * u118 * u119 * u120 * u124) + (380.25f * u118 * u119 * u120 * u124 * u71)));
+                const float u115 = (1.0f / (sqrtf(u114)));
+                const float u116 = (u111 * u115 * u67);
+                const float u107 = fdi_gen_sign((t165 + (-(t107 * t160))));
+                const float u108 = fdi_gen_heaviside((t166 + (-fdi_gen_max(0.5f, u61))));
+                const float u122 = ((-190.125f * u75 * ((-4.398f * t160) + (2.05f * t161))) + (-190.125f * t162 * u60 * ((2.05f * t160) + (4.398f * t161))) + (380.25f * t164 * u106 * u107 * u108 * u77) + (380.25f * u106 * u107 * u108 * u77 * u79));
+                spread += (0.006f * fabsf((u14 * ((u12 * ((-(u104 * u47)) + (-(u41 * u99)) + (5.85f * t293 * t295 * t298 * t300 * u100 * u101 * u98))) + (-(u22 * ((-39.0f * t312 * u105) + (64.49793f * t313 * u105) + (-(u104 * u7)) + (u106 * u53) + (-(u121 * u8)) + (-(u121 * u9)) + (-(u125 * u68)) + (-(u125 * u74)) + (-(u48 * u99)) + (-(u49 * u99)) + (-(t3 * u116 * ((-0.425f * t3) + (-0.199f * t4)))) + (-(t4 * u116 * u117)) + (-(u122 * u82 * u84)) + (64.49793f * t161 * t174 * t319 * ((1.025f * t160) + (2.199f * t161))) + (64.49793f * t106 * t111 * t301 * t306 * u103) + (-(t172 * u106 * u107 * u108 * u66)) + (64.49793f * t161 * t162 * t173 * t319 * u122 * u81) + (-(t293 * u100 * u101 * u3 * u54 * u98)) + (t26 * t271 * u112 * u115 * u118 * u119 * u120) + (t293 * t298 * t300 * t314 * u100 * u101 * u98) + (64.49793f * t160 * t171 * t172 * t319 * u106 * u107 * u108 * u60) + (t26 * t289 * t59 * u112 * u115 * u118 * u119 * u120) + (t293 * t295 * t298 * t300 * t315 * u100 * u101 * u98) + (t293 * t295 * t298 * t300 * t329 * u100 * u101 * u98)))))))); /* b_r */
+                spread += (0.7824f * fabsf((u14 * (u94 + (u22 * u95))))); /* g_x */
+                spread += (0.4899f * fabsf((u14 * ((-u96) + (u22 * u97))))); /* g_y */
+                spread += (700.0f * fabsf((u14 * (u5 + (t105 * u0))))); /* F_res */
+                spread += (20.0f * fabsf((-(t290 * u92)))); /* M_rr3 */
+                io->spread[io->at[8]] = spread;
+                if (!fdi_float_is_finite(spread))
+                {
+                    io->failed |= 0x00000100U;
+                }
+            }
 #if FDI_GEN_SENSITIVITIES
             if ((io->sens_mask & 0x00000100U) != 0U) /* d r / d f: f1 f2 f3 f4 f5 f6 f8 f9 f12 f16 f18 f20 f21 f22 f25 */
             {
@@ -1956,6 +2717,155 @@ static void romo_gen_step(fdi_gen_io_t *io)
             if (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK)
             {
                 io->failed |= 0x00000200U;
+            }
+            if (io->spread != NULL) /* worst-case spread: sum |d r / d theta| * dtheta over m Iz h_CoG R mu_max k_t K_TM mu_DB b_r g_x g_y F_res M_rr2 M_rr4 */
+            {
+                float spread = 0.0f; /* no constant term */
+                const float u1 = (2.0f + (-2.0f * (t330 * t330)));
+                const float u2 = (b[14].x1 * u1);
+                const float u5 = (t333 * t335);
+                const float u6 = (t187 * t338 * t342 * t343 * u5);
+                const float u3 = (5.85f * t335);
+                const float u4 = (t187 * t345);
+                const float u7 = ((1.5795f * t347) + (-1.5795f * u6) + (u3 * u4));
+                const float u8 = ((0.00010666667f * u2) + u7);
+                const float u0 = (t350 * t350);
+                const float u9 = (1.0f / (fdi_gen_min(-0.1f, ((-u8) + (-(u0 * (1.0f / (65025.0f + u0)) * fdi_gen_max(0.0f, (12.566371f + (-u8)))))))));
+                const float u18 = (-u8);
+                const float u12 = (b[2].x1 * t71);
+                const float u10 = (0.104253545f * b[3].x2);
+                const float u11 = (0.14113773f * b[2].x2);
+                const float u13 = (0.104253545f * u12);
+                const float u14 = (0.1724138f * t66);
+                const float u15 = (0.1724138f * b[4].x2);
+                const float u16 = (2.4525f + u14 + u15);
+                const float u17 = (t340 * (u10 + (-u11) + (-u13) + u16));
+                const float u23 = (39.0f * t163);
+                const float u24 = (39.0f * t161);
+                const float u25 = (t335 * u24);
+                const float u19 = ((-u10) + u13);
+                const float u20 = ((-0.20368986f * b[2].x2) + u16 + u19);
+                const float u21 = (t159 * t97);
+                const float u22 = (39.0f * u21);
+                const float u26 = (2.4525f + u11 + (-u14) + (-u15) + u19);
+                const float u27 = (64.49793f * t62);
+                const float u28 = (t3 * t59);
+                spread += (261.5f * fabsf((u9 * ((-(u18 * ((-1.3537931f * b[2].x2) + (1.6537931f * t66) + (-u12) + b[3].x2 + (1.6537931f * b[4].x2) + (-(u17 * u23)) + (-(u17 * u25)) + (-(u20 * u22)) + (-(u26 * u27 * u28)) + (64.49793f * t4 * t49 * t62 * u26) + (64.49793f * t79 * t84 * t97 * u20)))) + (-(t350 * u17 * u3)))))); /* m */
+                const float u29 = (u18 * u9);
+                spread += (169.5f * fabsf((-1.3793104f * b[2].x2 * u29))); /* Iz */
+                const float u30 = (218.09842f * b[3].x2);
+                const float u31 = (218.09842f * u12);
+                const float u32 = ((360.68967f * t66) + (360.68967f * b[4].x2));
+                const float u35 = ((-426.11917f * b[2].x2) + (-u30) + u31 + u32);
+                const float u33 = ((-295.26013f * b[2].x2) + u30 + (-u31) + u32);
+                const float u36 = (t340 * u23);
+                const float u37 = (t340 * u25);
+                const float u38 = (-u33);
+                const float u34 = (t340 * u3);
+                spread += (0.075f * fabsf((u9 * ((-(u18 * ((-(u22 * u35)) + (-(u33 * u36)) + (-(u33 * u37)) + (-(u27 * u28 * u38)) + (64.49793f * t4 * t49 * t62 * u38) + (64.49793f * t79 * t84 * t97 * u35)))) + (-(t350 * u33 * u34)))))); /* h_CoG */
+                const float u39 = (t335 * t347);
+                const float u40 = (5.85f * t347);
+                const float u41 = (t187 * u3);
+                const float u44 = ((1.0f / (t337 * sqrtf(t337))) * t339);
+                const float u42 = (380.25f * xp);
+                const float u43 = (t344 * u42);
+                const float u45 = (u44 * ((t164 * u43) + (t336 * u43) + (-(u42 * u5))));
+                const float u47 = fdi_gen_tanh((2.0f * b[16].x1));
+                const float u48 = (b[13].x1 * u47);
+                const float u49 = ((1.6f * b[10].x1) + (-0.9f * b[16].x2) + (-9.6e-05f * u48));
+                const float u62 = (t187 * u23);
+                const float u46 = (t347 * u24);
+                const float u50 = fdi_gen_sign(b[16].x1);
+                const float u52 = fdi_gen_heaviside((t86 + (-fdi_gen_max(0.5f, t90))));
+                const float u59 = (u50 * u52);
+                const float u51 = (1.0f / (t91 * t91));
+                const float u60 = (t84 * u51);
+                const float u61 = (64.49793f * t101 * t79 * t95 * u60);
+                const float u63 = (39.0f * t101);
+                const float u64 = (t159 * u63);
+                const float u65 = (t94 * u51);
+                const float u66 = (380.25f * b[16].x1);
+                const float u67 = (1.0f / (t91 * t91 * t91));
+                const float u68 = (u59 * u66);
+                const float u69 = (t94 * t94);
+                const float u70 = ((-(u65 * u66)) + (t85 * u67 * u68) + (u67 * u68 * u69));
+                const float u71 = (1.0f / ((1.0f + (t85 * t92) + (t92 * u69)) * sqrtf((1.0f + (t85 * t92) + (t92 * u69)))));
+                const float u72 = (t96 * u71);
+                const float u73 = (t3 * t77);
+                const float u74 = (64.49793f * u73);
+                const float u53 = fdi_gen_sign(b[15].x1);
+                const float u55 = fdi_gen_heaviside((t12 + (-fdi_gen_max(0.5f, t53))));
+                const float u58 = (u53 * u55);
+                const float u75 = (380.25f * b[15].x1);
+                const float u76 = ((1.0f / (t54 * t54 * t54)) * u58 * u75);
+                const float u77 = (t59 * t59);
+                const float u54 = (1.0f / (t54 * t54));
+                const float u78 = ((t50 * u76) + (u76 * u77) + (-(t59 * u54 * u75)));
+                const float u79 = (1.0f / ((1.0f + (t50 * t55) + (t55 * u77)) * sqrtf((1.0f + (t50 * t55) + (t55 * u77)))));
+                const float u80 = (t61 * u79);
+                const float u56 = (t4 * t49 * t76);
+                const float u57 = (64.49793f * u56);
+                spread += (0.00405f * fabsf((u9 * ((t350 * ((-21.666666f * u39) + (-(u40 * xp)) + (-(u41 * u45)) + (5.85f * t187 * t333 * t335 * t338 * t342 * t343 * xp))) + (-(u18 * ((27.434843f * t79 * u49) + (45.37155f * t80 * u49) + (-(u45 * u62)) + (-(u46 * xp)) + (-(b[16].x1 * u59 * u61)) + (-(t187 * u25 * u45)) + (-(u64 * u70 * u72)) + (-(u74 * u78 * u80)) + (-(b[15].x1 * t3 * t76 * u27)) + (-(b[15].x1 * t60 * u54 * u57 * u58)) + (64.49793f * t101 * t79 * t84 * t96 * u70 * u71) + (t333 * t338 * t342 * t343 * t348 * xp) + (64.49793f * t4 * t49 * t61 * t76 * u78 * u79) + (b[15].x1 * t351 * t60 * t77 * u53 * u54 * u55) + (39.0f * b[16].x1 * t101 * t159 * t95 * u50 * u51 * u52) + (t187 * t333 * t338 * t342 * t343 * t349 * xp)))))))); /* R */
+                const float u81 = (t163 * t347);
+                spread += (0.5f * fabsf((u9 * ((-5.85f * t350 * u39) + (-(u18 * ((-39.0f * u81) + (-(t101 * u22)) + (-(u24 * u39)) + (-(u27 * u73)) + (64.49793f * t101 * t79 * t84 * t97) + (64.49793f * t4 * t49 * t62 * t76)))))))); /* mu_max */
+                const float u82 = (t187 * u44);
+                const float u83 = (u82 * ((t164 * t333) + (t333 * t336)));
+                const float u84 = (t335 * u83);
+                const float u87 = (t101 * u72 * ((t85 * u51) + (u51 * u69)));
+                const float u85 = (3.3075862f * t62);
+                const float u88 = (1257.7096f * u80 * ((t50 * u54) + (u54 * u77)));
+                const float u86 = (t79 * t84);
+                spread += (2.925f * fabsf((u9 * ((t350 * ((-0.3f * u39) + (114.075f * u84))) + (-(u18 * ((-2.0f * u81) + (-2.0f * t101 * u21) + (760.5f * t159 * u87) + (-2.0f * t161 * u39) + (760.5f * t161 * u84) + (760.5f * t163 * u83) + (u56 * u85) + (-(u56 * u88)) + (-(u73 * u85)) + (u73 * u88) + (-1257.7096f * u86 * u87) + (3.3075862f * t101 * t97 * u86)))))))); /* k_t */
+                const float u89 = (1.1111112f * t350);
+                const float u90 = (7.4074073f * t79);
+                const float u91 = (12.2503195f * t80);
+                spread += (0.064f * fabsf((u9 * ((b[12].x1 * u89) + (-(u18 * ((-(b[10].x1 * u90)) + (-(b[10].x1 * u91))))))))); /* K_TM */
+                spread += (0.04f * fabsf((u9 * ((-(u18 * ((0.0017777778f * t79 * u48) + (0.0029400766f * t80 * u48)))) + (-0.00026666667f * b[14].x1 * t330 * t350))))); /* mu_DB */
+                const float u100 = (1.0f / (t332 * t332 * t332));
+                const float u92 = ((2.199f * t160) + (-1.025f * t161));
+                const float u98 = fdi_gen_sign((t165 + (-(t107 * t160))));
+                const float u99 = fdi_gen_heaviside((t166 + (-fdi_gen_max(0.5f, t331))));
+                const float u101 = ((-190.125f * u5 * ((-4.398f * t160) + (2.05f * t161))) + (-190.125f * t162 * t333 * ((2.05f * t160) + (4.398f * t161))) + (380.25f * t164 * u100 * u92 * u98 * u99) + (380.25f * t336 * u100 * u92 * u98 * u99));
+                const float u102 = (u101 * u44);
+                const float u94 = (180.34483f * b[3].x1);
+                const float u95 = (109.04921f * b[4].x1);
+                const float u96 = ((326.3053f * b[2].x1) + u94 + (-u95));
+                const float u97 = (-u96);
+                const float u93 = (-u92);
+                const float u104 = ((109.89152f * b[2].x1) + (-u94) + (-u95));
+                const float u109 = fabsf(t58);
+                const float u110 = fdi_gen_max(0.5f, fdi_gen_max(t12, u109));
+                const float u111 = (1.0f / (u110 * u110));
+                const float u112 = (380.25f * u111);
+                const float u113 = (1.0f + (t50 * u112) + (u112 * u77));
+                const float u114 = (1.0f / (sqrtf(u113)));
+                const float u115 = (1.0f / (u110));
+                const float u116 = (64.49793f * u114 * u115);
+                const float u105 = fdi_gen_sign(t89);
+                const float u106 = ((-1.025f * t79) + (-0.199f * t80));
+                const float u107 = fdi_gen_heaviside((t90 + (-fdi_gen_max(0.5f, t86))));
+                const float u120 = ((-190.125f * u60 * ((-0.398f * t79) + (2.05f * t80))) + (-190.125f * u65 * ((2.05f * t79) + (0.398f * t80))) + (380.25f * t85 * u105 * u106 * u107 * u67) + (380.25f * u105 * u106 * u107 * u67 * u69));
+                const float u103 = ((-0.199f * t79) + (1.025f * t80));
+                const float u108 = ((0.199f * t3) + (-0.425f * t4));
+                const float u121 = (1.0f / (u113 * sqrtf(u113)));
+                const float u122 = (190.125f * u111);
+                const float u117 = fdi_gen_sign(t58);
+                const float u118 = (-u108);
+                const float u119 = fdi_gen_heaviside((u109 + (-fdi_gen_max(0.5f, t12))));
+                const float u123 = (1.0f / (u110 * u110 * u110));
+                const float u124 = ((-(t49 * u122 * ((-0.85f * t3) + (-0.398f * t4)))) + (-(t59 * u122 * ((0.398f * t3) + (-0.85f * t4)))) + (380.25f * t50 * u117 * u118 * u119 * u123) + (380.25f * u117 * u118 * u119 * u123 * u77));
+                spread += (0.006f * fabsf((u9 * ((t350 * ((-(u102 * u41)) + (-(u34 * u97)) + (-(u40 * u93)) + (5.85f * t187 * t333 * t335 * t338 * u92 * u98 * u99))) + (-(u18 * ((-3129.9207f * b[2].x1) + (-1729.8676f * b[3].x1) + (1046.0f * b[4].x1) + (-(u102 * u62)) + (-(u104 * u22)) + (-(u36 * u97)) + (-(u37 * u97)) + (-(u46 * u93)) + (-39.0f * t160 * t347 * ((1.025f * t160) + (2.199f * t161))) + (-(u101 * u25 * u82)) + (-(u116 * u28 * u96)) + (-(u120 * u64 * u72)) + (64.49793f * t101 * t79 * t97 * u103) + (-(t3 * t76 * u108 * u116)) + (64.49793f * t79 * t84 * t97 * u104) + (-(t80 * t97 * u103 * u63)) + (-(u105 * u106 * u107 * u61)) + (-(u115 * u121 * u124 * u74)) + (64.49793f * t4 * t49 * u114 * u115 * u96) + (64.49793f * t4 * t76 * u114 * u115 * ((-0.425f * t3) + (-0.199f * t4))) + (64.49793f * t101 * t79 * t84 * t96 * u120 * u71) + (t333 * t338 * t348 * u92 * u98 * u99) + (64.49793f * t4 * t49 * t76 * u115 * u121 * u124) + (-(u111 * u114 * u117 * u118 * u119 * u57)) + (39.0f * t101 * t159 * t95 * u105 * u106 * u107 * u51) + (t187 * t333 * t338 * t349 * u92 * u98 * u99) + (t351 * t77 * u111 * u114 * u117 * u118 * u119)))))))); /* b_r */
+                const float u125 = (t335 * u4);
+                spread += (0.7824f * fabsf((u9 * ((1652.157f * t347) + (6119.1f * u125) + (0.11157333f * u2) + (-1652.157f * u6))))); /* g_x */
+                spread += (0.4899f * fabsf((u9 * ((2732.326f * t347) + (10119.726f * u125) + (0.18451922f * u2) + (-2732.326f * u6))))); /* g_y */
+                spread += (700.0f * fabsf((u9 * (u7 + (t105 * u1))))); /* F_res */
+                spread += (20.0f * fabsf((-(u29 * ((u47 * u90) + (u47 * u91)))))); /* M_rr2 */
+                spread += (20.0f * fabsf((-(t330 * u89 * u9)))); /* M_rr4 */
+                io->spread[io->at[9]] = spread;
+                if (!fdi_float_is_finite(spread))
+                {
+                    io->failed |= 0x00000200U;
+                }
             }
 #if FDI_GEN_SENSITIVITIES
             if ((io->sens_mask & 0x00000200U) != 0U) /* d r / d f: f3 f4 f5 f6 f7 f9 f11 f13 f15 f17 f18 f19 f21 f22 f23 */
@@ -2289,6 +3199,41 @@ static void romo_gen_step(fdi_gen_io_t *io)
             {
                 io->failed |= 0x00000400U;
             }
+            if (io->spread != NULL) /* worst-case spread: sum |d r / d theta| * dtheta over m Iz h_CoG R mu_max k_t K_TM mu_DB b_ay b_r g_x g_y F_res M_rr1 M_rr3 */
+            {
+                float spread = 0.0f; /* m Iz h_CoG R mu_max k_t K_TM mu_DB g_x F_res M_rr1 M_rr3 */
+                const float u4 = (t106 * t423);
+                const float u5 = (t387 * t442);
+                const float u6 = (t4 * t404);
+                const float u7 = (t419 * t446);
+                const float u8 = (b[2].x1 * t428);
+                const float u9 = (t427 * t453);
+                const float u11 = (64.49793f * t362);
+                const float u12 = (t450 * u11);
+                const float u10 = (4252.919f * b[2].x1);
+                const float u13 = (t432 * t438);
+                const float u14 = (t381 * t432 * t437);
+                const float u15 = ((64.49793f * t403) + (39.0f * t454) + (39.0f * t456) + (39.0f * u4) + (39.0f * u5) + (39.0f * u6) + (39.0f * u7) + (7033.448f * u8) + (64.49793f * u9) + (t381 * u12) + (-(t384 * u12)) + (t425 * u10) + (-(t430 * u10)) + (u11 * u13) + (-(u11 * u14)));
+                const float u19 = (64.49793f * t378);
+                const float u1 = (b[2].x1 * t377);
+                const float u2 = (7033.448f * u1);
+                const float u20 = ((-1046.0f * b[2].x1) + (-u15) + (-(t359 * u19)) + (-(t380 * u19)) + (-(t381 * u2)) + (-64.49793f * t4 * t424 * t441) + (t372 * t377 * t458 * t80));
+                const float u17 = (810.5049f * t362);
+                const float u18 = (t450 * u17);
+                const float u3 = (t365 * t79);
+                const float u16 = (53443.758f * b[2].x1);
+                const float u0 = (t3 * t441);
+                const float u21 = (1.0f / (fdi_gen_min(-0.1f, (u20 * (1.0f / (5382400.0f + (u20 * u20))) * ((13144.424f * b[2].x1) + (810.5049f * t403) + (490.08844f * t454) + (490.08844f * t456) + (490.08844f * u4) + (490.08844f * u5) + (490.08844f * u6) + (490.08844f * u7) + (88384.914f * u8) + (810.5049f * u9) + (t359 * t379) + (t379 * t380) + (t381 * u18) + (t383 * u3) + (-88384.914f * t384 * u1) + (-(t384 * u18)) + (t425 * u16) + (-(t430 * u16)) + (t444 * u0) + (u13 * u17) + (-(u14 * u17)))))));
+                const float u22 = (u21 * (t177 + u15 + (t359 * t457) + (t380 * t457) + (-(t384 * u2)) + (t462 * u0) + (t377 * t458 * u3)));
+                spread += (0.15f * fabsf(u22)); /* b_ay */
+                spread += (0.006f * fabsf((u20 * u21 * ((0.6f * b[2].x1) + b[3].x1)))); /* b_r */
+                spread += (0.4899f * fabsf(u22)); /* g_y */
+                io->spread[io->at[10]] = spread;
+                if (!fdi_float_is_finite(spread))
+                {
+                    io->failed |= 0x00000400U;
+                }
+            }
 #if FDI_GEN_SENSITIVITIES
             if ((io->sens_mask & 0x00000400U) != 0U) /* d r / d f: f2 f3 f4 f6 f7 f8 f10 f12 f14 f16 f18 f19 f20 f22 f23 f24 */
             {
@@ -2396,6 +3341,137 @@ static void romo_gen_step(fdi_gen_io_t *io)
             if (fdi_gen_obs_store(o, xh, fx + (l * value)) != FDI_OK)
             {
                 io->failed |= 0x00000800U;
+            }
+            if (io->spread != NULL) /* worst-case spread: sum |d r / d theta| * dtheta over m Iz h_CoG R mu_max k_t K_TM mu_DB b_ax b_ay b_r g_x g_y F_res M_rr1 M_rr2 M_rr3 */
+            {
+                float spread = 0.0f; /* no constant term */
+                const float u3 = (t493 * t508);
+                const float u2 = (5.85f * t493);
+                const float u4 = ((1.5795f * t500) + (-1.5795f * u3) + (t506 * u2));
+                const float u1 = (2.0f + (-2.0f * (t488 * t488)));
+                const float u5 = (u4 + (0.00010666667f * b[13].x1 * u1));
+                const float u0 = (t510 * t510);
+                const float u6 = (1.0f / (fdi_gen_min(-0.1f, ((-u5) + (-(u0 * (1.0f / (61.9369f + u0)) * fdi_gen_max(0.0f, (12.566371f + (-u5)))))))));
+                const float u10 = (t510 * u2);
+                const float u11 = (t496 * t497);
+                const float u12 = (u10 * u11);
+                const float u7 = (0.104253545f * b[0].x1);
+                const float u8 = (0.1724138f * b[1].x1);
+                const float u9 = (2.4525f + (-u7) + u8);
+                const float u13 = (-u5);
+                const float u14 = (39.0f * t279);
+                const float u15 = (2.4525f + (-u7) + (-u8));
+                const float u16 = (t154 * t62);
+                const float u17 = (39.0f * u16);
+                const float u20 = (t4 * t49);
+                const float u21 = (t62 * u20);
+                const float u22 = (64.49793f * u21);
+                const float u18 = (t280 * u11);
+                const float u19 = (64.49793f * u18);
+                spread += (261.5f * fabsf((u6 * ((-(u12 * u9)) + (-(u13 * (b[0].x1 + (-1.6537931f * b[1].x1) + (-(u14 * (2.4525f + u7 + (-u8)))) + (-(u15 * u17)) + (-(u15 * u22)) + (-(u19 * u9)) + (64.49793f * t493 * t496 * t497 * t80 * u9)))))))); /* m */
+                const float u23 = (u13 * u6);
+                spread += (169.5f * fabsf((1.3793104f * b[2].x2 * u23))); /* Iz */
+                const float u24 = (218.09842f * b[0].x1);
+                const float u25 = (360.68967f * b[1].x1);
+                const float u26 = (u24 + (-u25));
+                const float u27 = (-u26);
+                const float u28 = ((-u24) + (-u25));
+                spread += (0.075f * fabsf((u6 * ((-(u12 * u27)) + (-(u13 * ((-(u14 * u26)) + (-(u17 * u28)) + (-(u19 * u27)) + (-(u22 * u28)) + (64.49793f * t493 * t496 * t497 * t80 * u27)))))))); /* h_CoG */
+                const float u29 = (t493 * t500);
+                const float u35 = (1.0f / (t495 * sqrtf(t495)));
+                const float u36 = (t499 * u35);
+                const float u31 = (t491 * t493);
+                const float u32 = (380.25f * xp);
+                const float u33 = (1.0f / (t490 * t490 * t490));
+                const float u34 = (t504 * u32);
+                const float u37 = (u36 * ((-(u31 * u32)) + (t494 * u33 * u34) + (t85 * u33 * u34)));
+                const float u30 = (5.85f * t500);
+                const float u39 = fdi_gen_tanh((2.0f * b[17].x1));
+                const float u40 = (b[14].x1 * u39);
+                const float u41 = fdi_gen_tanh((2.0f * b[15].x1));
+                const float u42 = (b[13].x1 * u41);
+                const float u43 = ((1.6f * b[9].x1) + (-0.9f * b[15].x2) + (-9.6e-05f * u42));
+                const float u53 = (64.49793f * t280);
+                const float u44 = (1.0f / (t54 * t54));
+                const float u45 = (fdi_gen_heaviside((t12 + (-fdi_gen_max(0.5f, t53)))) * fdi_gen_sign(b[15].x1));
+                const float u46 = (b[15].x1 * t60 * u44 * u45);
+                const float u51 = (64.49793f * t26);
+                const float u52 = (u20 * u51);
+                const float u65 = (t59 * t59);
+                const float u66 = (t61 * (1.0f / ((1.0f + (t50 * t55) + (t55 * u65)) * sqrtf((1.0f + (t50 * t55) + (t55 * u65))))));
+                const float u63 = (380.25f * b[15].x1);
+                const float u64 = ((1.0f / (t54 * t54 * t54)) * u45 * u63);
+                const float u67 = (u66 * ((t50 * u64) + (u64 * u65) + (-(t59 * u44 * u63))));
+                const float u49 = (39.0f * t300);
+                const float u50 = (t144 * u49);
+                const float u58 = (t229 * t229);
+                const float u59 = (t231 * (1.0f / ((1.0f + (t112 * t227) + (t227 * u58)) * sqrtf((1.0f + (t112 * t227) + (t227 * u58))))));
+                const float u60 = (u50 * u59);
+                const float u48 = (1.0f / (t226 * t226));
+                const float u54 = (t229 * u48);
+                const float u55 = (380.25f * b[17].x1);
+                const float u56 = (1.0f / (t226 * t226 * t226));
+                const float u47 = (fdi_gen_heaviside((t225 + (-fdi_gen_max(0.5f, t115)))) * fdi_gen_sign(b[17].x1));
+                const float u57 = (u47 * u55);
+                const float u61 = (39.0f * t26);
+                const float u62 = (t154 * u61);
+                const float u38 = (64.49793f * t80);
+                spread += (0.00405f * fabsf((u6 * ((t510 * ((-21.666666f * u29) + (-(u2 * u37)) + (-(u30 * xp)) + (5.85f * t493 * t508 * xp))) + (-(u13 * ((27.434843f * t106 * ((1.6f * b[11].x1) + (-0.9f * b[17].x2) + (-9.6e-05f * u40))) + (-45.37155f * t3 * u43) + (27.434843f * t4 * u43) + (-(u37 * u53)) + (u46 * u52) + (-(u52 * u67)) + (-(u60 * ((-(u54 * u55)) + (t112 * u56 * u57) + (u56 * u57 * u58)))) + (-(u62 * u67)) + (t26 * t271 * u46) + (t493 * u37 * u38) + (t500 * u38 * xp) + (t508 * t509 * xp) + (-(u3 * u38 * xp)) + (b[17].x1 * t230 * u47 * u48 * u50)))))))); /* R */
+                const float u68 = (t154 * t318);
+                const float u69 = (t280 * t500);
+                const float u70 = (t318 * u20);
+                spread += (0.5f * fabsf((u6 * ((-(t500 * u10)) + (-(u13 * ((-39.0f * u68) + (-64.49793f * u69) + (-64.49793f * u70) + (-(t300 * u14)) + (64.49793f * t493 * t500 * t80)))))))); /* mu_max */
+                const float u71 = ((t491 * t494) + (t491 * t85));
+                const float u73 = (t26 * u66 * ((t50 * u44) + (u44 * u65)));
+                const float u72 = (u36 * u71);
+                spread += (2.925f * fabsf((u6 * ((t510 * ((-0.3f * u29) + (114.075f * t493 * t499 * u35 * u71))) + (-(u13 * ((-2.0f * u68) + (-3.3075862f * u69) + (-3.3075862f * u70) + (760.5f * t154 * u73) + (-2.0f * t279 * t300) + (1257.7096f * t280 * u72) + (3.3075862f * t80 * u29) + (1257.7096f * u20 * u73) + (-1257.7096f * t493 * t80 * u72) + (760.5f * t144 * t300 * u59 * ((t112 * u48) + (u48 * u58)))))))))); /* k_t */
+                const float u74 = (1.1111112f * t510);
+                const float u75 = (7.4074073f * t106);
+                spread += (0.064f * fabsf((u6 * ((b[10].x1 * u74) + (-(u13 * ((12.2503195f * b[9].x1 * t3) + (-7.4074073f * b[9].x1 * t4) + (-(b[11].x1 * u75))))))))); /* K_TM */
+                spread += (0.04f * fabsf((u6 * ((-(u13 * ((0.0017777778f * t106 * u40) + (-0.0029400766f * t3 * u42) + (0.0017777778f * t4 * u42)))) + (-0.00026666667f * b[13].x1 * t488 * t510))))); /* mu_DB */
+                const float u76 = (t493 * u11);
+                const float u77 = (t510 * u76);
+                const float u78 = (637.93787f * u77);
+                const float u79 = ((-4252.919f * t279) + (4252.919f * u16) + (7033.448f * u18) + (7033.448f * u21) + (-7033.448f * t493 * t496 * t497 * t80));
+                spread += (0.15f * fabsf((u6 * ((-u78) + (-(u13 * (-1046.0f + (-u79)))))))); /* b_ax */
+                const float u80 = (1055.0172f * u77);
+                const float u81 = ((7033.448f * t279) + (7033.448f * u16) + (11631.868f * u21) + (11631.868f * t80 * u76) + (-11631.868f * t280 * t496 * t497));
+                spread += (0.15f * fabsf((u6 * (u80 + (-(u13 * (1729.8676f + (-u81)))))))); /* b_ay */
+                const float u83 = fdi_gen_sign(t89);
+                const float u82 = ((1.025f * t79) + (0.199f * t80));
+                const float u84 = (-u82);
+                const float u85 = fdi_gen_heaviside((t90 + (-fdi_gen_max(0.5f, t489))));
+                const float u86 = ((-190.125f * u31 * ((2.05f * t79) + (0.398f * t80))) + (-190.125f * t491 * t84 * ((-0.398f * t79) + (2.05f * t80))) + (380.25f * t494 * u33 * u83 * u84 * u85) + (380.25f * t85 * u33 * u83 * u84 * u85));
+                const float u87 = (u36 * u86);
+                const float u91 = fabsf(t58);
+                const float u92 = fdi_gen_max(0.5f, fdi_gen_max(t12, u91));
+                const float u93 = (1.0f / (u92));
+                const float u94 = (1.0f / (u92 * u92));
+                const float u95 = (380.25f * u94);
+                const float u96 = (1.0f + (t50 * u95) + (u65 * u95));
+                const float u102 = (190.125f * u94);
+                const float u100 = ((-0.199f * t3) + (0.425f * t4));
+                const float u101 = fdi_gen_heaviside((u91 + (-fdi_gen_max(0.5f, t12))));
+                const float u103 = (1.0f / (u92 * u92 * u92));
+                const float u99 = fdi_gen_sign(t58);
+                const float u104 = (u93 * (1.0f / (u96 * sqrtf(u96))) * ((-(t49 * u102 * ((-0.85f * t3) + (-0.398f * t4)))) + (-(t59 * u102 * ((0.398f * t3) + (-0.85f * t4)))) + (380.25f * t50 * u100 * u101 * u103 * u99) + (380.25f * u100 * u101 * u103 * u65 * u99)));
+                const float u88 = fdi_gen_sign(t121);
+                const float u89 = ((0.425f * t106) + (2.199f * t109));
+                const float u90 = fdi_gen_heaviside((t115 + (-fdi_gen_max(0.5f, t225))));
+                const float u97 = (1.0f / (sqrtf(u96)));
+                const float u98 = (u93 * u97 * ((-0.425f * t3) + (-0.199f * t4)));
+                spread += (0.006f * fabsf((u6 * ((t510 * ((-(u2 * u87)) + (-(u30 * u82)) + (5.85f * t491 * t493 * t496 * t498 * u83 * u84 * u85))) + (-(u13 * ((-(u104 * u52)) + (-(u104 * u62)) + (-(u53 * u87)) + (-(u60 * ((-190.125f * u54 * ((-0.85f * t106) + (-4.398f * t109))) + (-190.125f * t111 * u48 * ((4.398f * t106) + (-0.85f * t109))) + (380.25f * t112 * u56 * u88 * u89 * u90) + (380.25f * u56 * u58 * u88 * u89 * u90)))) + (-(t3 * u61 * u98)) + (-(t4 * u51 * u98)) + (-64.49793f * t500 * t79 * ((-0.199f * t79) + (1.025f * t80))) + (64.49793f * t500 * t80 * u82) + (-(t109 * t232 * u49 * ((2.199f * t106) + (-0.425f * t109)))) + (64.49793f * t493 * t499 * t80 * u35 * u86) + (39.0f * t144 * t230 * t300 * u48 * u88 * u89 * u90) + (t26 * t271 * u100 * u101 * u94 * u97 * u99) + (t491 * t496 * t498 * t509 * u83 * u84 * u85) + (-(t496 * t498 * u31 * u38 * u83 * u84 * u85)) + (64.49793f * t26 * t4 * t49 * u100 * u101 * u94 * u97 * u99)))))))); /* b_r */
+                spread += (0.7824f * fabsf((u6 * ((-u78) + (u13 * u79))))); /* g_x */
+                spread += (0.4899f * fabsf((u6 * (u80 + (u13 * u81))))); /* g_y */
+                spread += (700.0f * fabsf((u6 * (u4 + (t247 * u1))))); /* F_res */
+                spread += (20.0f * fabsf((-(u23 * ((-12.2503195f * t3 * u41) + (7.4074073f * t4 * u41)))))); /* M_rr1 */
+                spread += (20.0f * fabsf((-(t488 * u6 * u74)))); /* M_rr2 */
+                spread += (20.0f * fabsf((-(u23 * u39 * u75)))); /* M_rr3 */
+                io->spread[io->at[11]] = spread;
+                if (!fdi_float_is_finite(spread))
+                {
+                    io->failed |= 0x00000800U;
+                }
             }
 #if FDI_GEN_SENSITIVITIES
             if ((io->sens_mask & 0x00000800U) != 0U) /* d r / d f: f1 f2 f3 f4 f5 f6 f7 f8 f10 f11 f12 f14 f15 f16 f18 f19 f20 f22 f24 */
