@@ -157,6 +157,7 @@ static fdi_diag_config_t good_config(const fdi_table_t *t)
     c.gen_param[2] = 0.0f;
     c.gen_param[3] = 0.0f;
     c.sensitivities = false;
+    c.adaptive = false;
     c.sens_every = 4U; /* the default's turns */
     c.cusum_k = 1.5f;
     c.cusum_h = 150.0f;
@@ -265,7 +266,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     c.mode = (fdi_iso_mode_t)(fz_u8(&in) % 3U);
     c.noise_allowance = fz_f32(&in);
     c.episode_clear_steps = (uint16_t)fz_u8(&in);
-    c.sensitivities = (fz_u8(&in) & 1U) != 0U;
+    const uint8_t flags = fz_u8(&in);
+    c.sensitivities = (flags & 1U) != 0U;
+    c.adaptive = (flags & 2U) != 0U;
     c.sens_every = (uint16_t)(fz_u8(&in) % 20U); /* beyond FDI_DIAG_MAX_SENS_EVERY too */
     bool good_cfg = false;
     if (fdi_diag_init(&d, &c) != FDI_OK)

@@ -47,6 +47,7 @@ static fdi_diag_config_t config(fdi_iso_mode_t mode)
     c.gen_param[2] = 0.0f;
     c.gen_param[3] = 0.0f;
     c.sensitivities = false;
+    c.adaptive = false;
     c.sens_every = 1U;
     /* The residuals are low-pass noise (correlation ~0.2 s), so the CUSUM needs a larger drift and
        threshold than for white noise: with k = 1.5 sigma the largest fault-free excursion in 1e6 steps

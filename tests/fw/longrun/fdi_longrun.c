@@ -72,6 +72,8 @@ static fdi_diag_config_t config(const fdi_table_t *table, uint16_t warmup)
     c.gen_param[2] = 0.0f;
     c.gen_param[3] = 0.0f;
     c.sensitivities = false;
+    c.adaptive = false;
+    c.sens_every = 1U;
     c.cusum_k = 1.5f; /* the values of tests/fw/test_fdi_diag.c */
     c.cusum_h = 150.0f;
     c.set_count = 10U;
