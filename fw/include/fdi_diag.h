@@ -87,6 +87,19 @@
  * + 2 a_i (the uncertainty may hide up to a_i of it and has raised the threshold by as much). Without
  * cfg->adaptive, or for hand-written generators, a_i = 0: the fixed gates.
  *
+ * On-line offset estimation (cfg->estimate, fdi_est.h): for each test of the mask, the slowly varying offset of its
+ * residual (the lumped sensor biases and gravity components on a grade or bank of the inertial tests) is estimated from
+ * the residual and removed before the evaluation: the test evaluates r_i - b_i at its fixed gate (its spread is not
+ * added: the estimator takes that uncertainty), and its result's residual is r_i - b_i. After its warm-up, the test
+ * averages warmup_steps samples into b_i before it becomes evaluable; then b_i forgets with estimate_tau. The estimate
+ * is frozen while the test alarms and for the rest of an isolation episode in which it alarmed (it is accused), so a
+ * fault that set its alarm is never absorbed; other tests' episodes do not hold it (a false alarm of an unrelated test
+ * would leave it stale for as long); |b_i| is bounded by the generator's spread a_i at the step (what the declared
+ * uncertainty explains) plus estimate_limit * sigma_i. A test restarted for lack of inputs or domain keeps its
+ * estimate. What the estimator cannot tell from a fault (one present at start-up, one slower than the nuisance may
+ * change, up to the bound) is stated in fdi_est.h. Only tests whose uncertainty enters with a constant sensitivity (an
+ * offset) belong in the mask (fdi_analysis.residuals.uncertainty_sensitivity.is_offset_like).
+ *
  * Fault sensitivities: at every step with cfg->sensitivities the diagnoser asks every generator for d r / d f_j
  * of the faults of its sens_mask (fdi_gen.h) and keeps the last ones: the result lists them per test (sens_offset,
  * sens; all offsets 0 without cfg->sensitivities). Without cfg->sensitivities they are computed only during an
@@ -115,6 +128,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "fdi_est.h"
 #include "fdi_eval.h"
 #include "fdi_frame.h"
 #include "fdi_gen.h"
@@ -171,6 +185,12 @@ typedef struct
     bool adaptive;                /* adaptive thresholds: each test of the set alarms beyond gate * sigma plus its
                                      generator's spread over the table's uncertainty at the step (fdi_gen.h); false:
                                      the fixed gates */
+    uint32_t estimate;            /* tests (bit i: test i) whose residual's slow offset is estimated on line and
+                                     removed ("On-line offset estimation" above); 0: none */
+    float estimate_tau;           /* [s] the estimators' forgetting time constant, >= the step (read when
+                                     estimate != 0) */
+    float estimate_limit;         /* [sigma] bound of an estimate beyond its test's spread, >= 0 (read when
+                                     estimate != 0) */
 } fdi_diag_config_t;
 
 typedef struct
@@ -193,6 +213,8 @@ typedef struct
     uint8_t n_tests;
     bool sensitivities;
     bool adaptive;      /* fdi_diag_config_t.adaptive */
+    uint32_t estimate;  /* fdi_diag_config_t.estimate */
+    float est_limit;    /* fdi_diag_config_t.estimate_limit */
     uint8_t sens_every; /* fdi_diag_config_t.sens_every */
     uint8_t n_domains;  /* runs of consecutive tests whose generators share a domain function (runnable()) */
     uint32_t signals;   /* signals read by some test (finiteness checked once per step) */
@@ -217,6 +239,7 @@ typedef struct
     uint32_t size_cleared; /* faults the reaction-size rule clears (fdi_iso_size_cleared) */
     fdi_eval_t eval[FDI_DIAG_MAX_TESTS];
     fdi_obs_t obs[FDI_DIAG_MAX_TESTS];     /* observer state of test i's generator */
+    fdi_est_t est[FDI_DIAG_MAX_TESTS];     /* test i's offset estimator (estimate) */
     fdi_svf_t filt[FDI_DIAG_MAX_FILTERS];  /* the set's bank, then the hand-written generators' filters */
     uint8_t filt_base[FDI_DIAG_MAX_TESTS]; /* hand-written test i: its filters at filt[filt_base[i]] */
     uint8_t slot_test[FDI_GEN_MAX_SLOTS];  /* slot k of the set -> its test */
@@ -246,8 +269,9 @@ typedef struct
 } fdi_diag_t; /* opaque by convention */
 
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
-FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (200U + (sizeof(void *) * 2U) +
-                                         (FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) + 37U)) +
+FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (208U + (sizeof(void *) * 2U) +
+                                         (FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) +
+                                                                sizeof(fdi_est_t) + 37U)) +
                                          (sizeof(fdi_svf_t) * FDI_DIAG_MAX_FILTERS) +
                                          (sizeof(float) * FDI_DIAG_MAX_SENS) +
                                          (((2U * sizeof(float)) + sizeof(uint16_t)) * FDI_TABLE_MAX_FAULTS) +
@@ -266,6 +290,7 @@ typedef struct
                                            spread, with an adaptive threshold */
     float spread[FDI_DIAG_MAX_TESTS];   /* last adaptive threshold term: the residual's worst-case spread over the
                                            table's uncertainty (units of r; 0 with the fixed gate) */
+    float offset[FDI_DIAG_MAX_TESTS];   /* test i's estimated offset, removed from its residual (0: not estimated) */
     uint32_t accused_mask;              /* tests accused in the current isolation episode */
     fdi_iso_result_t iso;               /* candidates and isolability class (detected: episode active) */
     bool in_envelope;                   /* the frame was inside the table's calibrated envelope (or it has none):
@@ -280,8 +305,8 @@ typedef struct
    warm-up = the design point's settling time + 20 steps, exoneration, episodes ending after 3 s without alarm,
    noise allowance 3 sigma, generator parameters 0, no reported sensitivities, the fixed gates (adaptive thresholds
    are opt-in: over the whole declared envelope they hide most faults at their required sizes, README "Robust
-   diagnosis"), each test's sensitivities every 4th
-   step of an episode. BAD_ARG on NULL; BAD_TABLE when
+   diagnosis"), no offset estimation (estimate 0; tau 10 s, limit 0 sigma when set), each test's sensitivities
+   every 4th step of an episode. BAD_ARG on NULL; BAD_TABLE when
    the design point has no finite settling time (the table itself is checked by fdi_diag_init). */
 fdi_status_t fdi_diag_config_default(fdi_diag_config_t *cfg, const fdi_table_t *table);
 

@@ -40,6 +40,8 @@
 /* During an episode a test's sensitivities are computed every SENS_EVERY steps, the tests in turn (40 ms at 10 ms:
    a quarter of the tests' sensitivity code per step; the rule's decisions are confirmed over CLEAR_CONFIRM_S). */
 #define SENS_EVERY 4U
+/* the default forgetting time constant of the offset estimators (fdi_diag_config_t.estimate_tau) */
+#define ESTIMATE_TAU_S 10.0f
 
 /* The position of the lowest set bit of x != 0 (de Bruijn: x & -x times the sequence 0x077CB531 has a distinct top
    5 bits for each of the 32 powers of two). The isolation's loops over fault masks visit only their set bits with
@@ -145,6 +147,9 @@ fdi_status_t fdi_diag_config_default(fdi_diag_config_t *cfg, const fdi_table_t *
             cfg->sensitivities = false;
             cfg->sens_every = SENS_EVERY;
             cfg->adaptive = false; /* opt-in until on-line estimators narrow the envelope (fdi_diag.h) */
+            cfg->estimate = 0U;
+            cfg->estimate_tau = ESTIMATE_TAU_S;
+            cfg->estimate_limit = 0.0f;
             st = FDI_OK;
         }
     }
@@ -375,6 +380,17 @@ static fdi_status_t check_config(const fdi_diag_config_t *cfg)
     {
         st = FDI_BAD_ARG;
     }
+    else if ((cfg->estimate != 0U) &&
+             (!fdi_float_is_finite(cfg->estimate_tau) || !fdi_float_is_finite(cfg->estimate_limit)))
+    {
+        st = FDI_NOT_FINITE;
+    }
+    else if ((cfg->estimate != 0U) &&
+             ((cfg->estimate_tau < cfg->table->design.dt) || (cfg->estimate_limit < 0.0f) ||
+              (((uint32_t)cfg->table->n_tests < 32U) && ((cfg->estimate >> cfg->table->n_tests) != 0U))))
+    {
+        st = FDI_BAD_ARG;
+    }
     else
     {
         const uint32_t need = settle_steps(&cfg->table->design);
@@ -428,6 +444,11 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             self->residual[i] = 0.0f;
             self->ratio[i] = 0.0f;
             self->spread[i] = 0.0f;
+            if (st == FDI_OK)
+            {
+                const bool est = (cfg->estimate & ((uint32_t)1U << i)) != 0U;
+                st = fdi_est_init(&self->est[i], t->design.dt, est ? cfg->estimate_tau : t->design.dt);
+            }
             self->warm[i] = cfg->warmup_steps;
             self->quiet_run[i] = 0U;
             self->alarm_run[i] = 0U;
@@ -462,6 +483,8 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             self->n_tests = t->n_tests;
             self->sensitivities = cfg->sensitivities;
             self->adaptive = cfg->adaptive;
+            self->estimate = cfg->estimate;
+            self->est_limit = cfg->estimate_limit;
             self->sens_every = (cfg->sens_every > 1U) ? (uint8_t)cfg->sens_every : 1U;
             sens_turns(self, (uint32_t)self->sens_every);
             self->sens_known = 0U;
@@ -623,7 +646,8 @@ static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t
         io.run = slots_of(self, set);
         io.restart = slots_of(self, set & self->rearm);
         io.sens_mask = slots_of(self, with_sens);
-        io.spread = self->adaptive ? self->spread : NULL; /* slots without an uncertainty term keep 0 */
+        /* slots without an uncertainty term keep 0; the estimated tests' spread bounds their estimate */
+        io.spread = (self->adaptive || (self->estimate != 0U)) ? self->spread : NULL;
         io.failed = 0U;
         self->set->step(&io);
         failed = tests_of(self, io.failed & io.run);
@@ -681,13 +705,52 @@ static uint32_t sens_turn(const fdi_diag_t *self)
     return self->turns[(uint32_t)sat_inc(self->episode_age) % (uint32_t)self->sens_every];
 }
 
+/* The residual test i evaluates: with an offset estimator (fdi_diag.h, fdi_est.h), r minus its estimate (updated
+   unless the test alarms or an episode accuses it, bounded by its spread plus estimate_limit sigmas); false while the
+   estimator still averages its start-up samples (the test is not evaluable yet). The test's threshold spread:
+   the generator's without an estimator and with adaptive thresholds, else 0. */
+static bool corrected(fdi_diag_t *self, uint32_t i, float *r)
+{
+    const uint32_t bit = (uint32_t)1U << i;
+    bool ready = true;
+    if ((self->estimate & bit) != 0U)
+    {
+        /* frozen while the test alarms and for the rest of an episode it is accused in (the start-up average,
+           while the test cannot alarm, never) */
+        const bool started = fdi_est_samples(&self->est[i]) >= (uint32_t)self->warmup_steps;
+        const bool freeze = (((self->alarm | self->accused) & bit) != 0U);
+        float limit = self->spread[i];
+        float rc = *r;
+        if (self->est_limit > 0.0f)
+        {
+            limit += self->est_limit * sqrtf(self->table->tests[i].variance);
+        }
+        if (fdi_est_update(&self->est[i], *r, limit, freeze, &rc) == FDI_OK)
+        {
+            *r = rc;
+        }
+        ready = started;
+        self->spread[i] = 0.0f;
+    }
+    else if (!self->adaptive)
+    {
+        self->spread[i] = 0.0f;
+    }
+    else
+    {
+        /* the adaptive threshold's spread */
+    }
+    return ready;
+}
+
 /* Evaluation of test i after its generator ran (ok: a finite residual r and spread) against its gate widened by the
-   spread (the adaptive threshold, fdi_eval.h; 0 without one); true if it is evaluable this step (then *alarm is
-   set). */
-static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r, bool *alarm)
+   spread (the adaptive threshold, fdi_eval.h; 0 without one), with its offset estimate removed; true if it is
+   evaluable this step (then *alarm is set). */
+static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r_gen, bool *alarm)
 {
     const uint32_t bit = (uint32_t)1U << i;
     bool evaluable = false;
+    float r = r_gen;
     fdi_status_t st = ok ? FDI_OK : FDI_NOT_FINITE;
     if ((st == FDI_OK) && ((self->rearm & bit) != 0U))
     {
@@ -700,6 +763,7 @@ static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r, bool *alarm
         self->rearm |= bit;
         self->residual[i] = 0.0f;
         self->ratio[i] = 0.0f;
+        self->spread[i] = 0.0f;
         self->fresh &= ~bit;
         clear_sens(self, i);
     }
@@ -708,18 +772,27 @@ static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r, bool *alarm
         self->warm[i]--;
         self->residual[i] = r;
         self->ratio[i] = 0.0f;
+        if (!self->adaptive || ((self->estimate & bit) != 0U))
+        {
+            self->spread[i] = 0.0f;
+        }
     }
-    else if (fdi_float_is_finite(r)) /* fdi_eval_step()'s evaluation inline: eval[i] is initialised, r checked here */
+    else if (!fdi_float_is_finite(r))
+    {
+        self->rearm |= bit;
+    }
+    else if (!corrected(self, i, &r))
+    {
+        self->residual[i] = r;
+        self->ratio[i] = 0.0f;
+    }
+    else /* fdi_eval_step()'s evaluation inline: eval[i] is initialised, r checked here */
     {
         float ratio = 0.0f;
         evaluable = true;
         *alarm = fdi_eval_update(&self->eval[i], r, self->spread[i], &ratio);
         self->residual[i] = r;
         self->ratio[i] = ratio;
-    }
-    else
-    {
-        self->rearm |= bit;
     }
     return evaluable;
 }
@@ -1297,6 +1370,7 @@ fdi_status_t fdi_diag_result(const fdi_diag_t *self, fdi_diag_result_t *out)
             out->residual[i] = used ? self->residual[i] : 0.0f;
             out->ratio[i] = used ? self->ratio[i] : 0.0f;
             out->spread[i] = used ? self->spread[i] : 0.0f;
+            out->offset[i] = (used && ((self->estimate & bit) != 0U)) ? fdi_est_offset(&self->est[i]) : 0.0f;
         }
         out->accused_mask = self->accused;
         out->iso = self->iso;

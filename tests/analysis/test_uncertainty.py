@@ -22,6 +22,8 @@ from fdi_analysis.residuals.causality import synthesize
 from fdi_analysis.residuals.evaluate import residual, sensitivity_series
 from fdi_analysis.residuals.uncertainty_sensitivity import (
     UncertaintySolver,
+    is_offset_like,
+    offset_like,
     spread_series,
     uncertainties,
     uncertainty_sensitivities,
@@ -246,8 +248,14 @@ def test_a_decoupled_residual_does_not_see_the_grade(repo: Path) -> None:
     dec = decoupled(grouped, ["g_x"])
     g_dec = synthesize(dec, DECOUPLED_B1, "dec")
     g_nom = synthesize(grouped, NOMINAL_B1, "nom")
-    sens = dict(uncertainty_sensitivities(grouped, g_nom))
+    sens_nom = uncertainty_sensitivities(grouped, g_nom)
+    sens = dict(sens_nom)
     assert "g_x" in sens and "g_x" not in dict(uncertainty_sensitivities(dec, g_dec))
+    # the grade and the driving resistance enter the body-x balance as constants (an offset an on-line
+    # estimator can take), the mass with the manoeuvre
+    assert {"g_x", "F_res"} <= set(offset_like(sens_nom)) and "m" not in offset_like(sens_nom)
+    assert not is_offset_like(sens_nom) and is_offset_like(tuple((n, sens[n]) for n in ("g_x", "F_res")))
+    assert sens["g_x"] == pytest.approx(-grouped.parameters["m"].value)
     flat = _noise_free_drive(quasi, "straight", 10.0)
     hill = _noise_free_drive(at_values(quasi, {"g_x": grade}), "straight", 10.0)
     k = slice(300, None)  # after the filters' start

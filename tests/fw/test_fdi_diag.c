@@ -2,7 +2,7 @@
  * test_fdi_diag.c - the diagnoser on the kinematic table and the noisy reference vehicle: arguments,
  * warm-up and validity handling (exact step counts), non-finite signals, no false alarm in 10 min of
  * fault-free driving, isolation of each drifting sensor fault f1..f5 with and without exoneration,
- * a test without generator, and a 1e6-step run.
+ * a test without generator, a 1e6-step run, and the on-line offset estimation (convergence, bound, freeze).
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -48,6 +48,9 @@ static fdi_diag_config_t config(fdi_iso_mode_t mode)
     c.gen_param[3] = 0.0f;
     c.sensitivities = false;
     c.adaptive = false;
+    c.estimate = 0U;
+    c.estimate_tau = 10.0f;
+    c.estimate_limit = 0.0f;
     c.sens_every = 1U;
     /* The residuals are low-pass noise (correlation ~0.2 s), so the CUSUM needs a larger drift and
        threshold than for white noise: with k = 1.5 sigma the largest fault-free excursion in 1e6 steps
@@ -398,13 +401,150 @@ static void test_long_run(void **state)
     }
 }
 
+/*
+ * On-line offset estimation (fdi_diag.h, fdi_est.h): a vx sensor bias of 0.2 m/s (20 sigma of the sensor, f4 as a
+ * constant from t = 0) makes the fixed gates alarm. With every test's offset estimated (tau 10 s, bound 50 sigma):
+ * no alarm over 40 s once the start-up average is in, and the tests that alarmed carry an offset > 1 sigma.
+ * A step fault f1 of 1 m/s^2 at t = 40 s is detected within 1 s and isolated exactly (candidates {f1}); from the
+ * detection on, the estimate of every test the episode accuses is frozen bit for bit from its accusation while the
+ * episode is open (the tests that see f1: at least two of them), and before it the estimates moved by less than 2 %
+ * of the fault's residual. With a bound of 1 sigma the bias is not absorbed: the tests alarm.
+ */
+typedef struct
+{
+    uint32_t alarm_steps_before; /* steps with an alarm before t_fault, after the start-up */
+    uint32_t alarmed_before;     /* the tests that alarmed then */
+    double first_detect;         /* after t_fault, -1: none */
+    bool frozen;                 /* every accused test's offset unchanged from its accusation while the episode is open */
+    uint32_t accused;            /* the tests the fault's episode accused */
+    fdi_diag_result_t at_onset;
+    fdi_diag_result_t at_detect;
+    fdi_diag_result_t end;
+} est_run_t;
+
+static est_run_t est_run(uint32_t estimate, float limit_sigma, double t_fault, double t_end)
+{
+    fdi_diag_t d;
+    fdi_frame_t in;
+    fdi_diag_config_t c = config(FDI_ISO_EXONERATION);
+    veh_meas_cfg_t mc;
+    test_rng_t rng = {23ULL};
+    est_run_t out;
+    long k;
+    uint32_t accused = 0U; /* tests accused so far in the fault's episode, their estimates when first accused */
+    float held[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    const long n = (long)(t_end / DT + 0.5);
+    const long startup = 2L * (long)WARMUP; /* the warm-up, then the estimators' start-up average */
+    memset(&out, 0, sizeof out);
+    out.first_detect = -1.0;
+    out.frozen = true;
+    c.table = kin_with_response(200U);
+    c.episode_clear_steps = 300U;
+    c.estimate = estimate;
+    c.estimate_tau = 10.0f;
+    c.estimate_limit = limit_sigma;
+    noisy(&mc);
+    mc.f[3] = 0.2;
+    assert_int_equal(fdi_diag_init(&d, &c), FDI_OK);
+    for (k = 1L; k <= n; ++k)
+    {
+        const double t = (double)k * DT;
+        fdi_diag_result_t res;
+        mc.f[0] = (t > t_fault) ? 1.0 : 0.0;
+        veh_measure(t, &mc, &rng, &in);
+        assert_int_equal(fdi_diag_step(&d, &in, ROMO_SIGM_ALL), FDI_OK);
+        assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
+        if (t <= t_fault)
+        {
+            out.alarm_steps_before += ((k > startup) && (res.alarm_mask != 0U)) ? 1U : 0U;
+            out.alarmed_before |= (k > startup) ? res.alarm_mask : 0U;
+            out.at_onset = res;
+        }
+        else if (out.first_detect < 0.0)
+        {
+            if (res.alarm_mask != 0U)
+            {
+                out.first_detect = t - t_fault;
+                out.at_detect = res;
+            }
+        }
+        else if (res.accused_mask != 0U)
+        {
+            /* an accused test's estimate stays where it was when the episode first accused it; the others go on */
+            uint32_t i;
+            for (i = 0U; i < 4U; ++i)
+            {
+                const uint32_t bit = 1UL << i;
+                if ((res.accused_mask & bit) == 0U)
+                {
+                    /* not accused: free */
+                }
+                else if ((accused & bit) == 0U)
+                {
+                    accused |= bit;
+                    held[i] = res.offset[i];
+                }
+                else
+                {
+                    out.frozen = out.frozen && (memcmp(&res.offset[i], &held[i], sizeof(float)) == 0);
+                }
+            }
+            out.accused |= res.accused_mask;
+        }
+        else
+        {
+            /* the episode ended */
+        }
+        out.end = res;
+    }
+    return out;
+}
+
+static void test_offset_estimation(void **state)
+{
+    uint32_t biased; /* the tests the bias makes alarm at the fixed gates */
+    est_run_t r;
+    uint32_t i;
+    (void)state;
+    r = est_run(0U, 0.0f, 40.0, 40.0);
+    print_message("no estimation: %u alarm steps of %ld\n", r.alarm_steps_before, 4000L - 2L * (long)WARMUP);
+    assert_true(r.alarm_steps_before > 1000U);
+    biased = r.alarmed_before;
+    r = est_run(0xFU, 50.0f, 40.0, 60.0);
+    print_message("estimated: %u alarm steps; f1 detected after %.2f s, candidates 0x%X\n", r.alarm_steps_before,
+                  r.first_detect, r.end.iso.candidates);
+    assert_int_equal(r.alarm_steps_before, 0U);
+    for (i = 0U; i < 4U; ++i)
+    {
+        const double sd = sqrt((double)fdi_kin_table.tests[i].variance);
+        const double b = fabs((double)r.at_onset.offset[i]);
+        const double moved = fabs((double)r.at_detect.offset[i] - (double)r.at_onset.offset[i]);
+        print_message("  test %u: offset %.4f (%.1f sigma), moved %.5f before the detection, residual %.4f\n", i,
+                      (double)r.at_onset.offset[i], b / sd, moved, (double)r.end.residual[i]);
+        if ((biased & (1U << i)) != 0U)
+        {
+            assert_true(b > 1.0 * sd); /* at or beyond the CUSUM drift (1.5 sigma) that made it alarm */
+        }
+        assert_true(moved <= 0.02 * fabs((double)r.end.residual[i]) + 0.1 * sd);
+    }
+    assert_true((r.first_detect >= 0.0) && (r.first_detect < 1.0));
+    print_message("accused 0x%X, their estimates frozen: %d\n", r.accused, r.frozen ? 1 : 0);
+    assert_true(r.frozen);
+    assert_true((r.accused & 0xDU) == r.accused); /* f1's tests: MSO1, MSO3, MSO4 */
+    assert_true(((r.accused & 0x1U) != 0U) && ((r.accused & 0xCU) != 0U)); /* MSO1 and one of MSO3/MSO4 */
+    assert_int_equal(r.end.iso.candidates, 0x01U);
+    r = est_run(0xFU, 1.0f, 40.0, 40.0);
+    print_message("bound 1 sigma: %u alarm steps\n", r.alarm_steps_before);
+    assert_true(r.alarm_steps_before > 1000U);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_bad_args),          cmocka_unit_test(test_warmup_and_validity),
         cmocka_unit_test(test_no_false_alarm),    cmocka_unit_test(test_isolation_of_each_fault),
         cmocka_unit_test(test_kind_none),         cmocka_unit_test(test_long_run),
-        cmocka_unit_test(test_isolation_episodes),
+        cmocka_unit_test(test_isolation_episodes), cmocka_unit_test(test_offset_estimation),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -125,3 +125,16 @@ def spread_series(g: Generator, sensitivities: tuple[tuple[str, sympy.Expr], ...
     total = np.sum(np.vstack(list(parts.values())), axis=0)
     return np.asarray(total, dtype=float), parts
 
+
+
+def offset_like(sensitivities: tuple[tuple[str, sympy.Expr], ...]) -> tuple[str, ...]:
+    """The quantities whose d r / d theta is a constant (no signal in it): they add an offset to the residual
+    that does not depend on the operating point, which an on-line offset estimator (fw/include/fdi_est.h) can
+    follow; the others (a mass, a tyre stiffness) scale with the manoeuvre and it cannot."""
+    return tuple(name for name, s in sensitivities if not sympy.sympify(s).free_symbols)
+
+
+def is_offset_like(sensitivities: tuple[tuple[str, sympy.Expr], ...]) -> bool:
+    """Every uncertainty of the residual enters as an offset (`offset_like`), and there is at least one: the
+    test belongs in the diagnoser's estimate mask (fdi_diag_config_t.estimate)."""
+    return bool(sensitivities) and len(offset_like(sensitivities)) == len(sensitivities)

@@ -87,6 +87,7 @@ def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
             ("clear_count", ctypes.c_uint16), ("warmup_steps", ctypes.c_uint16), ("mode", ctypes.c_int),
             ("episode_clear_steps", ctypes.c_uint16), ("noise_allowance", ctypes.c_float),
             ("sensitivities", ctypes.c_bool), ("sens_every", ctypes.c_uint16), ("adaptive", ctypes.c_bool),
+            ("estimate", ctypes.c_uint32), ("estimate_tau", ctypes.c_float), ("estimate_limit", ctypes.c_float),
         ]
 
     class Config(ctypes.Structure):
@@ -120,7 +121,7 @@ def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
             ("n_tests", ctypes.c_uint8), ("alarm_mask", ctypes.c_uint32), ("evaluable_mask", ctypes.c_uint32),
             ("status", ctypes.c_int * c.max_tests), ("residual", ctypes.c_float * c.max_tests),
             ("ratio", ctypes.c_float * c.max_tests), ("spread", ctypes.c_float * c.max_tests),
-            ("accused_mask", ctypes.c_uint32), ("iso", IsoResult),
+            ("offset", ctypes.c_float * c.max_tests), ("accused_mask", ctypes.c_uint32), ("iso", IsoResult),
             ("in_envelope", ctypes.c_bool), ("sens_offset", ctypes.c_uint8 * (c.max_tests + 1)),
             ("sens", ctypes.c_float * c.max_sens),
         ]
@@ -339,7 +340,30 @@ def bus_info(name: str = "romo") -> BusInfo:
                    int(dll.fdi_py_bus_int(b, 2, 0)), int(dll.fdi_py_bus_int(b, 7, 0)))
 
 
-def _apply_diag(d: Any, ov: dict[str, Any]) -> None:
+def _estimate_mask(value: Any, mso_ids: Sequence[int]) -> int:
+    """``estimate``: a bitmask of tests, or tests by MSO id (``1``, ``"MSO1"``), as a sequence or a comma-separated
+    string (``"MSO1,MSO39"``)."""
+    if isinstance(value, bool):
+        raise ValueError(f"estimate = {value!r}: give a test mask or the tests' MSO ids, e.g. estimate='MSO1,MSO39'")
+    if isinstance(value, int):
+        if not 0 <= value < 1 << len(mso_ids):
+            raise ValueError(f"estimate = {value:#x} names tests beyond the table's {len(mso_ids)}")
+        return value
+    items = [x.strip() for x in value.split(",")] if isinstance(value, str) else list(value)
+    mask = 0
+    for item in items:
+        text = str(item).strip()
+        mso = int(text[3:]) if text.upper().startswith("MSO") and text[3:].isdigit() else None
+        if mso is None and text.isdigit():
+            mso = int(text)
+        if mso is None or mso not in mso_ids:
+            raise ValueError(f"estimate: {item!r} is not a test of the table; its tests are "
+                             f"{', '.join(f'MSO{m}' for m in mso_ids)}")
+        mask |= 1 << list(mso_ids).index(mso)
+    return mask
+
+
+def _apply_diag(d: Any, ov: dict[str, Any], mso_ids: Sequence[int]) -> None:
     """Overrides of the diagnoser settings (fdi_diag_config_t), consumed from `ov`."""
     dll = _lib().dll
     for key in ("d_x", "d_y"):
@@ -347,7 +371,7 @@ def _apply_diag(d: Any, ov: dict[str, Any]) -> None:
             k = int(dll.fdi_py_param_index(key.encode()))
             assert k >= 0, key
             d.gen_param[k] = float(ov.pop(key))
-    for key in ("cusum_k", "cusum_h", "noise_allowance"):
+    for key in ("cusum_k", "cusum_h", "noise_allowance", "estimate_tau", "estimate_limit"):
         if key in ov:
             setattr(d, key, float(ov.pop(key)))
     for key in ("set_count", "clear_count", "warmup_steps", "episode_clear_steps", "sens_every"):
@@ -364,6 +388,8 @@ def _apply_diag(d: Any, ov: dict[str, Any]) -> None:
     for key in ("sensitivities", "adaptive"):
         if key in ov:
             setattr(d, key, bool(ov.pop(key)))
+    if "estimate" in ov:
+        d.estimate = _estimate_mask(ov.pop("estimate"), mso_ids)
 
 
 def _sensitivities(d: Any, n_tests: int) -> tuple[tuple[float, ...], ...]:
@@ -420,6 +446,8 @@ class EcuResult:
     # per test: the adaptive threshold's term, the residual's worst-case spread over the model's uncertainty at the
     # step (units of r; the test alarms beyond gate * sigma + spread; 0 with the fixed gate)
     spreads: tuple[float, ...] = ()
+    # per test: the on-line estimate of its residual's slow offset, removed before the evaluation (0: not estimated)
+    offsets: tuple[float, ...] = ()
 
     @property
     def status_name(self) -> str:
@@ -454,7 +482,8 @@ class Ecu:
 
     Overrides: ``d_x``, ``d_y`` (the ROMO kinematic generators' parameters), ``cusum_k``, ``cusum_h``,
     ``set_count``, ``clear_count``, ``warmup_steps``, ``mode`` ("exoneration" | "no_exoneration"),
-    ``episode_clear_steps``, ``noise_allowance``, ``sensitivities``, ``sens_every``, ``adaptive`` (fdi_diag.h),
+    ``episode_clear_steps``, ``noise_allowance``, ``sensitivities``, ``sens_every``, ``adaptive``, ``estimate`` (a
+    test mask or MSO ids: "MSO1,MSO39"), ``estimate_tau`` [s], ``estimate_limit`` [sigma] (fdi_diag.h),
     ``timeout_s``
     (one value for all messages or a mapping message name -> seconds), ``max_delta_counter``,
     ``max_catchup_steps``, ``align_s`` (a step's signals are those of the instant ``align_s`` before it, fdi_ecu.h;
@@ -472,7 +501,7 @@ class Ecu:
         cfg = lib.types["Config"]()
         _check(self._dll.fdi_py_ecu_config_default(ctypes.byref(cfg), _table_ptr(table), _bus_ptr(self.bus.name)),
                "fdi_ecu_config_default")
-        self._apply(cfg, dict(overrides), self.bus.names)
+        self._apply(cfg, dict(overrides), self.bus.names, self.table.mso_ids)
         self.config = cfg
         self._buf = ctypes.create_string_buffer(lib.ecu_size)
         self._self = ctypes.cast(self._buf, ctypes.c_void_p)
@@ -480,8 +509,8 @@ class Ecu:
         self._tx = lib.types["Tx"]()
 
     @staticmethod
-    def _apply(cfg: Any, ov: dict[str, Any], names: Sequence[str]) -> None:
-        _apply_diag(cfg.diag, ov)
+    def _apply(cfg: Any, ov: dict[str, Any], names: Sequence[str], mso_ids: Sequence[int]) -> None:
+        _apply_diag(cfg.diag, ov, mso_ids)
         if "timeout_s" in ov:
             to = ov.pop("timeout_s")
             items: Iterable[tuple[str, float]] = (
@@ -622,6 +651,7 @@ class Ecu:
             residuals=tuple(float(d.residual[i]) for i in range(n)),
             ratios=tuple(float(d.ratio[i]) for i in range(n)),
             spreads=tuple(float(d.spread[i]) for i in range(n)),
+            offsets=tuple(float(d.offset[i]) for i in range(n)),
             test_names=self.table.test_names,
             sensitivities=_sensitivities(d, n),
             in_envelope=bool(d.in_envelope),
@@ -656,7 +686,7 @@ class Diagnoser:
         cfg = lib.types["DiagConfig"]()
         _check(self._dll.fdi_diag_config_default(ctypes.byref(cfg), _table_ptr(table)), "fdi_diag_config_default")
         ov = dict(overrides)
-        _apply_diag(cfg, ov)
+        _apply_diag(cfg, ov, self.table.mso_ids)
         if ov:
             raise TypeError(f"unknown Diagnoser option(s): {sorted(ov)}")
         self.config = cfg
@@ -686,7 +716,7 @@ class Diagnoser:
             detected=bool(r.iso.detected), isolated=bool(r.iso.isolated), iso_class=0,
             test_status=tuple(TEST_STATUS_NAMES[int(r.status[i])] for i in range(n)),
             residuals=tuple(float(r.residual[i]) for i in range(n)), ratios=tuple(float(r.ratio[i]) for i in range(n)),
-            spreads=tuple(float(r.spread[i]) for i in range(n)),
+            spreads=tuple(float(r.spread[i]) for i in range(n)), offsets=tuple(float(r.offset[i]) for i in range(n)),
             test_names=self.table.test_names, sensitivities=_sensitivities(r, n), in_envelope=bool(r.in_envelope))
 
     def step(self, values: Mapping[str, float], validity: int | None = None) -> EcuResult:

@@ -73,6 +73,9 @@ static fdi_diag_config_t config(const fdi_table_t *table, uint16_t warmup)
     c.gen_param[3] = 0.0f;
     c.sensitivities = false;
     c.adaptive = false;
+    c.estimate = 0U;
+    c.estimate_tau = 10.0f;
+    c.estimate_limit = 0.0f;
     c.sens_every = 1U;
     c.cusum_k = 1.5f; /* the values of tests/fw/test_fdi_diag.c */
     c.cusum_h = 150.0f;
