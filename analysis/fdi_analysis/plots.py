@@ -14,6 +14,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from fdi_analysis.names import axis_labels
 from fdi_analysis.robustness import RobustnessReport
 from fdi_analysis.summary import Summary
 
@@ -82,7 +83,7 @@ def plot_fault_matrix(fm_a: np.ndarray, fm_b: np.ndarray, faults: Sequence[str],
                       ax: Axes | None = None) -> Figure:
     """The paper's Fig. 4: method A as 'x', method B as red squares (row = occurred fault, 0 = no fault)."""
     n = fm_a.shape[0]
-    labels = ["0", *(f.lstrip("f") for f in faults)]
+    labels = ["0", *axis_labels(faults)]
     fig, ax = _figure(ax, (max(4.0, 0.3 * n), max(4.0, 0.3 * n)))
     by, bx = np.nonzero(fm_b)
     ax.scatter(bx, by, marker="s", s=70, facecolors="none", edgecolors="tab:red", linewidths=1.2,
@@ -109,7 +110,7 @@ def plot_selected_faults(fsm: np.ndarray, faults: Sequence[str], row_labels: lis
     fig, ax = _figure(ax, (max(5.0, 0.3 * nf), max(2.5, 0.35 * nt + 1.2)))
     yy, xx = np.nonzero(fsm)
     ax.scatter(xx, yy, marker="s", s=60, c="tab:blue")
-    ax.set_xticks(range(nf), [f.lstrip("f") for f in faults], fontsize=7)
+    ax.set_xticks(range(nf), axis_labels(faults), fontsize=7)
     ax.set_yticks(range(nt), row_labels, fontsize=7)
     ax.set_xlim(-0.5, nf - 0.5)
     ax.set_ylim(nt - 0.5, -0.5)
@@ -145,8 +146,8 @@ def plot_practical_isolability(faults: Sequence[str], structural: Mapping[tuple[
     sy, sx = np.nonzero([[i != j and not structural.get((a, b), False) for j, b in enumerate(faults)]
                          for i, a in enumerate(faults)])
     ax.scatter(sx, sy, marker="x", s=25, c="black", linewidths=0.8, label="not isolable structurally")
-    ax.set_xticks(range(n), [f.lstrip("f") for f in faults], fontsize=6)
-    ax.set_yticks(range(n), [f.lstrip("f") for f in faults], fontsize=6)
+    ax.set_xticks(range(n), axis_labels(faults), fontsize=6)
+    ax.set_yticks(range(n), axis_labels(faults), fontsize=6)
     ax.set_xlabel("fault")
     ax.set_ylabel("fault")
     ax.set_title(title, fontsize=9)

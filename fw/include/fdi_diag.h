@@ -91,7 +91,8 @@
  * residual (the lumped sensor biases and gravity components on a grade or bank of the inertial tests) is estimated from
  * the residual and removed before the evaluation: the test evaluates r_i - b_i at its fixed gate (its spread is not
  * added: the estimator takes that uncertainty), and its result's residual is r_i - b_i. After its warm-up, the test
- * averages warmup_steps samples into b_i before it becomes evaluable; then b_i forgets with estimate_tau. The estimate
+ * averages estimate_startup samples into b_i before it becomes evaluable (default 1 s: the mean within a tenth
+ * of sigma); then b_i forgets with estimate_tau. The estimate
  * is frozen while the test alarms and for the rest of an isolation episode in which it alarmed (it is accused), so a
  * fault that set its alarm is never absorbed; other tests' episodes do not hold it (a false alarm of an unrelated test
  * would leave it stale for as long); |b_i| is bounded by the generator's spread a_i at the step (what the declared
@@ -191,6 +192,8 @@ typedef struct
                                      estimate != 0) */
     float estimate_limit;         /* [sigma] bound of an estimate beyond its test's spread, >= 0 (read when
                                      estimate != 0) */
+    uint16_t estimate_startup;    /* samples an estimator averages before its test is evaluable, 1 ..
+                                     estimate_tau / dt (read when estimate != 0) */
 } fdi_diag_config_t;
 
 typedef struct
@@ -305,7 +308,7 @@ typedef struct
    warm-up = the design point's settling time + 20 steps, exoneration, episodes ending after 3 s without alarm,
    noise allowance 3 sigma, generator parameters 0, no reported sensitivities, the fixed gates (adaptive thresholds
    are opt-in: over the whole declared envelope they hide most faults at their required sizes, README "Robust
-   diagnosis"), no offset estimation (estimate 0; tau 10 s, limit 0 sigma when set), each test's sensitivities
+   diagnosis"), no offset estimation (estimate 0; tau 10 s, limit 0 sigma, a start-up average of 1 s when set), each test's sensitivities
    every 4th step of an episode. BAD_ARG on NULL; BAD_TABLE when
    the design point has no finite settling time (the table itself is checked by fdi_diag_init). */
 fdi_status_t fdi_diag_config_default(fdi_diag_config_t *cfg, const fdi_table_t *table);

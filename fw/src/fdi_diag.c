@@ -42,6 +42,9 @@
 #define SENS_EVERY 4U
 /* the default forgetting time constant of the offset estimators (fdi_diag_config_t.estimate_tau) */
 #define ESTIMATE_TAU_S 10.0f
+/* the default start-up average of an offset estimator (fdi_diag_config_t.estimate_startup): 1 s, the mean of ~100
+   samples at 10 ms, within a tenth of the residual's sigma */
+#define ESTIMATE_STARTUP_S 1.0f
 
 /* The position of the lowest set bit of x != 0 (de Bruijn: x & -x times the sequence 0x077CB531 has a distinct top
    5 bits for each of the 32 powers of two). The isolation's loops over fault masks visit only their set bits with
@@ -150,6 +153,7 @@ fdi_status_t fdi_diag_config_default(fdi_diag_config_t *cfg, const fdi_table_t *
             cfg->estimate = 0U;
             cfg->estimate_tau = ESTIMATE_TAU_S;
             cfg->estimate_limit = 0.0f;
+            cfg->estimate_startup = steps_of(ESTIMATE_STARTUP_S, table->design.dt);
             st = FDI_OK;
         }
     }
@@ -387,6 +391,8 @@ static fdi_status_t check_config(const fdi_diag_config_t *cfg)
     }
     else if ((cfg->estimate != 0U) &&
              ((cfg->estimate_tau < cfg->table->design.dt) || (cfg->estimate_limit < 0.0f) ||
+              (cfg->estimate_startup == 0U) ||
+              ((((float)cfg->estimate_startup - 1.0f) * cfg->table->design.dt) >= cfg->estimate_tau) ||
               (((uint32_t)cfg->table->n_tests < 32U) && ((cfg->estimate >> cfg->table->n_tests) != 0U))))
     {
         st = FDI_BAD_ARG;
@@ -447,7 +453,8 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             if (st == FDI_OK)
             {
                 const bool est = (cfg->estimate & ((uint32_t)1U << i)) != 0U;
-                st = fdi_est_init(&self->est[i], t->design.dt, est ? cfg->estimate_tau : t->design.dt);
+                st = est ? fdi_est_init(&self->est[i], t->design.dt, cfg->estimate_tau, cfg->estimate_startup)
+                         : fdi_est_init(&self->est[i], t->design.dt, t->design.dt, 1U);
             }
             self->warm[i] = cfg->warmup_steps;
             self->quiet_run[i] = 0U;
@@ -717,7 +724,6 @@ static bool corrected(fdi_diag_t *self, uint32_t i, float *r)
     {
         /* frozen while the test alarms and for the rest of an episode it is accused in (the start-up average,
            while the test cannot alarm, never) */
-        const bool started = fdi_est_samples(&self->est[i]) >= (uint32_t)self->warmup_steps;
         const bool freeze = (((self->alarm | self->accused) & bit) != 0U);
         float limit = self->spread[i];
         float rc = *r;
@@ -729,7 +735,7 @@ static bool corrected(fdi_diag_t *self, uint32_t i, float *r)
         {
             *r = rc;
         }
-        ready = started;
+        ready = fdi_est_ready(&self->est[i]);
         self->spread[i] = 0.0f;
     }
     else if (!self->adaptive)

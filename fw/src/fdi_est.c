@@ -5,7 +5,7 @@
 
 #include "fdi_float.h"
 
-fdi_status_t fdi_est_init(fdi_est_t *self, float dt, float tau)
+fdi_status_t fdi_est_init(fdi_est_t *self, float dt, float tau, uint16_t startup)
 {
     fdi_status_t st = FDI_OK;
     if (self == NULL)
@@ -16,7 +16,8 @@ fdi_status_t fdi_est_init(fdi_est_t *self, float dt, float tau)
     {
         st = FDI_NOT_FINITE;
     }
-    else if ((dt <= 0.0f) || (tau < dt))
+    else if ((dt <= 0.0f) || (tau < dt) || (startup == 0U) ||
+             ((((float)startup - 1.0f) * dt) >= tau))
     {
         st = FDI_BAD_ARG;
     }
@@ -25,6 +26,7 @@ fdi_status_t fdi_est_init(fdi_est_t *self, float dt, float tau)
         self->gain = dt / tau; /* in (0, 1] */
         self->offset = 0.0f;
         self->n = 0U;
+        self->startup = startup;
     }
     return st;
 }
@@ -51,11 +53,11 @@ fdi_status_t fdi_est_update(fdi_est_t *self, float r, float limit, bool freeze, 
         {
             float g = self->gain;
             float b;
-            if (self->n < 0xFFFFFFFFU)
+            if (self->n < 0xFFFFU)
             {
                 self->n++;
             }
-            if (((float)self->n * g) < 1.0f) /* start-up: the running mean of the samples so far */
+            if (self->n <= self->startup) /* start-up: the running mean of the samples so far */
             {
                 g = 1.0f / (float)self->n;
             }
@@ -81,6 +83,11 @@ fdi_status_t fdi_est_update(fdi_est_t *self, float r, float limit, bool freeze, 
 float fdi_est_offset(const fdi_est_t *self)
 {
     return (self == NULL) ? 0.0f : self->offset;
+}
+
+bool fdi_est_ready(const fdi_est_t *self)
+{
+    return (self != NULL) && (self->n >= self->startup);
 }
 
 uint32_t fdi_est_samples(const fdi_est_t *self)

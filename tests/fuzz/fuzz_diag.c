@@ -161,6 +161,7 @@ static fdi_diag_config_t good_config(const fdi_table_t *t)
     c.estimate = 0U;
     c.estimate_tau = 10.0f;
     c.estimate_limit = 0.0f;
+    c.estimate_startup = 100U;
     c.sens_every = 4U; /* the default's turns */
     c.cusum_k = 1.5f;
     c.cusum_h = 150.0f;

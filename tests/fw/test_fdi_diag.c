@@ -17,6 +17,7 @@
 
 #define DT 0.01
 #define WARMUP 320U /* >= 300 steps: max(2 stages * 6 / (zeta * 2 pi 1 Hz), 6 / L = 3 s) at 100 Hz */
+#define EST_STARTUP 100U /* the offset estimators' start-up average (1 s, the default) */
 
 static const double sigma[5] = {0.02, 0.02, 0.001, 0.01, 0.01}; /* the table's noise assumption */
 
@@ -51,6 +52,7 @@ static fdi_diag_config_t config(fdi_iso_mode_t mode)
     c.estimate = 0U;
     c.estimate_tau = 10.0f;
     c.estimate_limit = 0.0f;
+    c.estimate_startup = 100U;
     c.sens_every = 1U;
     /* The residuals are low-pass noise (correlation ~0.2 s), so the CUSUM needs a larger drift and
        threshold than for white noise: with k = 1.5 sigma the largest fault-free excursion in 1e6 steps
@@ -434,7 +436,7 @@ static est_run_t est_run(uint32_t estimate, float limit_sigma, double t_fault, d
     uint32_t accused = 0U; /* tests accused so far in the fault's episode, their estimates when first accused */
     float held[4] = {0.0f, 0.0f, 0.0f, 0.0f};
     const long n = (long)(t_end / DT + 0.5);
-    const long startup = 2L * (long)WARMUP; /* the warm-up, then the estimators' start-up average */
+    const long startup = (long)WARMUP + (long)EST_STARTUP; /* the warm-up, then the estimators' start-up average */
     memset(&out, 0, sizeof out);
     out.first_detect = -1.0;
     out.frozen = true;
@@ -443,6 +445,7 @@ static est_run_t est_run(uint32_t estimate, float limit_sigma, double t_fault, d
     c.estimate = estimate;
     c.estimate_tau = 10.0f;
     c.estimate_limit = limit_sigma;
+    c.estimate_startup = EST_STARTUP;
     noisy(&mc);
     mc.f[3] = 0.2;
     assert_int_equal(fdi_diag_init(&d, &c), FDI_OK);
@@ -507,7 +510,8 @@ static void test_offset_estimation(void **state)
     uint32_t i;
     (void)state;
     r = est_run(0U, 0.0f, 40.0, 40.0);
-    print_message("no estimation: %u alarm steps of %ld\n", r.alarm_steps_before, 4000L - 2L * (long)WARMUP);
+    print_message("no estimation: %u alarm steps of %ld\n", r.alarm_steps_before,
+                  4000L - (long)WARMUP - (long)EST_STARTUP);
     assert_true(r.alarm_steps_before > 1000U);
     biased = r.alarmed_before;
     r = est_run(0xFU, 50.0f, 40.0, 60.0);

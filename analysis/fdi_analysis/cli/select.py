@@ -140,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
     best = selections["optimal B"]
     print("optimal selection, method B:")
     for row in selection_rows(model, best):
-        faults = " ".join(f.lstrip("f") for f in row["faults"])
+        faults = " ".join(row["faults"])
         print(f"  {row['mso']:<9} {row['unknowns']:>3} unknowns  faults {faults}")
     if args.out is not None:
         write_outputs(args.out, model, n_sets, kind, cands, selections, timing)

@@ -88,6 +88,7 @@ def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
             ("episode_clear_steps", ctypes.c_uint16), ("noise_allowance", ctypes.c_float),
             ("sensitivities", ctypes.c_bool), ("sens_every", ctypes.c_uint16), ("adaptive", ctypes.c_bool),
             ("estimate", ctypes.c_uint32), ("estimate_tau", ctypes.c_float), ("estimate_limit", ctypes.c_float),
+            ("estimate_startup", ctypes.c_uint16),
         ]
 
     class Config(ctypes.Structure):
@@ -374,7 +375,7 @@ def _apply_diag(d: Any, ov: dict[str, Any], mso_ids: Sequence[int]) -> None:
     for key in ("cusum_k", "cusum_h", "noise_allowance", "estimate_tau", "estimate_limit"):
         if key in ov:
             setattr(d, key, float(ov.pop(key)))
-    for key in ("set_count", "clear_count", "warmup_steps", "episode_clear_steps", "sens_every"):
+    for key in ("set_count", "clear_count", "warmup_steps", "episode_clear_steps", "sens_every", "estimate_startup"):
         if key in ov:
             v = int(ov.pop(key))
             if not 0 <= v <= 0xFFFF:
@@ -483,8 +484,8 @@ class Ecu:
     Overrides: ``d_x``, ``d_y`` (the ROMO kinematic generators' parameters), ``cusum_k``, ``cusum_h``,
     ``set_count``, ``clear_count``, ``warmup_steps``, ``mode`` ("exoneration" | "no_exoneration"),
     ``episode_clear_steps``, ``noise_allowance``, ``sensitivities``, ``sens_every``, ``adaptive``, ``estimate`` (a
-    test mask or MSO ids: "MSO1,MSO39"), ``estimate_tau`` [s], ``estimate_limit`` [sigma] (fdi_diag.h),
-    ``timeout_s``
+    test mask or MSO ids: "MSO1,MSO39"), ``estimate_tau`` [s], ``estimate_limit`` [sigma], ``estimate_startup``
+    [steps] (fdi_diag.h), ``timeout_s``
     (one value for all messages or a mapping message name -> seconds), ``max_delta_counter``,
     ``max_catchup_steps``, ``align_s`` (a step's signals are those of the instant ``align_s`` before it, fdi_ecu.h;
     0: sample-and-hold).

@@ -39,6 +39,7 @@ from sympy.printing.pycode import PythonCodePrinter
 from fdi_analysis.expressions import der
 from fdi_analysis.model import Equation, Model
 from fdi_analysis.model_loader import load_model
+from fdi_analysis.names import natural_sorted
 from fdi_analysis.resources import MODELS
 
 DEFAULT_MODEL = MODELS.path() / "romo_quasistatic.toml"  # analysis/models/ in a checkout, the copy in a wheel
@@ -156,7 +157,7 @@ class Plant:
         for e in self.input_equations:
             if len(e.unknowns) != 1:
                 raise PlantError(f"input equation {e.id} has unknowns {e.unknowns}")
-        normal_faults = sorted({f for e in normal for f in e.faults}, key=lambda s: int(s[1:]))
+        normal_faults = natural_sorted({f for e in normal for f in e.faults})
         self.faults: tuple[str, ...] = tuple(normal_faults)
 
         # Derivative targets: dvx, dvy (D1, D2), domega_i (W.D) and der(psidot) inline in B3.

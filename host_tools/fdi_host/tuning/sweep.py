@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fdi_analysis.export.fault_sizes import REACTION_WINDOW_S, FaultSizes
+from fdi_analysis.names import natural_sorted
 from fdi_analysis.residuals.evaluate import FilterDesign, evaluable_segments
 from fdi_analysis.residuals.generator import Generator
 from fdi_host.tuning.calibrate import first_alarm
@@ -251,7 +252,7 @@ def render_section(pairs: Sequence[PairLimit], provenance: str, test_order: Sequ
     are then listed in [per_test_scenario.<fault>] tables as {scenario, size}."""
     lines = [MARKER, *(f"# {p}" for p in provenance.splitlines())]
     found = {(e.fault, e.test): e for e in elsewhere}
-    faults = sorted({p.fault for p in pairs}, key=lambda f: int(f[1:]))
+    faults = natural_sorted({p.fault for p in pairs})
     where = f"in {scenario}: " if scenario else ""
     for f in faults:
         lines.append(f"[per_test.{f}]")
@@ -265,7 +266,7 @@ def render_section(pairs: Sequence[PairLimit], provenance: str, test_order: Sequ
                              f'up to the limit confirmed with every seed"')
             else:
                 lines.append(f'{p.test} = "{NOT_DETECTABLE}: {where}{_reason(p)}"')
-    for f in sorted({e.fault for e in elsewhere}, key=lambda f: int(f[1:])):
+    for f in natural_sorted({e.fault for e in elsewhere}):
         lines.append(f"[{ELSEWHERE}.{f}]")
         for e in sorted((e for e in elsewhere if e.fault == f), key=lambda e: test_order.index(e.test)):
             lines.append(f'{e.test} = {{ scenario = "{e.scenario}", size = {e.stated:g} }}  '

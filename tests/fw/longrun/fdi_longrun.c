@@ -76,6 +76,7 @@ static fdi_diag_config_t config(const fdi_table_t *table, uint16_t warmup)
     c.estimate = 0U;
     c.estimate_tau = 10.0f;
     c.estimate_limit = 0.0f;
+    c.estimate_startup = 100U;
     c.sens_every = 1U;
     c.cusum_k = 1.5f; /* the values of tests/fw/test_fdi_diag.c */
     c.cusum_h = 150.0f;

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from fdi_analysis.cli.common import EXIT_ERROR
+from fdi_analysis.names import natural_sorted
 from fdi_host.tuning.seeds import CALIBRATION_SEEDS, CONFIRM_SEED_OFFSETS, SWEEP_SEEDS
 
 EXAMPLE = ("example: fdi-tune calibrate analysis/models/romo_grouped.toml "
@@ -168,7 +169,7 @@ def run_sizes(args: argparse.Namespace) -> int:
     print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
     _, gens = selected_generators(model, observer_reference(th), workers=args.workers, selection=th.selection)
     sigmas = th.sigmas(gens)
-    faults = sorted({f for g in gens for f in g.faults}, key=lambda f: int(f[1:]))
+    faults = natural_sorted({f for g in gens for f in g.faults})
     if args.faults:
         faults = [f for f in faults if f in set(args.faults)]
     missing = size_file.lacking(faults)
