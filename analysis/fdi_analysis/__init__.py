@@ -17,8 +17,8 @@ from typing import Any
 # The package root is a facade above every layer: these names come from fdi_analysis.api (layer 5), imported
 # when one of them is first used (PEP 562), so that importing a low layer never loads the API; the version
 # (importlib.metadata, 15 ms) likewise.
-API_NAMES = ("DiagnosisModel", "Decomposition", "TestSet", "IsolabilityAnalysis", "TestSelection", "ExportResult",
-             "ApiError")
+API_NAMES = ("DiagnosisModel", "Decomposition", "TestSet", "IsolabilityAnalysis", "MsoAnalysis", "TestSelection",
+             "ExportResult", "ApiError")
 __all__ = ["__version__", *API_NAMES]
 
 

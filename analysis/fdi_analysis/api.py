@@ -7,7 +7,9 @@
     for t in m.msos(): ...                             # every MSO set, streamed (constant memory)
     m.mtes()                                           # minimal test equation supports
     iso = m.isolability(); iso.plot(ax=ax)             # single-fault isolability, drawn into the caller's Axes
+    iso.one_way_pairs()                                # (a, b): a not isolable from b, b isolable from a
     sel = m.select(method="B"); sel.plot(ax=ax)        # optimal test selection (paper Fig. 5 for the plot)
+    sel.to_dataframe(), m.fault_matrix_frame(sel.tests) # labelled pandas tables (the `notebook` extra)
     m.export_c("out/gen", thresholds="romo_thresholds") # the firmware's C table and residual generators
 
 For Fault Diagnosis Toolbox users: ``model.MSO()`` is `DiagnosisModel.msos`, ``model.MTES()`` `mtes`,
@@ -16,7 +18,9 @@ For Fault Diagnosis Toolbox users: ``model.MSO()`` is `DiagnosisModel.msos`, ``m
 Every method returns a frozen dataclass (names, not indices, where a person reads them); the objects of the
 underlying modules stay reachable (`DiagnosisModel.model`, `.structure`, `TestSelection.selection`) for code
 that needs them. Plots never choose a backend: they draw into ``ax`` when given, else into a new figure, and
-return the figure.
+return the figure. In a notebook every result shows as a labelled HTML table (``_repr_html_``) and prints as a line
+or two (``repr``); ``to_dataframe()`` and the ``*_frame`` methods give pandas DataFrames with the names as labels
+(pandas: ``pip install 'romo-fdi[notebook]'``).
 """
 
 from __future__ import annotations
@@ -25,7 +29,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -41,6 +45,7 @@ from fdi_analysis.selection import Selection, greedy
 from fdi_analysis.selection import optimal as optimal_selection
 from fdi_analysis.structure import Structure
 from fdi_analysis.summary import Summary, summarize
+from fdi_analysis.tables import NO_FAULT, html_table, matrix_frame, matrix_html, name_list, require_pandas
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -64,6 +69,24 @@ class Decomposition:
     redundancy: int  # |M+| - |var(M+)|
     result: DMResult  # the same by index into the structure
 
+    def _parts(self) -> list[tuple[str, tuple[str, ...], tuple[str, ...]]]:
+        zero_eqs = tuple(e for eqs, _ in self.just_determined for e in eqs)
+        zero_vars = tuple(v for _, vs in self.just_determined for v in vs)
+        return [("M+ (overdetermined)", self.overdetermined, self.overdetermined_unknowns),
+                (f"M0 (just-determined, {len(self.just_determined)} blocks)", zero_eqs, zero_vars),
+                ("M- (underdetermined)", self.underdetermined, self.underdetermined_unknowns)]
+
+    def __repr__(self) -> str:
+        return (f"Decomposition(M+: {len(self.overdetermined)} equations, {len(self.overdetermined_unknowns)} "
+                f"unknowns, redundancy {self.redundancy}; M0: {len(self.just_determined)} blocks; M-: "
+                f"{len(self.underdetermined)} equations)")
+
+    def _repr_html_(self) -> str:
+        rows = [[len(e), len(v), name_list(e, 12, "-"), name_list(v, 12, "-")] for _, e, v in self._parts()]
+        return html_table(rows, ["equations", "unknowns", "equation names", "unknown names"],
+                          [p for p, _, _ in self._parts()],
+                          f"Dulmage-Mendelsohn decomposition: structural redundancy {self.redundancy}", "part")
+
 
 @dataclass(frozen=True)
 class TestSet:
@@ -75,6 +98,11 @@ class TestSet:
     mask: int  # bit i = equation i of the structure
     cost: int = -1
     label: str = ""
+
+    def __repr__(self) -> str:
+        cost = f", cost {self.cost}" if self.cost >= 0 else ""
+        return (f"TestSet({self.label + ': ' if self.label else ''}{len(self.equations)} equations{cost}; faults "
+                f"{name_list(self.faults, 8)})")
 
 
 @dataclass(frozen=True)
@@ -90,13 +118,83 @@ class IsolabilityAnalysis:
     summary: Summary
 
     def non_isolable_pairs(self) -> list[tuple[str, str]]:
+        """Pairs of detectable faults that cannot be isolated from each other in either direction (each pair once)."""
         return [(self.faults[i], self.faults[j]) for i, j in self.summary.isolability.non_isolable_pairs()]
+
+    def one_way_pairs(self) -> list[tuple[str, str]]:
+        """Pairs (a, b) of detectable faults isolable one way only: a cannot be isolated from b, but b can be
+        isolated from a (``isolable[a, b]`` false, ``isolable[b, a]`` true). When a occurs, b stays a candidate."""
+        return [(self.faults[i], self.faults[j]) for i, j in self.summary.isolability.one_way_pairs()]
+
+    def __repr__(self) -> str:
+        both, one = len(self.non_isolable_pairs()), len(self.one_way_pairs())
+        return (f"IsolabilityAnalysis({len(self.faults)} faults, {len(self.detectable)} detectable, "
+                f"{len(self.classes)} classes; {both} pair{'' if both == 1 else 's'} not isolable, {one} "
+                f"pair{'' if one == 1 else 's'} isolable one way only)")
+
+    def _repr_html_(self) -> str:
+        caption = (f"{self.summary.model.name}: fault in the row cannot be isolated from the fault in the column "
+                   f"(●). {len(self.detectable)} of {len(self.faults)} detectable; not detectable: "
+                   f"{name_list(self.not_detectable, 10)}; isolable one way only: "
+                   f"{name_list([f'{a} -> {b}' for a, b in self.one_way_pairs()], 10)}")
+        return matrix_html(~self.isolable, self.faults, self.faults, caption, "fault \\ from", diagonal="-")
+
+    def to_dataframe(self) -> Any:
+        """``isolable`` as a pandas DataFrame: rows and columns are the faults; True where the row fault can be
+        isolated from the column fault."""
+        return matrix_frame(self.isolable, self.faults, self.faults, "fault", "isolable from")
 
     def plot(self, ax: Axes | None = None) -> Figure:
         """The isolability matrix (filled: row fault not isolable from column fault) into `ax` or a new figure."""
         from fdi_analysis.plots import plot_isolability
 
         return plot_isolability(self.summary, ax=ax)
+
+
+@dataclass(frozen=True)
+class MsoAnalysis:
+    """What `DiagnosisModel.mso_summary` found, without the sets: their number, sizes and fault signatures (one entry
+    per signature: how many MSO sets have it and the smallest of them), by name. `summary` is the
+    `fdi_analysis.mso.MsoSummary` it comes from."""
+
+    model: str
+    faults: tuple[str, ...]
+    count: int
+    by_equations: dict[int, int]  # MSO sets with k equations
+    signatures: tuple[mso.SignatureEntry, ...]
+    complete: bool
+    elapsed_s: float
+    summary: mso.MsoSummary
+
+    @property
+    def by_unknowns(self) -> dict[int, int]:
+        return self.summary.by_unknowns
+
+    def signature_faults(self, entry: mso.SignatureEntry) -> tuple[str, ...]:
+        """The faults of a signature entry by name."""
+        return tuple(self.faults[k] for k in mso.bits(entry.faults))
+
+    def __repr__(self) -> str:
+        sizes = f", {min(self.by_equations)}..{max(self.by_equations)} equations" if self.by_equations else ""
+        return (f"MsoAnalysis({self.model!r}: {self.count:,} MSO sets{sizes}, {len(self.signatures):,} fault "
+                f"signatures{'' if self.complete else ', INCOMPLETE'})")
+
+    def _repr_html_(self) -> str:
+        sizes = sorted(self.by_equations)
+        rows = [[k, k - 1, self.by_equations[k]] for k in sizes]
+        caption = (f"{self.model}: {self.count:,} MSO sets with {len(self.signatures):,} distinct fault signatures "
+                   f"({'complete' if self.complete else 'interrupted: partial counts'}, {self.elapsed_s:.2f} s)")
+        return html_table(rows, ["equations", "unknowns", "MSO sets"], None, caption)
+
+    def to_dataframe(self) -> Any:
+        """One row per fault signature: its MSO sets' count, the size of the smallest, and one Boolean column per
+        fault (True: the signature's tests react to it), most frequent signatures first."""
+        pd = require_pandas()
+        order = sorted(self.signatures, key=lambda e: (-e.count, e.smallest_size, e.faults))
+        cols = {"MSO sets": [e.count for e in order], "smallest (equations)": [e.smallest_size for e in order]}
+        cols |= {f: [bool(e.faults >> k & 1) for e in order] for k, f in enumerate(self.faults)}
+        return pd.DataFrame(cols, index=pd.Index([", ".join(self.signature_faults(e)) for e in order],
+                                                 name="signature"))
 
 
 @dataclass(frozen=True)
@@ -113,16 +211,53 @@ class TestSelection:
     faults: tuple[str, ...]
     selection: Selection  # what fdi_analysis.selection returned, by index
 
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """The tests' names (``MSO6``; ``t1``, ``t2``, ... where a test has none)."""
+        return tuple(t.label or f"t{k + 1}" for k, t in enumerate(self.tests))
+
     def signature_matrix(self) -> npt.NDArray[np.bool_]:
         """``[t, k]``: selected test t reacts to fault k."""
         return np.array([[f in t.faults for f in self.faults] for t in self.tests], dtype=bool).reshape(
             len(self.tests), len(self.faults))
 
+    def fault_matrix(self) -> npt.NDArray[np.bool_]:
+        """The paper's fault matrix of the selected tests under the selection's method (row = occurred fault,
+        column = diagnosed; index 0 = no fault, then the faults): `fault_matrix_frame` labels it."""
+        from fdi_analysis.fault_matrix import fault_matrix
+
+        fi = {f: k for k, f in enumerate(self.faults)}
+        return fault_matrix([mso.to_mask([fi[f] for f in t.faults]) for t in self.tests], len(self.faults),
+                            self.method)
+
+    def fault_matrix_frame(self) -> Any:
+        """`fault_matrix` as a pandas DataFrame labelled by fault, the fault-free case as ``(no fault)``."""
+        labels = (NO_FAULT, *self.faults)
+        return matrix_frame(self.fault_matrix(), labels, labels, "occurred", "diagnosed as")
+
+    def to_dataframe(self) -> Any:
+        """The selection's signature matrix as a pandas DataFrame: a row per test (its label), a column per fault;
+        True where the test reacts to the fault."""
+        return matrix_frame(self.signature_matrix(), self.labels, self.faults, "test", "fault")
+
+    def __repr__(self) -> str:
+        return (f"TestSelection({self.kind}, method {self.method}: {len(self.tests)} tests "
+                f"({name_list(self.labels, 8)}), cost {self.cost}, {'proven' if self.proven else 'not proven'} "
+                f"minimal, from {self.candidates} candidates)")
+
+    def _repr_html_(self) -> str:
+        fsm = self.signature_matrix()
+        rows = [[t.cost, len(t.equations), *fsm[k]] for k, t in enumerate(self.tests)]
+        caption = (f"{self.kind} selection, method {self.method}: {len(self.tests)} tests, cost {self.cost} unknowns "
+                   f"({'proven' if self.proven else 'not proven'} minimal, {self.candidates} candidates); ● = the "
+                   "test reacts to the fault")
+        return html_table(rows, ["cost", "equations", *self.faults], self.labels, caption, "test")
+
     def plot(self, ax: Axes | None = None) -> Figure:
         """Faults per selected test (the paper's Fig. 5) into `ax` or a new figure."""
         from fdi_analysis.plots import plot_selected_faults
 
-        return plot_selected_faults(self.signature_matrix(), self.faults, [t.label for t in self.tests],
+        return plot_selected_faults(self.signature_matrix(), self.faults, list(self.labels),
                                     f"{self.kind} selection, method {self.method}", ax=ax)
 
 
@@ -201,6 +336,14 @@ class DiagnosisModel:
         return (f"DiagnosisModel({self.name!r}: {st.ne} equations, {st.nx} unknowns, {st.nz} knowns, "
                 f"{st.nf} faults)")
 
+    def _repr_html_(self) -> str:
+        st = self.structure
+        desc = {f.name: f.desc for f in self.model.faults}
+        rows = [[desc.get(f, "")] for f in st.faults]
+        caption = (f"{self.name}: {st.ne} equations, {st.nx} unknowns, {st.nz} knowns ({name_list(st.knowns, 8)}), "
+                   f"{st.nf} faults, structural redundancy {self.dm().redundancy}")
+        return html_table(rows, ["description"], st.faults, caption, "fault")
+
     # ------------------------------------------------------------------------------------------ analysis
     def dm(self) -> Decomposition:
         """The Dulmage-Mendelsohn decomposition."""
@@ -231,9 +374,11 @@ class DiagnosisModel:
         for eqs in mso.iter_msos(p):
             yield self._test_set(eqs, p.faults_of(eqs), eqs.bit_count() - 1)
 
-    def mso_summary(self, workers: int = 2, progress: bool = False) -> mso.MsoSummary:
+    def mso_summary(self, workers: int = 2, progress: bool = False) -> MsoAnalysis:
         """Count, size histogram and fault-signature table of the MSO sets (on `workers` processes)."""
-        return mso.find_msos(self.structure, workers=workers, progress=progress)
+        r = mso.find_msos(self.structure, workers=workers, progress=progress)
+        return MsoAnalysis(self.name, self.faults, r.count, dict(r.by_equations), r.signatures, r.complete,
+                           r.elapsed_s, r)
 
     def mtes(self) -> tuple[TestSet, ...]:
         """The minimal test equation supports (for models whose MSO sets are too many to enumerate)."""
@@ -288,11 +433,18 @@ class DiagnosisModel:
         return TestSelection(method, sel.kind, tests, sel.total_cost, sel.proven, len(cands), self.faults, sel)
 
     def fault_matrix(self, tests: Sequence[TestSet], method: Method = "B") -> npt.NDArray[np.bool_]:
-        """The paper's fault matrix of `tests` (row = occurred fault, column = diagnosed, index 0 = no fault)."""
+        """The paper's fault matrix of `tests` (row = occurred fault, column = diagnosed, index 0 = no fault, then
+        the faults in model order); `fault_matrix_frame` is the same with labels."""
         from fdi_analysis.fault_matrix import fault_matrix
 
         fi = {f: k for k, f in enumerate(self.faults)}
         return fault_matrix([mso.to_mask([fi[f] for f in t.faults]) for t in tests], len(self.faults), method)
+
+    def fault_matrix_frame(self, tests: Sequence[TestSet], method: Method = "B") -> Any:
+        """`fault_matrix` as a pandas DataFrame: rows (occurred) and columns (diagnosed as) labelled by fault name,
+        the fault-free case as ``(no fault)``."""
+        labels = (NO_FAULT, *self.faults)
+        return matrix_frame(self.fault_matrix(tests, method), labels, labels, "occurred", "diagnosed as")
 
     def signature_matrix(self, tests: Sequence[TestSet]) -> npt.NDArray[np.bool_]:
         """``[t, k]``: test t reacts to fault k."""
@@ -300,15 +452,29 @@ class DiagnosisModel:
         cands = [Candidate(t.mask, mso.to_mask([fi[f] for f in t.faults]), t.cost) for t in tests]
         return signature_matrix(cands, len(self.faults))
 
+    def signature_frame(self, tests: Sequence[TestSet]) -> Any:
+        """`signature_matrix` as a pandas DataFrame: a row per test (its label, else ``t1``, ``t2``, ...), a column
+        per fault."""
+        labels = [t.label or f"t{k + 1}" for k, t in enumerate(tests)]
+        return matrix_frame(self.signature_matrix(tests), labels, self.faults, "test", "fault")
+
     # ------------------------------------------------------------------------------------------ plots
-    def plot_dm(self) -> Figure:
-        """The incidence matrix in DM order with the faults beside it (a figure of its own: two axes)."""
+    def plot_dm(self, ax: Axes | None = None) -> Figure:
+        """The incidence matrix in DM order with the faults as columns on its right, into `ax` or a new figure."""
         from fdi_analysis.plots import plot_dm
 
-        return plot_dm(self.summary())
+        return plot_dm(self.summary(), ax=ax)
 
     def plot_isolability(self, ax: Axes | None = None) -> Figure:
+        """`IsolabilityAnalysis.plot` of the model's isolability."""
         return self.isolability().plot(ax=ax)
+
+    def plot_fault_matrix(self, tests: Sequence[TestSet], ax: Axes | None = None, title: str = "") -> Figure:
+        """The paper's Fig. 4 for `tests`: methods A and B in one matrix (row = occurred fault, 0 = no fault)."""
+        from fdi_analysis.plots import plot_fault_matrix
+
+        return plot_fault_matrix(self.fault_matrix(tests, "A"), self.fault_matrix(tests, "B"), self.faults,
+                                 title or f"{self.name}: fault matrix of {len(tests)} tests", ax=ax)
 
     # ------------------------------------------------------------------------------------------ export
     def export_c(self, out: str | Path, thresholds: str | Path, *, fault_sizes: str | Path | None = None,

@@ -34,6 +34,18 @@ class IsolabilityResult:
             if self.detectable[i] and self.detectable[j] and not self.isolable[i, j] and not self.isolable[j, i]
         ]
 
+    def one_way_pairs(self) -> list[tuple[int, int]]:
+        """Ordered pairs (i, j) of detectable faults isolable in one direction only: fault i cannot be isolated from
+        fault j, but j can be isolated from i (every residual that can react to i can also react to j, and some
+        residual can react to j and not to i). When i occurs, j stays a candidate; when j occurs, i is ruled out."""
+        n = len(self.faults)
+        return [
+            (i, j)
+            for i in range(n)
+            for j in range(n)
+            if i != j and self.detectable[i] and self.detectable[j] and not self.isolable[i, j] and self.isolable[j, i]
+        ]
+
     def class_of(self, fault: int) -> tuple[int, ...]:
         for c in self.classes:
             if fault in c:

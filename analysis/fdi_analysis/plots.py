@@ -28,36 +28,35 @@ def _figure(ax: Axes | None, size: tuple[float, float]) -> tuple[Figure, Axes]:
     return owner, ax
 
 
-def plot_dm(summary: Summary) -> Figure:
-    """Incidence matrix with rows/columns in DM order (M-, M0 blocks, M+), faults on the right (two axes, so
-    always a figure of its own)."""
+def plot_dm(summary: Summary, ax: Axes | None = None) -> Figure:
+    """Incidence matrix with rows/columns in DM order (M-, M0 blocks, M+), the faults as columns of their own on the
+    right (past a grey line)."""
     st = summary.structure
     dm = summary.dm
     rows = [*dm.minus_eqs, *dm.zero_eqs, *dm.plus_eqs]
     cols = [*dm.minus_vars, *dm.zero_vars, *dm.plus_vars]
     X = st.X[np.ix_(rows, cols)] != 0
     Fm = st.F[rows] != 0
-    fig_h = max(4.0, 0.11 * len(rows))
-    fig, (ax, axf) = plt.subplots(1, 2, figsize=(max(6.0, 0.11 * (len(cols) + st.nf)) + 2, fig_h),
-                                  gridspec_kw={"width_ratios": [len(cols), max(st.nf, 1)]})
+    nc = len(cols)
+    fig, ax = _figure(ax, (max(6.0, 0.11 * (nc + st.nf)) + 2, max(4.0, 0.11 * len(rows))))
     yy, xx = np.nonzero(X)
     ax.scatter(xx, yy, s=6, c="tab:blue", marker="s")
+    fy, fx = np.nonzero(Fm)
+    ax.scatter(fx + nc + 1, fy, s=8, c="tab:orange", marker="o")
     off = len(dm.minus_eqs) + len(dm.zero_eqs) - 0.5
     offc = len(dm.minus_vars) + len(dm.zero_vars) - 0.5
     ax.axhline(off, color="tab:red", lw=0.8)
     ax.axvline(offc, color="tab:red", lw=0.8)
-    ax.set_xlim(-0.5, len(cols) - 0.5)
+    ax.axvline(nc, color="grey", lw=0.8)
+    ax.set_xlim(-0.5, nc + st.nf + 0.5)
     ax.set_ylim(len(rows) - 0.5, -0.5)
     ax.set_yticks(range(len(rows)), [st.equations[r] for r in rows], fontsize=5)
-    ax.set_xticks(range(len(cols)), [st.unknowns[c] for c in cols], fontsize=5, rotation=90)
-    ax.set_title(f"{summary.model.name}: DM decomposition (M+ below/right of the red lines)", fontsize=8)
-    fy, fx = np.nonzero(Fm)
-    axf.scatter(fx, fy, s=8, c="tab:orange", marker="o")
-    axf.set_xlim(-0.5, st.nf - 0.5)
-    axf.set_ylim(len(rows) - 0.5, -0.5)
-    axf.set_yticks([])
-    axf.set_xticks(range(st.nf), list(st.faults), fontsize=5, rotation=90)
-    axf.set_title("faults", fontsize=8)
+    ax.set_xticks([*range(nc), *range(nc + 1, nc + 1 + st.nf)], [*(st.unknowns[c] for c in cols), *st.faults],
+                  fontsize=5, rotation=90)
+    for label in ax.get_xticklabels()[nc:]:
+        label.set_color("tab:orange")
+    ax.set_title(f"{summary.model.name}: DM decomposition (M+ below/right of the red lines; faults right of the grey "
+                 "line)", fontsize=8)
     fig.tight_layout()
     return fig
 

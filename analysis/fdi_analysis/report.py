@@ -49,6 +49,9 @@ def markdown(summary: Summary, plots: dict[str, str] | None = None) -> str:
     pairs = d["faults"]["non_isolable_pairs"]
     lines.append("- single faults that cannot be isolated from each other: "
                  + (", ".join("{" + ", ".join(p) + "}" for p in pairs) if pairs else "none"))
+    one_way = d["faults"]["one_way_pairs"]
+    lines.append("- isolable one way only (a -> b: a cannot be isolated from b, b can be isolated from a): "
+                 + (", ".join(f"{a} -> {b}" for a, b in one_way) if one_way else "none"))
     lines += ["", "### Isolability classes", "", "| class | faults | meaning |", "|---|---|---|"]
     fault_desc = {f.name: f.desc for f in summary.model.faults}
     for k, cl in enumerate(iso.classes, 1):

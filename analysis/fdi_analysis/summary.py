@@ -26,6 +26,11 @@ class Summary:
     def redundancy(self) -> int:
         return self.dm.redundancy
 
+    def __repr__(self) -> str:
+        iso = self.isolability
+        return (f"Summary({self.model.name!r}: redundancy {self.redundancy}, {int(iso.detectable.sum())} of "
+                f"{self.structure.nf} faults detectable, {len(iso.classes)} isolability classes)")
+
     def problems(self) -> list[str]:
         """What keeps the model from a complete diagnosis, each naming the equations, unknowns or faults."""
         return structural_problems(self.structure, self.dm, self.isolability)
@@ -59,6 +64,8 @@ class Summary:
                 "not_detectable": [f for f, d in zip(st.faults, iso.detectable, strict=True) if not d],
                 "isolability_classes": [[st.faults[i] for i in c] for c in iso.classes],
                 "non_isolable_pairs": [[st.faults[i], st.faults[j]] for i, j in iso.non_isolable_pairs()],
+                # [a, b]: a cannot be isolated from b, b can be isolated from a
+                "one_way_pairs": [[st.faults[i], st.faults[j]] for i, j in iso.one_way_pairs()],
                 "isolable_from": {
                     st.faults[i]: [st.faults[j] for j in range(st.nf) if iso.isolable[i, j]]
                     for i in range(st.nf)

@@ -44,6 +44,9 @@ def print_summary(s: Summary) -> None:
     for cl in iso.classes:
         if len(cl) > 1:
             print("  not isolable from each other: " + ", ".join(st.faults[i] for i in cl))
+    one_way = iso.one_way_pairs()
+    print(f"isolable one way only (a -> b: a cannot be isolated from b, b can be from a): {len(one_way)} pairs"
+          + (": " + ", ".join(f"{st.faults[i]} -> {st.faults[j]}" for i, j in one_way) if one_way else ""))
 
 
 def run(args: argparse.Namespace) -> int:
