@@ -21,7 +21,7 @@ LAYERS: tuple[tuple[str, int], ...] = (
     ("fdi_analysis.structure", 0), ("fdi_analysis.random_structures", 0), ("fdi_analysis.uncertainty", 0),
     ("fdi_analysis.dm", 1), ("fdi_analysis.isolability", 1), ("fdi_analysis.fault_matrix", 1),
     ("fdi_analysis.summary", 1), ("fdi_analysis.interpretation", 1), ("fdi_analysis.report", 1),
-    ("fdi_analysis.plots", 1), ("fdi_analysis.mso", 1), ("fdi_analysis.robustness", 1),
+    ("fdi_analysis.plots", 1), ("fdi_analysis.mso", 1), ("fdi_analysis.robustness", 1), ("fdi_analysis.tables", 0),
     ("fdi_analysis.selection", 2),
     ("fdi_analysis.residuals", 3),
     ("fdi_analysis.export", 4),
@@ -33,13 +33,14 @@ LAYERS: tuple[tuple[str, int], ...] = (
     ("fdi_host.live", 14),
     ("fdi_host.monitor", 15), ("fdi_host.quality", 15),
     ("fdi_host.replay", 16), ("fdi_host.fleet", 16),
+    ("fdi_host.diagnosis", 13), ("fdi_host.diagnosis_plots", 10), ("fdi_host.api", 16),
     ("fdi_host.cli", 17), ("fdi_host.tuning.cli", 17),
 )
 
 
 # A package root that re-exports an upper layer's names (PEP 562 `__getattr__`, loaded on first use) is a facade
-# above its whole package: `fdi_analysis` re-exports the API (layer 5).
-FACADES = {"fdi_analysis": 6}
+# above its whole package: `fdi_analysis` re-exports the API (layer 5), `fdi_host` its API (layer 16).
+FACADES = {"fdi_analysis": 6, "fdi_host": 18}
 
 
 def layer(module: str) -> int:
