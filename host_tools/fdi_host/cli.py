@@ -18,7 +18,7 @@ from fdi_analysis.cli.common import add_version, run, use_file_backend
 from fdi_host.can import traffic
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.can.frame import Frame
-from fdi_host.can.logs import LOG_SUFFIXES, write_log
+from fdi_host.can.logs import formats_text, is_log, write_log
 from fdi_host.live import sim as live_sim
 from fdi_host.paper import fig6
 from fdi_host.sim.drive import simulate_from_args, write_truth
@@ -55,7 +55,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     add_drive_arguments(ap)
     ap.add_argument("--out", action="append", default=[], type=Path, metavar="FILE",
-                    help="CAN log to write; format from the extension: .log .asc .blf (repeatable)")
+                    help="CAN log to write; format from the extension: .log .asc .blf .trc .csv .db, .mf4 (with "
+                    "asammdf), the text formats also .gz (repeatable)")
     ap.add_argument("--truth", type=Path, help="ground-truth JSON (default: <first out>.truth.json)")
     ap.add_argument("--npz", type=Path, help="also write true and measured signals at 1 kHz as .npz")
     ap.add_argument("--plot", type=Path, help="PNG with the signals and the fault windows")
@@ -85,8 +86,8 @@ def simulate_command(ap: argparse.ArgumentParser, args: argparse.Namespace) -> i
             print(f"{name:12s} {load_scenario(name).description}")
         return 0
     for out in args.out:
-        if out.suffix not in LOG_SUFFIXES:
-            ap.error(f"--out {out}: unsupported extension; use {', '.join(LOG_SUFFIXES)}")
+        if not is_log(out):
+            ap.error(f"--out {out}: unsupported extension; use {formats_text()}")
     try:
         drive = simulate_from_args(ap, args)
         result, plant, duration = drive.result, drive.plant, drive.duration

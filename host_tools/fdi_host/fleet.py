@@ -16,7 +16,9 @@ Executors:
   paths (a shared file system); only the small `LogResult` comes back.
 
 A log that cannot be read, or whose truth file is malformed, is a row with its one-line error, never the end of
-the run; the command line exits 1 when any log failed.
+the run; the command line exits 1 when any log failed. A log with malformed lines (garbage, a last line cut off)
+is replayed without them, as the ECU skips a bad frame; its row counts them (`LogResult.skipped`) and the summary
+lists those logs (`skipped_lines`); with ``strict`` such a log fails instead, naming the file and the line.
 
     logs = find_logs(["fleet/2026-06/"])                       # folders, files, glob patterns
     report = run_fleet(partial(replay_log, table="romo"), logs, scheduler="tcp://10.0.0.5:8786")
@@ -34,7 +36,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from fdi_host.can.logs import LOG_SUFFIXES, LogError
+from fdi_host.can.logs import LogError, formats_text, is_log, looks_like_log
 from fdi_host.executors import ExecutorError, run_tasks
 from fdi_host.monitor.score import FaultScore
 from fdi_host.sim.faults import FAULT_IDS
@@ -62,6 +64,8 @@ class LogResult:
     false_alarms: int = 0
     false_alarm_time: float = 0.0  # s
     error: str | None = None
+    skipped: int = 0  # malformed lines (or records) skipped while reading the log
+    skipped_note: str | None = None  # which, as one line (`fdi_host.can.logs.LogIssues.summary`)
 
 
 @dataclass(frozen=True)
@@ -118,30 +122,42 @@ class FleetReport:
     def false_alarms(self) -> int:
         return sum(r.false_alarms for r in self.replayed)
 
+    @property
+    def with_skipped(self) -> list[LogResult]:
+        """The logs replayed without some of their lines (malformed: garbage, a last line cut off)."""
+        return [r for r in self.replayed if r.skipped]
+
 
 # ---------------------------------------------------------------------------------------------- the logs
+_NONE_FOUND = ".log/.asc/.blf log"  # the common formats, in "no ... log" messages (every other is looked for too)
+
+
 def find_logs(specs: Sequence[str | Path]) -> list[Path]:
-    """The CAN logs named by `specs`: files, folders (searched recursively for .log/.asc/.blf) and glob patterns
-    (``**`` crosses folders), each log once, sorted. FleetError when a spec names nothing or no log is found."""
+    """The CAN logs named by `specs`: files, folders (searched recursively for every log format python-can reads:
+    .log, .asc, .blf, .trc, .csv, .mf4, .db, the text formats also .gz; a .csv or .db only with python-can's
+    header, `looks_like_log`) and glob patterns (``**`` crosses folders), each log once, sorted. FleetError when a
+    spec names nothing or no log is found."""
     out: set[Path] = set()
     for spec in specs:
         text = str(spec)
         p = Path(text)
         if p.is_dir():
-            found = [q for q in p.rglob("*") if q.suffix in LOG_SUFFIXES and q.is_file()]
+            found = [q for q in p.rglob("*") if q.is_file() and looks_like_log(q)]
         elif GLOB_CHARS & set(text):
-            found = [Path(q) for q in glob.glob(text, recursive=True) if Path(q).suffix in LOG_SUFFIXES]
+            found = [Path(q) for q in glob.glob(text, recursive=True) if Path(q).is_file() and looks_like_log(q)]
             if not found:
-                raise FleetError(f"{text}: no {'/'.join(LOG_SUFFIXES)} log matches")
+                raise FleetError(f"{text}: no {_NONE_FOUND} matches (nor any other format: {formats_text()})")
         elif p.is_file():
-            if p.suffix not in LOG_SUFFIXES:
-                raise FleetError(f"{p}: unsupported log format {p.suffix!r}; use one of {', '.join(LOG_SUFFIXES)}")
+            if not is_log(p):
+                raise FleetError(f"{p}: unsupported log format {''.join(p.suffixes[-2:]) or p.name!r}; use one of "
+                                 f"{formats_text()}")
             found = [p]
         else:
             raise FleetError(f"{p}: no such file or folder")
         out.update(found)
     if not out:
-        raise FleetError(f"no {'/'.join(LOG_SUFFIXES)} log in {', '.join(str(s) for s in specs)}")
+        raise FleetError(f"no {_NONE_FOUND} log in {', '.join(str(s) for s in specs)} (nor any other format: "
+                         f"{formats_text()})")
     return sorted(out)
 
 
@@ -232,9 +248,17 @@ def _ms(x: float | None) -> str:
 
 def summary_line(report: FleetReport) -> str:
     n, ok = len(report.logs), len(report.replayed)
+    skipped = report.with_skipped
+    note = (f"; {len(skipped)} logs with malformed lines skipped ({sum(r.skipped for r in skipped)} lines)"
+            if skipped else "")
     return (f"{ok} of {n} logs, {report.drive_hours:.2f} drive-hours in {report.wall:.1f} s on "
             f"{report.executor}: {report.logs_per_minute:.0f} logs/min, "
-            f"{report.drive_hours_per_minute:.2f} drive-hours/min")
+            f"{report.drive_hours_per_minute:.2f} drive-hours/min{note}")
+
+
+def skipped_lines(report: FleetReport) -> list[str]:
+    """One line per log replayed without some malformed lines: the log, how many, the first line numbers, why."""
+    return [r.skipped_note or f"{r.log}: {r.skipped} malformed lines skipped" for r in report.with_skipped]
 
 
 def fault_table(report: FleetReport) -> list[str]:
@@ -278,6 +302,8 @@ def markdown(report: FleetReport, per_log: bool = True) -> str:
           f"- {free_line(report)}", "", "## Per fault (the logs with a truth file)", "", *fault_table(report), ""]
     if report.failed:
         md += [f"{len(report.failed)} logs could not be replayed (see the table per log).", ""]
+    if report.with_skipped:
+        md += ["## Logs with malformed lines (skipped)", "", *(f"- {line}" for line in skipped_lines(report)), ""]
     if per_log:
         md += ["## Per log", "", *log_table(report), ""]
     return "\n".join(md)
@@ -295,6 +321,8 @@ def to_json(report: FleetReport) -> dict[str, Any]:
         "drive_hours_per_minute": report.drive_hours_per_minute,
         "fault_free_hours": report.fault_free_hours,
         "false_alarms": report.false_alarms,
+        "logs_with_skipped_lines": len(report.with_skipped),
+        "skipped_lines": sum(r.skipped for r in report.with_skipped),
         "faults": [asdict(f) for f in report.faults],
         "logs": [asdict(r) for r in report.logs],
         **report.extra,

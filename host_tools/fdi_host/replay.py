@@ -1,4 +1,9 @@
-"""``fdi-replay``: a recorded CAN log (candump .log, .asc, .blf) back onto a bus, or straight through the ECU.
+"""``fdi-replay``: a recorded CAN log (any format python-can reads) back onto a bus, or straight through the ECU.
+
+Logs: candump ``.log``, Vector ``.asc`` and ``.blf``, PEAK ``.trc``, ``.csv``, ``.mf4`` (with asammdf) and SQLite
+``.db``, the text formats also gzip-compressed (``.log.gz``), read through python-can's readers
+(`fdi_host.can.logs`). A malformed line (garbage, a last line cut off) is counted, reported with its line number
+and skipped, as the ECU skips a bad frame; ``--strict`` makes it an error naming the file and the line.
 
 On a bus the frames keep their relative timing, at ``--speed`` times real time (``max``: as fast as
 python-can sends). ``--offline`` skips the bus: every frame goes through the ECU bindings with its log
@@ -24,7 +29,6 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
-import can
 import numpy as np
 from tqdm import tqdm
 
@@ -32,12 +36,12 @@ from fdi_analysis.cli.common import EXIT_ERROR, INPUT_ERRORS, add_version, fail,
 from fdi_host import fleet
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.can.frame import Frame
-from fdi_host.can.log_columns import FrameColumns, frame_columns, read_log_columns
-from fdi_host.can.logs import LOG_SUFFIXES, LogError, read_log
+from fdi_host.can.log_columns import FrameColumns, frame_columns, read_columns_checked
+from fdi_host.can.logs import LogError, LogIssues, formats_text, is_log, read_log_checked
 from fdi_host.ecu.bindings import EcuError
 from fdi_host.ecu.records import DiagRecord
 from fdi_host.ecu.session import DIAG_ID, ORIGIN_LEAD, EcuSession, table_classes
-from fdi_host.live.bus import StopFlag, add_bus_arguments, open_bus
+from fdi_host.live.bus import BusOptions, StopFlag, add_bus_arguments, open_cli_bus
 from fdi_host.live.sender import send_paced
 from fdi_host.monitor.report import plot_diagnosis, plot_residuals, score_table, write_reports
 from fdi_host.monitor.score import score_run, windows_from_truth
@@ -46,6 +50,9 @@ EPILOG = """\
 examples:
   fdi-replay drive.blf --speed 1 --interface udp_multicast          (real time onto the bus)
   fdi-replay drive.log --speed 10 --interface socketcan --channel vcan0
+  fdi-replay drive.trc --interface pcan --channel PCAN_USBBUS1 --bitrate 500000   (onto a real bus, PEAK adapter)
+  fdi-replay drive.asc --can-config bus.ini --can-context bench     (the bus in a python-can configuration file)
+  fdi-replay drive.log.gz --offline --table kin --strict            (a malformed line is an error, not skipped)
   fdi-replay drive.blf --offline --table kin                        (through the bindings, prints x real time)
   fdi-replay drive.blf --offline --table kin --truth drive.truth.json --out-dir out/replay --ecu-log out/ecu.json
   fdi-replay fleet/ --out-dir out/fleet                             (every log below fleet/, one process per core)
@@ -154,39 +161,52 @@ def replay_offline_fast(frames: Sequence[Frame], table: str) -> FastResult:
 LOG_ERRORS: tuple[type[BaseException], ...] = (*INPUT_ERRORS, EcuError)  # a bad log, truth file or table
 
 
-def replay_log(path: str, table: str = "romo", grace: float = 3.0) -> fleet.LogResult:
+def no_frames(issues: LogIssues) -> LogError:
+    """The error for a log without a data frame (with what was skipped, if anything)."""
+    return LogError(f"{issues.path}: holds no data frames{f' ({issues.summary()})' if issues else ''}")
+
+
+def replay_log(path: str, table: str = "romo", grace: float = 3.0, strict: bool = False) -> fleet.LogResult:
     """One log of a fleet: read, through a fresh ECU in one C call, scored against ``<log>.truth.json`` when it
-    exists. Never raises for a bad log or truth file: the result then carries the one-line error."""
+    exists. Never raises for a bad log or truth file: the result then carries the one-line error. Malformed lines
+    are skipped and counted in the result (`strict`: the log fails at the first one)."""
     t0 = time.perf_counter()
     p = Path(path)
     try:
-        columns = read_log_columns(p)
-        if not len(columns):
-            raise LogError(f"{p}: holds no data frames")
-        res = replay_columns(columns, table)
-        steps = len(res.records)
-        alarms = sum(1 for r in res.records if r.alarm_mask)
-        truth = fleet.truth_file(p)
-        if not truth.is_file():
-            return fleet.LogResult(str(p), res.frames, res.log_duration, time.perf_counter() - t0, steps, alarms)
-        doc = fleet.read_truth(truth)
-        try:
-            windows = windows_from_truth(doc)
-        except (KeyError, TypeError, ValueError) as exc:
-            raise LogError(f"{truth}: a fault entry without {exc}") from exc
-        score = score_run(res.records, windows, table_classes(res.ecu), grace)
+        read = read_columns_checked(p, strict)
+        if not len(read.columns):
+            raise no_frames(read.issues)
+        result = _scored(p, replay_columns(read.columns, table), grace)
     except LOG_ERRORS as exc:
         return fleet.LogResult(str(p), wall=time.perf_counter() - t0, error=one_line(exc))
-    return fleet.LogResult(str(p), res.frames, res.log_duration, time.perf_counter() - t0, steps, alarms,
-                           str(truth), tuple(score.faults), len(score.false_alarms), score.false_alarm_time)
+    return replace(result, wall=time.perf_counter() - t0, skipped=read.issues.skipped,
+                   skipped_note=read.issues.summary() if read.issues else None)
+
+
+def _scored(p: Path, res: FastResult, grace: float) -> fleet.LogResult:
+    """A replayed log's row: what the diagnosis said, scored against ``<log>.truth.json`` when it exists."""
+    steps = len(res.records)
+    alarms = sum(1 for r in res.records if r.alarm_mask)
+    truth = fleet.truth_file(p)
+    if not truth.is_file():
+        return fleet.LogResult(str(p), res.frames, res.log_duration, 0.0, steps, alarms)
+    doc = fleet.read_truth(truth)
+    try:
+        windows = windows_from_truth(doc)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise LogError(f"{truth}: a fault entry without {exc}") from exc
+    score = score_run(res.records, windows, table_classes(res.ecu), grace)
+    return fleet.LogResult(str(p), res.frames, res.log_duration, 0.0, steps, alarms, str(truth), tuple(score.faults),
+                           len(score.false_alarms), score.false_alarm_time)
 
 
 def replay_fleet(logs: Sequence[str | Path], table: str = "romo", grace: float = 3.0, *, workers: int | None = None,
-                 scheduler: str | None = None, progress: fleet.Progress | None = None) -> fleet.FleetReport:
+                 scheduler: str | None = None, progress: fleet.Progress | None = None,
+                 strict: bool = False) -> fleet.FleetReport:
     """Every log of `logs` (files, folders, glob patterns) through the ECU with `replay_log`, on local processes
     (`workers`, default one per core) or the Dask cluster at `scheduler`; one report over all of them."""
-    return fleet.run_fleet(partial(replay_log, table=table, grace=grace), fleet.find_logs(logs), workers=workers,
-                           scheduler=scheduler, progress=progress, table=table)
+    return fleet.run_fleet(partial(replay_log, table=table, grace=grace, strict=strict), fleet.find_logs(logs),
+                           workers=workers, scheduler=scheduler, progress=progress, table=table)
 
 
 def _speed(text: str) -> float | None:
@@ -205,8 +225,9 @@ def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="fdi-replay", description=__doc__.splitlines()[0] if __doc__ else None,
                                  epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("logs", nargs="+", metavar="LOG",
-                    help="CAN log: .log (candump), .asc or .blf; several logs, a folder or a glob pattern: a fleet "
-                    "(offline, scored against each log's .truth.json)")
+                    help="CAN log: .log (candump), .asc, .blf, .trc, .csv, .mf4 (with asammdf), .db, the text formats "
+                    "also .gz; several logs, a folder or a glob pattern: a fleet (offline, scored against each log's "
+                    ".truth.json)")
     ap.add_argument("--speed", type=_speed, default=1.0, help="times real time: 1, 10, ... or max (default 1)")
     add_bus_arguments(ap)
     ap.add_argument("--offline", action="store_true", help="no bus: through the ECU bindings as fast as possible")
@@ -219,6 +240,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="fleet: local processes (default: one per core; 1: in this process)")
     ap.add_argument("--scheduler", metavar="ADDRESS",
                     help="fleet: the Dask scheduler to run on, e.g. tcp://10.0.0.5:8786 (pip install romo-fdi[fleet])")
+    ap.add_argument("--strict", action="store_true",
+                    help="a malformed line (garbage, a last line cut off) is an error naming the file and the line "
+                    "(default: counted, reported and skipped, as the ECU skips a bad frame)")
     ap.add_argument("--quiet", action="store_true", help="fleet: no progress bar")
     return add_version(ap)
 
@@ -234,8 +258,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             ap.error("--truth and --ecu-log are for one log (a fleet's truth files lie beside its logs)")
         return run("fdi-replay", lambda: _fleet(args), (fleet.FleetError,))
     args.log = Path(args.logs[0])
-    if args.log.suffix not in LOG_SUFFIXES:
-        ap.error(f"{args.log}: unsupported extension; use {', '.join(LOG_SUFFIXES)}")
+    if not is_log(args.log):
+        ap.error(f"{args.log}: unsupported extension; use {formats_text()}")
     if not args.log.is_file():
         ap.error(f"{args.log}: no such file")
     return run("fdi-replay", lambda: _one_log(args), (EcuError,))
@@ -243,19 +267,26 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _one_log(args: argparse.Namespace) -> int:
     """One log onto the bus, or offline through the ECU (in one C call the log read as columns, no frame objects)."""
-    empty = f"{args.log}: holds no data frames"
     if args.offline:  # a LogError names the file and what is wrong
-        source = read_log_columns(args.log) if args.ecu_log is None else read_log(args.log)
-        return _offline(args, source) if len(source) else fail("fdi-replay", empty)
-    frames = read_log(args.log)
+        source: list[Frame] | FrameColumns
+        if args.ecu_log is None:
+            cols = read_columns_checked(args.log, args.strict)
+            source, issues = cols.columns, cols.issues
+        else:
+            read = read_log_checked(args.log, args.strict)
+            source, issues = read.frames, read.issues
+        _report_skipped(issues)
+        return _offline(args, source) if len(source) else fail("fdi-replay", no_frames(issues))
+    read = read_log_checked(args.log, args.strict)
+    frames = read.frames
+    _report_skipped(read.issues)
     if not frames:
-        return fail("fdi-replay", empty)
+        return fail("fdi-replay", no_frames(read.issues))
     stop = StopFlag()
-    try:
-        bus = open_bus(args.interface, args.channel)
-    except (OSError, ValueError, ImportError, can.CanError) as exc:
-        print(f"fdi-replay: cannot open {args.interface} bus: {exc}", file=sys.stderr)
+    opened = open_cli_bus("fdi-replay", BusOptions.from_args(args))
+    if opened is None:
         return EXIT_ERROR
+    bus, bus_config = opened
     try:
         t0 = time.perf_counter()
         log = send_paced(bus, frames, args.speed, stop)
@@ -263,10 +294,16 @@ def _one_log(args: argparse.Namespace) -> int:
     finally:
         bus.shutdown()
     dur = frames[-1].timestamp - frames[0].timestamp
-    print(f"replayed {len(log.wall)} of {len(frames)} frames ({dur:.2f} s of log) in {wall:.2f} s "
-          f"({dur / wall if wall > 0 else float('inf'):.1f}x real time); "
+    print(f"replayed {len(log.wall)} of {len(frames)} frames ({dur:.2f} s of log) onto {bus_config.describe()} in "
+          f"{wall:.2f} s ({dur / wall if wall > 0 else float('inf'):.1f}x real time); "
           f"largest delay behind schedule {log.max_behind * 1e3:.2f} ms")
     return 130 if log.interrupted else 0
+
+
+def _report_skipped(issues: LogIssues) -> None:
+    """The malformed lines skipped, as one line (nothing for a clean log)."""
+    if issues:
+        print(f"skipped: {issues.summary()}", flush=True)
 
 
 def _offline(args: argparse.Namespace, source: list[Frame] | FrameColumns) -> int:
@@ -320,12 +357,18 @@ def _fleet(args: argparse.Namespace) -> int:
             if r.error is not None:
                 bar.write(f"fdi-replay: {r.error}", file=sys.stderr)
 
-        report = fleet.run_fleet(partial(replay_log, table=args.table, grace=args.grace), logs,
+        report = fleet.run_fleet(partial(replay_log, table=args.table, grace=args.grace, strict=args.strict), logs,
                                  workers=args.workers, scheduler=args.scheduler, progress=progress, table=args.table)
     print("\n".join(fleet.fault_table(report)))
     print(fleet.free_line(report))
     if len(report.logs) <= 20:
         print("\n".join(fleet.log_table(report)))
+    skipped = fleet.skipped_lines(report)
+    if skipped:
+        print(f"logs with malformed lines (skipped): {len(skipped)}")
+        print("\n".join(f"  {line}" for line in skipped[:20]))
+        if len(skipped) > 20:
+            print("  ... (every one in fleet.md)")
     print(fleet.summary_line(report))
     print("wrote " + ", ".join(str(p) for p in fleet.write_reports(args.out_dir, report)))
     if report.failed:

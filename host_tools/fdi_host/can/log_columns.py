@@ -1,12 +1,14 @@
 """A log's data frames as columns (times, identifiers, lengths, payloads): what the ECU bindings take in one C call
 (`Ecu.process_arrays`), without one Python object per frame.
 
-`read_log_columns` gives exactly the columns of `frame_columns(read_log(path))`. A candump log (``.log``) in the
-plain form that python-can and ``candump -L`` write, classic data frames only, is parsed here with numpy, several
-times faster than python-can's reader (`host_tools/bench/bench_can.py` prints both); any other log, and any
-candump log with something else in it (a remote, error or CAN FD frame, a tab, a blank line, an unusual
-timestamp, a malformed line), goes through `read_log`, so that the result, and the error for a bad file, are
-always python-can's.
+`read_log_columns` gives exactly the columns of `frame_columns(read_log(path))`, and `read_columns_checked` the
+same malformed lines as `read_log_checked`. A candump log (``.log``, ``.log.gz``) is parsed here with numpy,
+several times faster than python-can's reader (`host_tools/bench/bench_can.py` prints both), line by line: every
+line in the plain form that python-can and ``candump -L`` write (a classic data frame) is parsed here; every
+other line (a remote, error or CAN FD frame, a tab, a blank line, an unusual timestamp, a garbage line, a last
+line cut off) goes through python-can's reader (`fdi_host.can.logs.read_text_lines`), so that its frame, or its
+count as malformed, is always python-can's; the frames are merged back in line order. Any other format goes
+through `read_log`.
 """
 
 from __future__ import annotations
@@ -16,11 +18,20 @@ from dataclasses import dataclass
 from operator import attrgetter
 from pathlib import Path
 
+import can
 import numpy as np
 from numpy.typing import NDArray
 
 from fdi_host.can.frame import Frame
-from fdi_host.can.logs import check_suffix, read_log
+from fdi_host.can.logs import (
+    LogIssues,
+    Tally,
+    check_suffix,
+    log_format,
+    read_bytes,
+    read_log_checked,
+    read_text_lines,
+)
 
 
 @dataclass(frozen=True)
@@ -36,9 +47,22 @@ class FrameColumns:
     def __len__(self) -> int:
         return int(self.t.size)
 
-    def select(self, keep: NDArray[np.bool_]) -> FrameColumns:
-        """The frames where keep is true."""
+    def select(self, keep: NDArray[np.bool_] | NDArray[np.intp]) -> FrameColumns:
+        """The frames where keep is true (or at the indices in keep, in their order)."""
         return FrameColumns(self.t[keep], self.frame_id[keep], self.dlc[keep], self.data[keep])
+
+    def concat(self, other: FrameColumns) -> FrameColumns:
+        """These frames, then `other`'s."""
+        return FrameColumns(np.concatenate((self.t, other.t)), np.concatenate((self.frame_id, other.frame_id)),
+                            np.concatenate((self.dlc, other.dlc)), np.concatenate((self.data, other.data)))
+
+
+@dataclass(frozen=True)
+class ColumnsRead:
+    """A log's data frames as columns and what was skipped (`fdi_host.can.logs.LogIssues`)."""
+
+    columns: FrameColumns
+    issues: LogIssues
 
 
 def frame_columns(frames: Sequence[Frame]) -> FrameColumns:
@@ -54,19 +78,42 @@ def frame_columns(frames: Sequence[Frame]) -> FrameColumns:
     return FrameColumns(t, ids, dlc, data)
 
 
-def read_log_columns(path: str | Path) -> FrameColumns:
+def read_log_columns(path: str | Path, strict: bool = False) -> FrameColumns:
     """The data frames of a log as columns, the same as `frame_columns(read_log(path))`; a LogError (from
     read_log) for a file that cannot be read."""
+    return read_columns_checked(path, strict).columns
+
+
+def read_columns_checked(path: str | Path, strict: bool = False) -> ColumnsRead:
+    """The data frames of a log as columns and the malformed lines skipped, the same as `read_log_checked` (with
+    `strict` the first malformed line is a `MalformedLogError`)."""
     p = check_suffix(path)
-    if p.suffix == ".log" and p.is_file():
-        columns = parse_candump(p.read_bytes())
-        if columns is not None:
-            return columns
-    return frame_columns(read_log(p))
+    if log_format(p) in (".log", ".log.gz") and p.is_file():
+        return _read_candump(p, strict)
+    read = read_log_checked(p, strict)
+    return ColumnsRead(frame_columns(read.frames), read.issues)
 
 
-# the bytes a plain candump log may hold: printable ASCII, one space between tokens, a newline after each line
+def _read_candump(p: Path, strict: bool) -> ColumnsRead:
+    """A candump log: its plain lines parsed here, the others by python-can, merged in line order."""
+    raw, cut = read_bytes(p)
+    tally = Tally(str(p), strict)
+    fast = candump_lines(raw)
+    others = list(read_text_lines(can.CanutilsLogReader, fast.other, tally))
+    if cut is not None and (raw.endswith(b"\n") or not raw):  # as read_log_checked
+        tally.add(raw.count(b"\n") + 1, None, cut)
+    columns = fast.columns
+    if others:
+        lines = np.concatenate((fast.line, np.array([n for n, _ in others], np.int64)))
+        merged = columns.concat(frame_columns([f for _, f in others]))
+        columns = merged.select(np.argsort(lines, kind="stable"))
+    return ColumnsRead(columns, tally.issues())
+
+
+# the bytes a plain candump line may hold: printable ASCII (the newline ends it)
 _PRINTABLE = bytes(range(0x20, 0x7F)) + b"\n"
+_NOT_PRINTABLE = np.ones(256, np.bool_)
+_NOT_PRINTABLE[0x20:0x7F] = False
 _HEX = np.full(256, 0xFF, np.uint8)
 _HEX[np.frombuffer(b"0123456789", np.uint8)] = np.arange(10, dtype=np.uint8)
 _HEX[np.frombuffer(b"abcdef", np.uint8)] = np.arange(10, 16, dtype=np.uint8)
@@ -74,113 +121,150 @@ _HEX[np.frombuffer(b"ABCDEF", np.uint8)] = np.arange(10, 16, dtype=np.uint8)
 _DIRECTIONS = np.frombuffer(b"RTrt", np.uint8)
 _ID_MAX_DIGITS = 8
 _DATA_MAX_DIGITS = 16  # 8 bytes: a classic frame
+_TS_WIDTH = 24
+_FRAME_WIDTH = _ID_MAX_DIGITS + 1 + _DATA_MAX_DIGITS
 _EXACT_INT = 2**53  # a decimal N / 10^d with N below this is float(its text) after one float division
 _POW10 = np.array([float(10**d) for d in range(17)])  # exact: 10^d < 2^53 for d <= 15, 10^16 = 2^16 5^16 exact too
 
+Mask = NDArray[np.bool_]
+Ints = NDArray[np.int64]
 
-def _gather(padded: NDArray[np.uint8], start: NDArray[np.int64], end: NDArray[np.int64],
-            width: int) -> tuple[NDArray[np.uint8], NDArray[np.int64]] | None:
-    """Each token padded[start:end] as a row of `width` bytes (0 past its end) and its length; None when a token is
-    empty or longer than width. `padded` ends in at least `width` bytes past the last token."""
+
+@dataclass(frozen=True)
+class CandumpLines:
+    """A candump log split by `candump_lines`: the frames of its plain lines (`columns`, their 1-based line
+    numbers in `line`), every other line for python-can (`other`: number and text with its line end), and whether
+    the whole file is plain (`uniform`: every line plain, with the same number of tokens, ending in a newline)."""
+
+    columns: FrameColumns
+    line: Ints
+    other: list[tuple[int, str]]
+    uniform: bool
+
+
+def _lines_with(positions: Ints, newline: Ints) -> Ints:
+    """How many of the byte `positions` each line holds (a line ends at its newline)."""
+    counts: Ints = np.bincount(np.searchsorted(newline, positions), minlength=newline.size).astype(np.int64)
+    return counts
+
+
+def _gather(padded: NDArray[np.uint8], start: Ints, end: Ints, width: int) -> tuple[NDArray[np.uint8], Ints, Mask]:
+    """Each token padded[start:end] as a row of `width` bytes (0 past its end), its length, and whether it is one
+    (not empty, not longer than width; the row of one that is not is garbage). `padded` ends in at least `width`
+    bytes past the last token."""
     length = end - start
-    if length.size and (int(length.min()) < 1 or int(length.max()) > width):
-        return None
+    ok = (length >= 1) & (length <= width)
+    length = np.where(ok, length, 1)
     rows = np.lib.stride_tricks.sliding_window_view(padded, width)[start]  # a copy: row i = padded[start[i]:][:width]
     rows[np.arange(width)[None, :] >= length[:, None]] = 0
-    return rows, length
+    return rows, length, ok
 
 
-def _timestamps(tok: NDArray[np.uint8], length: NDArray[np.int64]) -> NDArray[np.float64] | None:
+def _timestamps(tok: NDArray[np.uint8], length: Ints) -> tuple[NDArray[np.float64], Mask]:
     """"(digits.digits)" -> its value, exactly float() of the text: N / 10^d with N < 2^53 is one correctly rounded
-    division of two exact floats. None for any other form (signs, exponents, more digits)."""
+    division of two exact floats; and which rows have that form (not: signs, exponents, more digits)."""
     n, width = tok.shape
     rows = np.arange(n)
-    if not ((tok[:, 0] == ord("(")).all() and (tok[rows, length - 1] == ord(")")).all()):
-        return None
+    ok = (tok[:, 0] == ord("(")) & (tok[rows, length - 1] == ord(")")) & (length >= 4)
     inner = np.zeros_like(tok)
     inner[:, : width - 1] = tok[:, 1:]
-    inner[rows, length - 2] = 0  # the closing parenthesis
+    inner[rows, np.maximum(length - 2, 0)] = 0  # the closing parenthesis
     dot = inner == ord(".")
     digit = (inner >= ord("0")) & (inner <= ord("9"))
-    if not ((dot.sum(axis=1) == 1).all() and ((digit | dot) == (inner != 0)).all()):
-        return None
+    ok &= (dot.sum(axis=1) == 1) & ((digit | dot) == (inner != 0)).all(axis=1)
     dot_at = np.argmax(dot, axis=1)
-    n_digits = digit.sum(axis=1)
-    if (dot_at < 1).any() or (dot_at >= length - 3).any() or (n_digits > 16).any():
-        return None  # digits on both sides of the point, at most 16 of them
+    ok &= (dot_at >= 1) & (dot_at < length - 3) & (digit.sum(axis=1) <= 16)  # digits on both sides, at most 16
     value = np.zeros(n, np.int64)
     for k in range(width - 1):
-        d = digit[:, k]
+        d = digit[:, k] & ok
         value = np.where(d, value * 10 + (inner[:, k].astype(np.int64) - ord("0")), value)
-    if (value >= _EXACT_INT).any():
-        return None
-    decimals = length - 3 - dot_at  # characters after the point, before ")"
+    ok &= value < _EXACT_INT
+    decimals = np.clip(length - 3 - dot_at, 0, 16)  # characters after the point, before ")"
     exact: NDArray[np.float64] = value.astype(np.float64) / _POW10[decimals]
-    return exact
+    return exact, ok
 
 
-def _frames(tok: NDArray[np.uint8], length: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64],
-                                                                          NDArray[np.uint8]] | None:
-    """"ID#DATA" (1-8 hex digits, then 0-16 hex digits in pairs) -> identifier, length, payload. None for a
-    remote, error or CAN FD frame or anything else."""
+def _frames(tok: NDArray[np.uint8], length: Ints) -> tuple[Ints, Ints, NDArray[np.uint8], Mask]:
+    """"ID#DATA" (1-8 hex digits, then 0-16 hex digits in pairs) -> identifier, length, payload, and which rows
+    have that form (not: a remote, error or CAN FD frame, or anything else)."""
     n, width = tok.shape
     sharp = tok == ord("#")
-    if not (sharp.sum(axis=1) == 1).all():
-        return None
+    ok = sharp.sum(axis=1) == 1
     at = np.argmax(sharp, axis=1)
     nib = _HEX[tok]
     used = tok != 0
-    if ((nib == 0xFF) & used & ~sharp).any():
-        return None  # not a hex digit (a remote frame's R, a second #, ...)
+    ok &= ~((nib == 0xFF) & used & ~sharp).any(axis=1)  # hex digits only (not a remote frame's R, a second #, ...)
     n_data = length - at - 1
-    if (at < 1).any() or (at > _ID_MAX_DIGITS).any() or (n_data % 2 != 0).any() or (n_data > _DATA_MAX_DIGITS).any():
-        return None
+    ok &= (at >= 1) & (at <= _ID_MAX_DIGITS) & (n_data % 2 == 0) & (n_data <= _DATA_MAX_DIGITS)
     ids = np.zeros(n, np.int64)
     for k in range(_ID_MAX_DIGITS):
         ids = np.where(k < at, (ids << 4) | nib[:, k].astype(np.int64), ids)
-    if (ids > 0x1FFFFFFF).any():
-        return None  # error frames (CAN_ERR_FLAG) and flag bits: python-can's reader decides
-    dlc = n_data // 2
+    ok &= ids <= 0x1FFFFFFF  # error frames (CAN_ERR_FLAG) and flag bits: python-can's reader decides
+    dlc = np.clip(n_data // 2, 0, 8)
     cols = np.minimum(at[:, None] + 1 + np.arange(_DATA_MAX_DIGITS)[None, :], width - 1)
     digits = np.take_along_axis(nib, cols, axis=1)  # uint8, as nib
     data = (digits[:, 0::2] << 4) | digits[:, 1::2]
     data[np.arange(8)[None, :] >= dlc[:, None]] = 0
-    return ids, dlc, data.astype(np.uint8, copy=False)  # already uint8: no copy (the annotation for mypy)
+    return ids, dlc, data.astype(np.uint8, copy=False), ok  # already uint8: no copy (the annotation for mypy)
+
+
+def _empty_columns() -> FrameColumns:
+    return FrameColumns(np.zeros(0, np.float64), np.zeros(0, np.int64), np.zeros(0, np.int64),
+                        np.zeros((0, 8), np.uint8))
+
+
+def candump_lines(raw: bytes) -> CandumpLines:
+    """A candump log's lines: the plain ones parsed to columns, the rest handed out as text for python-can.
+    Plain: printable ASCII, "(time) channel frame" with an optional direction R or T, the tokens one space apart,
+    ended by a newline (a last line without one may be cut off: python-can's reader and the malformed count
+    decide)."""
+    if not raw:
+        return CandumpLines(_empty_columns(), np.zeros(0, np.int64), [], False)
+    terminated = raw.endswith(b"\n")
+    buf = np.frombuffer(raw if terminated else raw + b"\n", np.uint8)
+    newline = np.flatnonzero(buf == ord("\n")).astype(np.int64)
+    starts = np.concatenate(([0], newline[:-1] + 1)).astype(np.int64)
+    space_at = np.flatnonzero(buf == ord(" ")).astype(np.int64)
+    n_space = _lines_with(space_at, newline)
+    cand = (n_space == 2) | (n_space == 3)
+    if raw.translate(None, _PRINTABLE):  # a byte other than printable ASCII and newlines: its line is not plain
+        odd = np.flatnonzero(_NOT_PRINTABLE[buf] & (buf != ord("\n"))).astype(np.int64)
+        cand &= _lines_with(odd, newline) == 0
+    if not terminated:
+        cand[-1] = False
+    idx = np.flatnonzero(cand)
+    spaces_before = np.concatenate(([0], np.cumsum(n_space)[:-1])).astype(np.int64)
+    columns, ok = _parse_lines(buf, starts[idx], newline[idx], spaces_before[idx], n_space[idx] == 3, space_at)
+    plain = np.zeros(newline.size, np.bool_)
+    plain[idx[ok]] = True
+    other = [(int(i) + 1, raw[starts[i]: newline[i] + 1].decode("utf-8", errors="replace")) for i in
+             np.flatnonzero(~plain)]
+    uniform = terminated and bool(plain.all()) and bool((n_space == n_space[0]).all())
+    return CandumpLines(columns.select(ok), idx[ok].astype(np.int64) + 1, other, uniform)
+
+
+def _parse_lines(buf: NDArray[np.uint8], starts: Ints, newline: Ints, spaces_before: Ints, four: Mask,
+                 space_at: Ints) -> tuple[FrameColumns, Mask]:
+    """The candidate lines (two or three spaces, printable) parsed: their columns and which of them are plain."""
+    if not starts.size:
+        return _empty_columns(), np.zeros(0, np.bool_)
+    sp0 = space_at[spaces_before]
+    sp1 = space_at[spaces_before + 1]
+    sp2 = np.where(four, space_at[np.minimum(spaces_before + 2, space_at.size - 1)], newline)
+    ok = sp1 > sp0 + 1  # a channel
+    ok &= ~four | ((sp2 + 2 == newline) & np.isin(buf[newline - 1], _DIRECTIONS))  # the direction: one character
+    padded = np.concatenate((buf, np.zeros(max(_TS_WIDTH, _FRAME_WIDTH), np.uint8)))  # once, for both gathers
+    ts_tok, ts_len, ts_ok = _gather(padded, starts, sp0, _TS_WIDTH)
+    fr_tok, fr_len, fr_ok = _gather(padded, sp1 + 1, sp2, _FRAME_WIDTH)
+    t, t_ok = _timestamps(ts_tok, ts_len)
+    ids, dlc, data, f_ok = _frames(fr_tok, fr_len)
+    return FrameColumns(t, ids, dlc, data), ok & ts_ok & fr_ok & t_ok & f_ok
 
 
 def parse_candump(raw: bytes) -> FrameColumns | None:
-    """A plain candump log -> its columns; None for anything this parser does not take (the caller then reads the
-    file with python-can). Plain: printable ASCII lines, each ending in a newline, each "(time) channel frame"
-    with an optional direction R or T, the tokens one space apart, every line with the same number of tokens."""
-    if not raw or not raw.endswith(b"\n") or raw.translate(None, _PRINTABLE):
-        return None
-    if b"  " in raw or b" \n" in raw or b"\n " in raw or b"\n\n" in raw or raw.startswith(b" "):
-        return None
-    buf = np.frombuffer(raw, np.uint8)
-    newline = np.flatnonzero(buf == ord("\n"))
-    space = np.flatnonzero(buf == ord(" "))
-    n = int(newline.size)
-    per_line = np.bincount(np.searchsorted(newline, space), minlength=n)
-    k = int(per_line[0]) + 1
-    if k not in (3, 4) or not (per_line == k - 1).all():
-        return None
-    starts = np.concatenate(([0], newline[:-1] + 1)).astype(np.int64)
-    sp = space.reshape(n, k - 1).astype(np.int64)
-    if k == 4:
-        if not (sp[:, 2] + 2 == newline).all() or not np.isin(buf[newline - 1], _DIRECTIONS).all():
-            return None  # the direction: one character
-        frame_end = sp[:, 2]
-    else:
-        frame_end = newline.astype(np.int64)
-    ts_width, frame_width = 24, _ID_MAX_DIGITS + 1 + _DATA_MAX_DIGITS
-    padded = np.concatenate((buf, np.zeros(max(ts_width, frame_width), np.uint8)))  # once, for both gathers
-    ts = _gather(padded, starts, sp[:, 0], ts_width)
-    fr = _gather(padded, sp[:, 1] + 1, frame_end, frame_width)
-    if ts is None or fr is None:
-        return None
-    t = _timestamps(*ts)
-    frames = _frames(*fr)
-    if t is None or frames is None:
-        return None
-    ids, dlc, data = frames
-    return FrameColumns(t, ids, dlc, data)
+    """A plain candump log -> its columns; None for anything else (`read_log_columns` then reads the lines this
+    parser does not take with python-can). Plain: printable ASCII lines, each ending in a newline, each "(time)
+    channel frame" with an optional direction R or T, the tokens one space apart, every line with the same number
+    of tokens."""
+    lines = candump_lines(raw)
+    return lines.columns if lines.uniform else None

@@ -9,8 +9,9 @@ masks, candidates, residuals and test ratios) if ``--log`` is given.
 Every frame goes to the C core, whatever its ID: other ECUs' frames (a real bus carries up to ~4,000
 frames/s) are counted there as unknown IDs and ignored, as in the SocketCAN program and in an offline replay
 (the same calls); a 29-bit ID carries SocketCAN's EFF flag, so it never matches a subscribed 11-bit ID.
-The per-frame path is kept short (`fdi_host.live.bus.frame_reader`: udp_multicast datagrams straight from
-the socket, all queued ones per wake-up) and nothing but the C calls runs between the frame that completes
+The per-frame path is kept short (`fdi_host.live.bus.frame_reader`: python-can's ``bus.recv``, then every
+frame already queued with ``bus.recv(timeout=0)``, per wake-up) and nothing but the C calls runs between the
+frame that completes
 a step and its diagnosis frame: the frame is handed to the bus as soon as the C core returns it, before the
 step is recorded (`SendFirst`). The garbage collector runs only right after a diagnosis frame was sent (the
 quiet part of a step), never between a frame and its diagnosis: its full collections over the recorded
@@ -41,13 +42,13 @@ from fdi_host.live.bus import (
     CAN_EFF_MASK,
     CAN_ERR_FLAG,
     CAN_RTR_FLAG,
+    BusOptions,
     BusReader,
     CpuLatencyRequest,
     StopFlag,
-    UdpMulticastReader,
     add_bus_arguments,
     frame_reader,
-    open_bus,
+    open_cli_bus,
     set_affinity,
     set_receive_buffer,
     signal_ready,
@@ -60,6 +61,8 @@ EPILOG = """\
 examples:
   fdi-ecu --interface udp_multicast --table kin --log out/ecu.json
   fdi-ecu --interface socketcan --channel vcan0 --table romo
+  fdi-ecu --interface pcan --channel PCAN_USBBUS1 --bitrate 500000 --table romo     (a PEAK adapter)
+  fdi-ecu --can-config bus.ini --can-context vehicle --table romo   (python-can's configuration file)
   fdi-ecu --interface udp_multicast --table kin --idle-exit 2     (exit 2 s after the traffic stops)
 """
 
@@ -73,7 +76,8 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--duration", type=float, help="stop after this many seconds")
     ap.add_argument("--idle-exit", type=float, help="stop when no frame arrived for this many seconds "
                     "(after the first frame)")
-    ap.add_argument("--rx-log", type=Path, help="CAN log of every frame received, with receive times (.log/.asc/.blf)")
+    ap.add_argument("--rx-log", type=Path, help="CAN log of every frame received, with receive times (.log, .asc, "
+                    ".blf, .trc, .csv, .db, ...)")
     ap.add_argument("--origin-file", type=Path, help="wall-clock time of the drive's t = 0 (written by fdi-sim "
                     "live --origin-file): steps are aligned to it instead of to the first frame")
     ap.add_argument("--realtime", action="store_true", help="SCHED_FIFO priority (root)")
@@ -85,8 +89,8 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--rcvbuf", type=int, default=DEFAULT_RCVBUF, metavar="BYTES",
                     help=f"socket receive buffer (default {DEFAULT_RCVBUF}; 0: the kernel's default)")
     ap.add_argument("--rx", choices=("auto", "recv"), default="auto",
-                    help="auto: udp_multicast datagrams straight from the socket (python-can's wire format), "
-                    "bus.recv on other interfaces; recv: python-can's bus.recv everywhere")
+                    help="auto: bus.recv, then every frame already queued (bus.recv with timeout 0) per wake-up; "
+                    "recv: one bus.recv per loop")
     ap.add_argument("--ready-file", type=Path, help="file created once the bus is open (for orchestration)")
     ap.add_argument("--quiet", action="store_true", help="print only the final counters")
     return add_version(ap)
@@ -136,7 +140,7 @@ def _log_frame(can_id: int, data: bytes, ts: float, rx_log: list[tuple[float, in
 
 def run(bus: can.BusABC, session: EcuSession, stop: StopFlag, duration: float | None, idle_exit: float | None,
         rx_log: list[tuple[float, int, bytes]] | None = None, origin_file: Path | None = None,
-        period: float = 0.005, reader: BusReader | UdpMulticastReader | None = None) -> None:
+        period: float = 0.005, reader: BusReader | None = None) -> None:
     """The receive / poll / send loop until `stop` (or the duration / idle limit).
 
     Timer polls run the steps due two steps before now: they only matter when traffic stops (timeouts), and
@@ -195,17 +199,16 @@ def serve(args: argparse.Namespace) -> int:
     except (ImportError, OSError, RuntimeError, ValueError) as exc:
         print(f"fdi-ecu: cannot load the ECU bindings ({exc}); build them with `pip install -e .`", file=sys.stderr)
         return EXIT_ERROR
-    try:
-        bus = open_bus(args.interface, args.channel)
-    except (OSError, ValueError, ImportError, can.CanError) as exc:
-        print(f"fdi-ecu: cannot open {args.interface} bus: {exc}", file=sys.stderr)
+    opened = open_cli_bus("fdi-ecu", BusOptions.from_args(args))
+    if opened is None:
         return EXIT_ERROR
-    reader: BusReader | UdpMulticastReader | None = None
+    bus, bus_config = opened
+    reader: BusReader | None = None
     qos: CpuLatencyRequest | None = None
     try:
         rcvbuf = set_receive_buffer(bus, args.rcvbuf) if args.rcvbuf > 0 else 0
-        reader = BusReader(bus) if args.rx == "recv" else frame_reader(bus)
-        setup = [f"receive {'bus.recv' if isinstance(reader, BusReader) else 'socket'}"]
+        reader = frame_reader(bus, drain=args.rx == "auto")
+        setup = [f"receive bus.recv{', every queued frame per wake-up' if args.rx == 'auto' else ''}"]
         if rcvbuf:
             setup.append(f"socket buffer {rcvbuf // 1024} KiB")
         if args.cpu:
@@ -217,12 +220,12 @@ def serve(args: argparse.Namespace) -> int:
             setup.append(qos.note)
         signal_ready(args.ready_file)
         if not args.quiet:
-            print(f"fdi-ecu: table {args.table} on {args.interface}; Ctrl-C to stop", flush=True)
+            print(f"fdi-ecu: table {args.table} on {bus_config.describe()}; Ctrl-C to stop", flush=True)
         print(f"fdi-ecu: {', '.join(setup)}", flush=True)
         rx_log: list[tuple[float, int, bytes]] | None = [] if args.rx_log is not None else None
         run(bus, session, stop, args.duration, args.idle_exit, rx_log, args.origin_file, reader=reader)
     finally:
-        if isinstance(reader, UdpMulticastReader):
+        if reader is not None:
             reader.close()
         if qos is not None:
             qos.close()

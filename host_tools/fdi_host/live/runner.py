@@ -1,9 +1,14 @@
 """``fdi-live``: a simulated drive live over a bus, with the ECU and the monitor as separate processes.
 
-Transport (``--transport auto``): SocketCAN ``vcan0`` where the kernel has AF_CAN and the interface exists;
-otherwise python-can ``udp_multicast`` in a private network namespace (the runner re-executes itself under
-``unshare -n``, see `fdi_host.live.netns`), and where that is not permitted udp_multicast in the current network
-namespace; ``--transport current`` forces the latter, ``netns`` / ``vcan`` fail if not available.
+Transport (``--transport auto``): the bus the bus options name, when any is given (``--interface``,
+``--can-config``, ``--bitrate``, ...: python-can's configuration, as every program takes it, see
+`fdi_host.live.bus`; the three programs get the same options); otherwise SocketCAN ``vcan0`` where the kernel has
+AF_CAN and the interface exists; otherwise (with a note) the simulated bus, python-can ``udp_multicast`` in a
+private network namespace (the runner re-executes itself under ``unshare -n``, see `fdi_host.live.netns`), and
+where that is not permitted udp_multicast in the current network namespace. ``--transport current`` forces the
+latter, ``netns`` / ``vcan`` fail if not available, ``bus`` takes the bus python-can's configuration names (its
+files and environment included) even without an option. python-can's ``virtual`` interface is one process's: it
+cannot carry a run of three programs.
 
 Order: ``fdi-ecu`` and ``fdi-monitor`` start and signal readiness (ready files), then ``fdi-sim live`` sends the
 drive in real time; when it is done the ECU is stopped (SIGTERM: it writes its log), then the monitor (it
@@ -25,10 +30,21 @@ import sys
 import time
 from collections import Counter
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from fdi_analysis.cli.common import EXIT_ERROR, EXIT_USAGE, add_version, run
+from fdi_host.live.bus import (
+    BUS_ERRORS,
+    DEFAULT_CHANNEL,
+    SIMULATED_INTERFACE,
+    VCAN_CHANNEL,
+    BusOptions,
+    add_bus_arguments,
+    resolve_bus,
+    vcan_missing,
+)
 from fdi_host.live.netns import check_unshare, inside_private_netns, netns_command, vcan_available
 from fdi_host.live.restart import Managed, RestartEvent, restart_schedule
 from fdi_host.live.sender import SendLog
@@ -39,6 +55,8 @@ examples:
   fdi-live --scenario fig6 --fault f4@5s:0.5 --table kin --out-dir out/live
   fdi-live --scenario straight --duration 12 --no-scenario-faults --fault f4@4s:0.5:end=8s --table kin
   fdi-live --transport current ...     (udp_multicast in this network namespace, no unshare)
+  fdi-live --interface socketcan --channel vcan1 ...      (any bus python-can opens; the same for the 3 programs)
+  fdi-live --can-config bus.ini --can-context bench ...   (the bus in a python-can configuration file)
   fdi-live --scenario cornering --fault f4@5s:0.5 --table kin --bus-load 4000
                                        (other ECUs' frames up to 4,000 frames/s: counted and ignored by the ECU)
   fdi-live --scenario fig6 --duration 21.5 --no-scenario-faults --fault f4@16s:0.5 --table kin
@@ -59,9 +77,12 @@ def build_parser() -> argparse.ArgumentParser:
     add_drive_arguments(ap, noise=False)
     ap.add_argument("--table", choices=("romo", "kin"), default="romo",
                     help="ECU diagnosis table: romo (generated, default) or kin (hand-written kinematic tests)")
-    ap.add_argument("--transport", choices=("auto", "vcan", "netns", "current"), default="auto",
-                    help="vcan0, udp_multicast in a private netns, or udp_multicast here (default auto)")
-    ap.add_argument("--channel", default="239.74.163.2", help="multicast group for udp_multicast")
+    ap.add_argument("--transport", choices=("auto", "bus", "vcan", "netns", "current"), default="auto",
+                    help="bus: the bus the options below or python-can's configuration name; vcan: vcan0; netns: "
+                    "udp_multicast in a private network namespace; current: udp_multicast here (default auto: bus "
+                    "when a bus option other than --channel is given, else vcan0 where the kernel has it, else "
+                    "netns, else current)")
+    add_bus_arguments(ap)
     ap.add_argument("--grace", type=float, default=3.0, help="scoring grace after a fault's end [s] (default 3)")
     ap.add_argument("--out-dir", type=Path, default=Path("out/live"), help="output directory")
     ap.add_argument("--start-timeout", type=float, default=60.0, help="max wait for ECU and monitor to start [s]")
@@ -189,7 +210,8 @@ def _supervise(args: argparse.Namespace, out: Path, ecu: Managed, sim: Managed, 
     return rc
 
 
-def run_here(args: argparse.Namespace, interface: str, channel: str) -> int:
+def run_here(args: argparse.Namespace, bus: list[str], label: str) -> int:
+    """The three programs on the bus `bus` (their bus options), described as `label`."""
     out: Path = args.out_dir
     out.mkdir(parents=True, exist_ok=True)
     try:
@@ -204,7 +226,6 @@ def run_here(args: argparse.Namespace, interface: str, channel: str) -> int:
         (out / f).unlink(missing_ok=True)
     for old in out.glob("send.resume*.npz"):
         old.unlink()
-    bus = ["--interface", interface, "--channel", channel]
     ecu_cmd = _py("fdi_host.live.ecu", *bus, "--table", args.table, "--log", str(out / "ecu.json"),
                   "--rx-log", str(out / "ecu_rx.log"), "--ready-file", str(out / "ecu.ready"), "--quiet",
                   "--origin-file", str(out / "origin.txt"), "--realtime", "--cpu-latency", "0")
@@ -230,8 +251,7 @@ def run_here(args: argparse.Namespace, interface: str, channel: str) -> int:
     # the sending process restarted; live_sim directly, without the simulator's imports, is back in ~1 s.
     sim_resume_cmd = _py("fdi_host.live.sim", *drive, "--resume", "--counter-start", str(args.sim_counter_start),
                          "--frames-from", str(out / "drive.blf"))
-    print(f"fdi-live: {interface} {channel}, table {args.table}, scenario {args.scenario} {' '.join(args.fault)}",
-          flush=True)
+    print(f"fdi-live: {label}, table {args.table}, scenario {args.scenario} {' '.join(args.fault)}", flush=True)
     if schedule:
         print("fdi-live: restarts: " + ", ".join(f"{e.target} {e.action} at t={e.t:g} s" for e in schedule),
               flush=True)
@@ -285,27 +305,52 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def start(args: argparse.Namespace, args_list: list[str]) -> int:
     """``fdi-live`` after its options are parsed: choose the transport, run the three programs."""
+    options = BusOptions.from_args(args)
+    group = args.channel or DEFAULT_CHANNEL
     mode = args.transport
     if mode == "auto":
-        mode = "vcan" if vcan_available() else "netns"
+        mode = "bus" if replace(options, channel=None).given else "vcan" if vcan_available() else "netns"
+        if mode == "netns" and not inside_private_netns():
+            print(f"fdi-live: no SocketCAN {VCAN_CHANNEL} ({vcan_missing()}); the simulated bus, "
+                  f"{SIMULATED_INTERFACE} {group} in a private network namespace", file=sys.stderr, flush=True)
+    if mode == "bus":
+        return _on_configured_bus(args, options)
     if mode == "vcan":
         if not vcan_available():
-            print("fdi-live: no vcan0 (kernel without AF_CAN or interface missing)", file=sys.stderr)
+            print(f"fdi-live: no {VCAN_CHANNEL} (kernel without AF_CAN or interface missing)", file=sys.stderr)
             return EXIT_ERROR
-        return run_here(args, "socketcan", "vcan0")
+        return run_here(args, ["--interface", "socketcan", "--channel", VCAN_CHANNEL], f"socketcan {VCAN_CHANNEL}")
+    simulated = (["--interface", SIMULATED_INTERFACE, "--channel", group], f"{SIMULATED_INTERFACE} {group}")
     if mode == "current" or inside_private_netns():
-        return run_here(args, "udp_multicast", args.channel)
+        return run_here(args, *simulated)
     chk = check_unshare()
     if not chk.ok:
         if args.transport == "auto":  # last resort: multicast on this host's network
             print(f"fdi-live: {chk.reason}; falling back to udp_multicast in this network namespace",
                   file=sys.stderr)
-            return run_here(args, "udp_multicast", args.channel)
+            return run_here(args, *simulated)
         print(f"fdi-live: {chk.reason}; use --transport current to run udp_multicast in this namespace",
               file=sys.stderr)
         return EXIT_ERROR
     env_cmd = netns_command([sys.executable, "-m", "fdi_host.live.runner", *args_list])
     return subprocess.run(env_cmd, check=False, env=os.environ.copy()).returncode
+
+
+def _on_configured_bus(args: argparse.Namespace, options: BusOptions) -> int:
+    """The three programs on the bus the options and python-can's configuration name (each resolves the same
+    options itself); not on python-can's virtual bus, which one process cannot share with another."""
+    try:
+        config = resolve_bus(options)
+    except BUS_ERRORS as exc:
+        print(f"fdi-live: cannot use the CAN bus: {' '.join(str(exc).split())}", file=sys.stderr)
+        return EXIT_ERROR
+    if config.interface == "virtual":
+        print("fdi-live: python-can's virtual bus lives inside one process; the ECU, the monitor and the simulator "
+              "are three: use vcan, udp_multicast or an adapter", file=sys.stderr)
+        return EXIT_ERROR
+    if config.note is not None:
+        print(f"fdi-live: {config.note}", file=sys.stderr, flush=True)
+    return run_here(args, options.argv(), f"{config.describe()} (from the {config.source})")
 
 
 if __name__ == "__main__":

@@ -34,8 +34,8 @@ from fdi_analysis.cli.common import EXIT_ERROR
 from fdi_host.can import background
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.can.frame import Frame
-from fdi_host.can.logs import LOG_SUFFIXES, read_log, write_log
-from fdi_host.live.bus import StopFlag, add_bus_arguments, open_bus, try_realtime
+from fdi_host.can.logs import formats_text, is_log, read_log, write_log
+from fdi_host.live.bus import BusOptions, StopFlag, add_bus_arguments, open_cli_bus, try_realtime
 from fdi_host.live.sender import SendLog, resume_frames, send_paced
 from fdi_host.sim.options import add_drive_arguments
 
@@ -44,6 +44,7 @@ examples:
   fdi-sim live --scenario fig6 --fault f4@5s:0.5 --interface udp_multicast --channel 239.74.163.2
   fdi-sim live --scenario straight --duration 10 --speed 10 --out sent.blf --truth sent.truth.json
   fdi-sim live --scenario fig6 --interface socketcan --channel vcan0
+  fdi-sim live --scenario fig6 --can-config bus.ini            (the bus in a python-can configuration file)
   fdi-sim live --scenario slalom --bus-load 4000     (other ECUs' frames up to 4,000 frames/s in total)
   fdi-sim live --scenario fig6 --resume --origin-file out/live/origin.txt --counter-start 9
       (a restarted simulator: joins the drive whose t = 0 is in origin.txt, counters restart at 9)
@@ -59,7 +60,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_drive_arguments(ap)
     ap.add_argument("--speed", type=float, default=1.0, help="times real time (default 1)")
     add_bus_arguments(ap)
-    ap.add_argument("--out", type=Path, help="also write the frames sent as a CAN log (.log/.asc/.blf)")
+    ap.add_argument("--out", type=Path, help="also write the frames sent as a CAN log (.log, .asc, .blf, .trc, .csv, "
+                    ".db, ...)")
     ap.add_argument("--truth", type=Path, help="ground-truth JSON (default <out>.truth.json when --out is given)")
     ap.add_argument("--send-log", type=Path, help="send times of every frame (.npz)")
     ap.add_argument("--origin-file", type=Path, help="write the wall-clock time of the drive's t = 0 here before "
@@ -130,8 +132,8 @@ def _drive_frames(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Sequ
 def main(argv: Sequence[str] | None = None) -> int:
     ap = build_parser()
     args = ap.parse_args(argv)
-    if args.out is not None and args.out.suffix not in LOG_SUFFIXES:
-        ap.error(f"--out {args.out}: unsupported extension; use {', '.join(LOG_SUFFIXES)}")
+    if args.out is not None and not is_log(args.out):
+        ap.error(f"--out {args.out}: unsupported extension; use {formats_text()}")
     if not args.speed > 0.0:
         ap.error("--speed must be > 0")
     if args.resume and args.origin_file is None:
@@ -151,14 +153,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not frames:
         print("fdi-sim live: the drive has no frames", file=sys.stderr)
         return EXIT_ERROR
-    try:
-        bus = open_bus(args.interface, args.channel)
-    except (OSError, ValueError, ImportError) as exc:
-        print(f"fdi-sim live: cannot open {args.interface} bus: {exc}", file=sys.stderr)
+    opened = open_cli_bus("fdi-sim live", BusOptions.from_args(args))
+    if opened is None:
         return EXIT_ERROR
+    bus, bus_config = opened
     try:
         print(f"sending {len(frames)} frames over {frames[-1].timestamp:.1f} s at {args.speed:g}x real time "
-              f"on {args.interface}", flush=True)
+              f"on {bus_config.describe()}", flush=True)
         if args.realtime:
             print(f"sender: {try_realtime()}", flush=True)
 

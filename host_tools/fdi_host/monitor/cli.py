@@ -25,13 +25,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import can
-
 from fdi_analysis.cli.common import EXIT_ERROR, add_version, run, use_file_backend
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.ecu.records import DiagRecord, TableClasses
 from fdi_host.ecu.session import DIAG_ID, ORIGIN_LEAD, load_steps
-from fdi_host.live.bus import StopFlag, add_bus_arguments, open_bus, signal_ready
+from fdi_host.live.bus import BusOptions, StopFlag, add_bus_arguments, open_cli_bus, signal_ready
 from fdi_host.monitor.frames import FrameStats
 from fdi_host.monitor.gaps import Gap, GapTracker, gap_summary
 from fdi_host.monitor.report import frame_table, plot_diagnosis, plot_residuals, score_table, write_reports
@@ -41,6 +39,7 @@ EPILOG = """\
 examples:
   fdi-monitor --interface udp_multicast --table kin --truth out/live/truth.json --out-dir out/live
   fdi-monitor --interface udp_multicast --table kin --truth t.json --ecu-log out/ecu.json --idle-exit 2
+  fdi-monitor --interface kvaser --channel 0 --bitrate 500000 --table romo     (a Kvaser adapter)
   fdi-monitor --classes classes.json ...     (signatures given as JSON instead of from the ECU bindings:
                                               {"signature": [13, 14, 15, 7, 11], "test_names": ["r1", ...]})
 """
@@ -228,11 +227,10 @@ def monitor(args: argparse.Namespace) -> int:
         print(f"fdi-monitor: no fault signatures for table {args.table}: {exc}", file=sys.stderr)
         return EXIT_ERROR
     mon = Monitor(RomoDatabase(), classes, step, gap_threshold=args.gap_threshold)
-    try:
-        bus = open_bus(args.interface, args.channel)
-    except (OSError, ValueError, ImportError, can.CanError) as exc:
-        print(f"fdi-monitor: cannot open {args.interface} bus: {exc}", file=sys.stderr)
+    opened = open_cli_bus("fdi-monitor", BusOptions.from_args(args))
+    if opened is None:
         return EXIT_ERROR
+    bus = opened[0]
     signal_ready(args.ready_file)
     tty = sys.stdout.isatty()
     shown = 0
