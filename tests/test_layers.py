@@ -16,7 +16,7 @@ ROOTS = {"fdi_analysis": REPO / "analysis", "fdi_host": REPO / "host_tools"}
 
 # (module prefix, layer): the longest matching prefix decides
 LAYERS: tuple[tuple[str, int], ...] = (
-    ("fdi_analysis", 0),
+    ("fdi_analysis", 0), ("fdi_analysis.errors", 0),  # the root of both packages' errors: imports nothing
     ("fdi_analysis.model", 0), ("fdi_analysis.model_loader", 0), ("fdi_analysis.expressions", 0),
     ("fdi_analysis.structure", 0), ("fdi_analysis.random_structures", 0), ("fdi_analysis.uncertainty", 0),
     ("fdi_analysis.dm", 1), ("fdi_analysis.isolability", 1), ("fdi_analysis.fault_matrix", 1),
@@ -26,7 +26,7 @@ LAYERS: tuple[tuple[str, int], ...] = (
     ("fdi_analysis.residuals", 3),
     ("fdi_analysis.export", 4),
     ("fdi_analysis.cli", 5), ("fdi_analysis.api", 5),
-    ("fdi_host", 10), ("fdi_host.sim", 10),
+    ("fdi_host", 10), ("fdi_host.errors", 10), ("fdi_host.sim", 10),
     ("fdi_host.can", 11),
     ("fdi_host.ecu", 12),
     ("fdi_host.tuning", 13), ("fdi_host.paper", 13),

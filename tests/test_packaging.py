@@ -159,7 +159,8 @@ def _bad_inputs(tmp: Path) -> list[tuple[str, list[str], int, str]]:
         ("fdi-quality", ["--quick", "--sizes", str(missing)], EXIT_ERROR, "missing.toml"),
         ("fdi-tune", ["residuals", str(missing), "--thresholds", str(missing), "--log", str(blf)], EXIT_ERROR,
          "missing.toml"),
-        ("fdi-sim", ["--scenario", str(tmp / "scen.toml"), "--duration", "0.1"], 2, "scen.toml"),
+        ("fdi-sim", ["--scenario", str(tmp / "scen.toml"), "--duration", "0.1"], EXIT_ERROR, "scen.toml"),
+        ("fdi-sim", ["--scenario", "no_such_scenario", "--duration", "0.1"], 2, "no_such_scenario"),
         ("fdi-sim", ["--scenario", "fig6", "--duration", "0.2", "--out", str(tmp / "o.blf"), "--truth",
                      str(tmp / "truth.json" / "t.json"), "--quiet"], EXIT_ERROR, "truth.json"),
     ]

@@ -36,11 +36,12 @@ import numpy.typing as npt
 
 from fdi_analysis import mso
 from fdi_analysis.dm import DMResult, dulmage_mendelsohn
+from fdi_analysis.errors import FdiError
 from fdi_analysis.fault_matrix import Candidate, Method, signature_matrix
 from fdi_analysis.isolability import IsolabilityResult
 from fdi_analysis.model import Model
 from fdi_analysis.model_loader import load_model, model_from_structure
-from fdi_analysis.resources import model_file
+from fdi_analysis.resources import model_file, thresholds_file
 from fdi_analysis.selection import Selection, greedy
 from fdi_analysis.selection import optimal as optimal_selection
 from fdi_analysis.structure import Structure
@@ -52,7 +53,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 
-class ApiError(ValueError):
+class ApiError(FdiError, ValueError):
     """A question the model cannot answer (e.g. C export of a structure-only model)."""
 
 
@@ -489,7 +490,7 @@ class DiagnosisModel:
             raise ApiError(f"{self.name}: C export needs a model file with equations (TOML); this one is "
                            "a structure only")
         out = Path(out)
-        files = generate_all(self.model.source, model_file(thresholds), out, name, workers, False,
+        files = generate_all(self.model.source, thresholds_file(thresholds), out, name, workers, False,
                              Path(fault_sizes) if fault_sizes is not None else None)
         out.mkdir(parents=True, exist_ok=True)
         written = []

@@ -14,6 +14,8 @@ from collections.abc import Mapping
 import sympy
 from sympy.parsing.sympy_parser import parse_expr, standard_transformations
 
+from fdi_analysis.errors import FdiError
+
 
 class der(sympy.Function):  # type: ignore[misc]  # noqa: N801 - the model language spells it der(x)
     """Time derivative of an unknown, written inline in an equation: ``der(x)`` = dx/dt."""
@@ -58,7 +60,7 @@ _PARSER_GLOBALS: dict[str, object] = {
 _EQ_SPLIT = re.compile(r"(?<![<>=!])=(?!=)")
 
 
-class ExpressionError(ValueError):
+class ExpressionError(FdiError, ValueError):
     """An expression that cannot be parsed; `symbol` names the offending name when there is one."""
 
     def __init__(self, message: str, symbol: str | None = None) -> None:

@@ -15,6 +15,7 @@ from typing import Literal
 import numpy as np
 import sympy
 
+from fdi_analysis.errors import FdiError
 from fdi_analysis.structure import DIFF_DERIVATIVE, DIFF_INTEGRATED, INCIDENCE, Structure
 
 Role = Literal["unknown", "known", "fault"]
@@ -22,7 +23,7 @@ EquationKind = Literal["normal", "differential", "measurement"]
 NuisanceKind = Literal["constant", "slow", "input"]
 
 
-class ModelError(ValueError):
+class ModelError(FdiError, ValueError):
     """A model file that is not well formed. The message names the file, the equation and the symbol."""
 
     def __init__(

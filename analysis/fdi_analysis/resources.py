@@ -9,6 +9,7 @@ a checkout (editable install) the source folder itself, so nothing is duplicated
     from fdi_analysis.resources import MODELS, model_file
     MODELS.path() / "romo_grouped.toml"          # the installed copy, or analysis/models/ in a checkout
     model_file("romo_grouped")                   # a shipped model by name; a path stays a path
+    thresholds_file("romo_thresholds")           # a shipped thresholds file by name
 
 Standard library only: setup.py imports this module before anything is built.
 """
@@ -55,17 +56,38 @@ MODELS = DataDir("fdi_analysis", "data/models", "analysis/models", "*.toml")
 PACKAGE_DATA: tuple[DataDir, ...] = (MODELS,)
 
 
-def shipped_models() -> list[str]:
-    """Names of the model files shipped with the package (``romo_grouped``, ...)."""
+THRESHOLDS_SUFFIX = "_thresholds"  # a shipped thresholds file is <model>_thresholds.toml, beside its model
+
+
+def _shipped() -> list[str]:
     return sorted(p.stem for p in MODELS.path().glob(MODELS.pattern))
+
+
+def shipped_models() -> list[str]:
+    """Names of the model files shipped with the package (``romo_grouped``, ...; not the thresholds files)."""
+    return [n for n in _shipped() if not n.endswith(THRESHOLDS_SUFFIX)]
+
+
+def shipped_thresholds() -> list[str]:
+    """Names of the thresholds files shipped with the package (``romo_thresholds``, ...)."""
+    return [n for n in _shipped() if n.endswith(THRESHOLDS_SUFFIX)]
+
+
+def _file(name_or_path: str | Path, names: list[str]) -> Path:
+    p = Path(name_or_path)
+    if p.exists() or p.suffix or len(p.parts) != 1 or p.name not in names:
+        return p
+    return MODELS.path() / f"{p.name}.toml"
 
 
 def model_file(name_or_path: str | Path) -> Path:
     """A model file: an existing path as given, else a bare name (no suffix, no folder) of a shipped model, so
     that ``fdi-analyze report romo_quasistatic`` works from any directory. Anything else is returned as given
     (the loader then names the missing file)."""
-    p = Path(name_or_path)
-    if p.exists() or p.suffix or len(p.parts) != 1:
-        return p
-    shipped = MODELS.path() / f"{p.name}.toml"
-    return shipped if shipped.is_file() else p
+    return _file(name_or_path, shipped_models())
+
+
+def thresholds_file(name_or_path: str | Path) -> Path:
+    """A thresholds file: an existing path as given, else a bare name of a shipped one (``--thresholds
+    romo_thresholds``); anything else as given."""
+    return _file(name_or_path, shipped_thresholds())

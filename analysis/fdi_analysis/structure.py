@@ -21,6 +21,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from fdi_analysis.errors import FdiError
+
 IntMatrix = npt.NDArray[np.int8]
 
 INCIDENCE = 1
@@ -28,7 +30,7 @@ DIFF_INTEGRATED = 2
 DIFF_DERIVATIVE = 3
 
 
-class StructureError(ValueError):
+class StructureError(FdiError, ValueError):
     """A structure that is not well formed (wrong shapes, bad markings, duplicate names)."""
 
 

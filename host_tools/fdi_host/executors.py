@@ -17,11 +17,13 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import TypeVar
 
+from fdi_host.errors import FdiHostError
+
 T = TypeVar("T")
 R = TypeVar("R")
 
 
-class ExecutorError(ValueError):
+class ExecutorError(FdiHostError, ValueError):
     """No Dask where a scheduler is asked for, or a scheduler that cannot be reached."""
 
 

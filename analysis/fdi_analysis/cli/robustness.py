@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+from fdi_analysis.model import ModelError
 from fdi_analysis.model_loader import load_model
 from fdi_analysis.plots import plot_decoupling_cost, save
 from fdi_analysis.robustness import analyse, markdown
@@ -38,8 +39,8 @@ def register(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     model = load_model(args.model)
     if not model.nuisances:
-        raise ValueError(f"{args.model}: the model declares no [[unknown_parameter]] or [[unknown_input]]; "
-                         "there is nothing to decouple")
+        raise ModelError("the model declares no [[unknown_parameter]] or [[unknown_input]]; there is nothing to "
+                         "decouple", file=str(args.model))
     if args.mso:
         print(f"{model.name}: counting MSO sets of three models ...", flush=True)
     report = analyse(model, mso_workers=max(1, args.workers) if args.mso else 0)

@@ -10,12 +10,14 @@ from collections.abc import Callable
 import numpy as np
 import sympy
 
+from fdi_analysis.errors import FdiError
+
 MAX_PRODUCT = 8  # integer powers up to this exponent become products (beyond: powf)
 _FUNCS = {sympy.sin: "fdi_gen_sin", sympy.cos: "fdi_gen_cos", sympy.tanh: "fdi_gen_tanh", sympy.Abs: "fabsf",
           sympy.exp: "expf", sympy.tan: "tanf", sympy.atan: "atanf"}
 
 
-class CExprError(ValueError):
+class CExprError(FdiError, ValueError):
     """An expression with a construct the C emitter does not support."""
 
 

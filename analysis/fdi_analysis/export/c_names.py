@@ -11,10 +11,12 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from fdi_analysis.errors import FdiError
+
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
-class CNameError(ValueError):
+class CNameError(FdiError, ValueError):
     """A table name that is not a C identifier."""
 
 

@@ -24,8 +24,10 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from fdi_analysis.errors import FdiError
 
-class FaultSizesError(ValueError):
+
+class FaultSizesError(FdiError, ValueError):
     """The fault sizes file is malformed."""
 
 

@@ -26,6 +26,7 @@ from string import Template
 import sympy
 from sympy.core.parameters import evaluate
 
+from fdi_analysis.errors import FdiError
 from fdi_analysis.export.c_expr import c_float, to_c
 from fdi_analysis.export.c_names import VehicleNames
 from fdi_analysis.export.c_order import defined_before_use
@@ -39,7 +40,7 @@ MAX_SENS = 32  # FDI_DIAG_MAX_TEST_SENS of fw/include/fdi_diag.h
 MAX_FRAME = 32  # FDI_FRAME_MAX_SIGNALS of fw/include/fdi_frame.h
 
 
-class EmitError(ValueError):
+class EmitError(FdiError, ValueError):
     """A generator that does not fit the firmware's limits."""
 
 

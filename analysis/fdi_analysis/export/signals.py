@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from string import Template
 
+from fdi_analysis.errors import FdiError
 from fdi_analysis.export.c_names import VehicleNames
 from fdi_analysis.export.c_text import c_string, comment_text
 from fdi_analysis.model import Model
@@ -17,7 +18,7 @@ from fdi_analysis.model import Model
 MAX_SIGNALS = 32  # FDI_FRAME_MAX_SIGNALS of fw/include/fdi_frame.h
 
 
-class SignalsError(ValueError):
+class SignalsError(FdiError, ValueError):
     """A model whose measured signals do not fit the frame."""
 
 

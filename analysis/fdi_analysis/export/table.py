@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from string import Template
 
+from fdi_analysis.errors import FdiError
 from fdi_analysis.export.c_expr import c_float
 from fdi_analysis.export.c_names import VehicleNames
 from fdi_analysis.export.c_text import banner, c_string, comment_text
@@ -33,7 +34,7 @@ MAX_FAULTS = 32
 NO_GENERATOR = "NULL"
 
 
-class ExportError(ValueError):
+class ExportError(FdiError, ValueError):
     """The selection cannot be expressed in the firmware's table format."""
 
 

@@ -13,11 +13,12 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from fdi_analysis.errors import FdiError, InputError
 from fdi_analysis.residuals.generator import Generator
 from fdi_analysis.residuals.observer import ObserverReference
 
 
-class MissingSigmaError(ValueError):
+class MissingSigmaError(FdiError, ValueError):
     """A generator of the table without a calibrated sigma in the thresholds file."""
 
 
@@ -36,11 +37,11 @@ class Envelope:
         sig = doc.get("signals")
         votes, margin = doc.get("votes"), doc.get("margin")
         if not (isinstance(sig, list) and sig and all(isinstance(x, str) for x in sig) and len(set(sig)) == len(sig)):
-            raise ValueError("[envelope] signals: a list of distinct signal names")
+            raise InputError("[envelope] signals: a list of distinct signal names")
         if not (isinstance(votes, int) and 1 <= votes <= len(sig)):
-            raise ValueError(f"[envelope] votes: an integer 1..{len(sig)} (the number of signals)")
+            raise InputError(f"[envelope] votes: an integer 1..{len(sig)} (the number of signals)")
         if not (isinstance(margin, (int, float)) and margin >= 1.0):
-            raise ValueError("[envelope] margin: a number >= 1")
+            raise InputError("[envelope] margin: a number >= 1")
         lim = {str(k): float(v) for k, v in limits.items() if isinstance(v, (int, float))}
         return Envelope(tuple(sig), votes, float(margin), lim)
 

@@ -6,6 +6,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import Enum
 
+from fdi_analysis.errors import FdiError
+
 
 class Reason(Enum):
     """Kinds of rejection; the value is the plural phrase reports use ("2,015 contain an algebraic loop")."""
@@ -44,7 +46,7 @@ class Rejection:
         return self.text
 
 
-class NotRealizableError(ValueError):
+class NotRealizableError(FdiError, ValueError):
     """The MSO set has no residual generator of this kind; str() is 'not realizable: <reason>'."""
 
     def __init__(self, reason: Rejection) -> None:

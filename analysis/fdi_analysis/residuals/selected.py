@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from fdi_analysis.errors import ComputationError, FdiError
 from fdi_analysis.fault_matrix import Candidate
 from fdi_analysis.model import Model
 from fdi_analysis.mso.results import bits
@@ -24,7 +25,7 @@ from fdi_analysis.selection.candidates import mso_candidates
 SELECTION_TIME_LIMIT_S = 900.0
 
 
-class SelectionError(ValueError):
+class SelectionError(FdiError, ValueError):
     """A [selection] test of the thresholds file that the model does not offer (any more)."""
 
 
@@ -80,7 +81,7 @@ def structural_selection(model: Model, keep: Sequence[Candidate]) -> list[Candid
     # must not depend on the machine's load (an unproven search could return another selection)
     sel = optimal(list(keep), model.structure().nf, "B", time_limit_s=SELECTION_TIME_LIMIT_S)
     if not sel.proven:
-        raise RuntimeError(f"the optimal selection was not proven within {SELECTION_TIME_LIMIT_S:g} s")
+        raise ComputationError(f"the optimal selection was not proven within {SELECTION_TIME_LIMIT_S:g} s")
     return list(sel.tests)
 
 

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fdi_analysis.errors import ComputationError
 from fdi_analysis.selection.practical import PracticalCandidate, Requirement, requirements
 
 
@@ -118,5 +119,5 @@ def _solve(reqs: Sequence[Requirement], costs: Sequence[int], budget: int) -> li
     res = milp(obj, constraints=LinearConstraint(a, lb=np.full(m + 1, -np.inf), ub=ub),
                integrality=np.ones(n + m), bounds=Bounds(0.0, 1.0), options={"mip_rel_gap": 0.0})
     if not res.success:
-        raise RuntimeError(f"selection within budget {budget}: HiGHS found no solution ({res.message})")
+        raise ComputationError(f"selection within budget {budget}: HiGHS found no solution ({res.message})")
     return [i for i in range(n) if res.x[i] > 0.5]

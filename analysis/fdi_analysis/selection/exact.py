@@ -54,13 +54,14 @@ import numpy as np
 import numpy.typing as npt
 from scipy.sparse import csc_matrix
 
+from fdi_analysis.errors import FdiError
 from fdi_analysis.fault_matrix import Method
 
 BoolMatrix = npt.NDArray[np.bool_]
 IntArray = npt.NDArray[np.int64]
 
 
-class SearchTimeoutError(Exception):
+class SearchTimeoutError(FdiError):
     """The search ran past its deadline; nothing was proven by the interrupted call."""
 
 

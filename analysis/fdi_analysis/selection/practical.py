@@ -32,6 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
+from fdi_analysis.errors import ComputationError, FdiError
+
 MARGIN = 1.5  # a test practically detects a fault where its FNR clears the gate by this factor, at least, ...
 SHARE = 0.8  # ... at this share of a manoeuvre's operating points
 # ... and by as much as it takes to cross the gate within DETECT_S of a step: 1 / (the share of its final value
@@ -40,7 +42,7 @@ SHARE = 0.8  # ... at this share of a manoeuvre's operating points
 DETECT_S = 0.27
 
 
-class ScreeningError(ValueError):
+class ScreeningError(FdiError, ValueError):
     """A screening file that this code cannot use (malformed, or made by a screening with another criterion)."""
 
 
@@ -308,7 +310,7 @@ def _solve_highs(rows: Sequence[Sequence[int]], costs: Sequence[int]) -> list[in
     res = milp(np.asarray(costs, dtype=float), constraints=LinearConstraint(a, lb=1.0, ub=np.inf),
                integrality=np.ones(n), bounds=Bounds(0.0, 1.0), options={"mip_rel_gap": 0.0})
     if not res.success:
-        raise RuntimeError(f"practical selection: HiGHS found no solution ({res.message})")
+        raise ComputationError(f"practical selection: HiGHS found no solution ({res.message})")
     return [i for i in range(n) if res.x[i] > 0.5]
 
 

@@ -50,6 +50,7 @@ from typing import cast
 import numpy as np
 import numpy.typing as npt
 
+from fdi_analysis.errors import ComputationError, FdiError
 from fdi_analysis.selection.exact import Problem, automorphisms, search_order
 
 try:  # optional: without python-sat the exact stages fall back to the code search (and may stay unproven)
@@ -64,11 +65,11 @@ MIN_CLASS = 4  # classes of at least this many items become count rows (smaller 
 MAX_CLASS_K = 10  # count rows need one variable per code (2^k) and clauses per comparable code pair (3^k)
 
 
-class SatUnavailableError(RuntimeError):
+class SatUnavailableError(FdiError, RuntimeError):
     """python-sat is not installed."""
 
 
-class SatTimeoutError(Exception):
+class SatTimeoutError(FdiError):
     """The solver ran past its deadline; nothing was proven by the interrupted call."""
 
 
@@ -590,8 +591,8 @@ class _Child:
                 else:
                     out.finished, out.answer = True, value
         except EOFError as exc:
-            raise RuntimeError(f"SAT solver process ended without an answer (exit code "
-                               f"{self.proc.exitcode})") from exc
+            raise ComputationError(f"SAT solver process ended without an answer (exit code "
+                                   f"{self.proc.exitcode})") from exc
         finally:
             self.cancel()
         return out

@@ -16,6 +16,7 @@ from typing import Any
 import cantools
 
 from fdi_host.can import e2e
+from fdi_host.errors import FdiHostError
 from fdi_host.resources import DBC
 
 DEFAULT_DBC = DBC.path() / "romo.dbc"  # dbc/romo.dbc in a checkout, the package's copy in a wheel
@@ -69,7 +70,7 @@ def _diag_id(path: Path) -> int:
 DIAG_ID: int = _diag_id(DEFAULT_DBC)  # ID of FDI_Diagnosis, from the DBC (the one definition on the host side)
 
 
-class E2EError(ValueError):
+class E2EError(FdiHostError, ValueError):
     """A received frame failed its E2E CRC check."""
 
 

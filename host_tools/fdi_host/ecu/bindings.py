@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fdi_host.can.dbc import DIAG_ID
+from fdi_host.errors import FdiHostError
 
 __all__ = ["BUSES", "DIAG_ID", "REASONS", "TABLES", "BusInfo", "DiagRun", "Diagnoser", "Ecu", "EcuCounters",
            "EcuError", "EcuResult", "Evidence", "MessageCounters", "TableInfo", "bus_info", "table_info"]
@@ -55,7 +56,7 @@ _N_REASONS = len(REASONS)
 _MODES = {"no_exoneration": 0, "exoneration": 1}
 
 
-class EcuError(RuntimeError):
+class EcuError(FdiHostError, RuntimeError):
     """A call of the C core returned an error status."""
 
 

@@ -13,9 +13,10 @@ from pathlib import Path
 from tqdm import tqdm
 
 from fdi_analysis.cli.common import add_version, fail
+from fdi_analysis.errors import FdiError
 from fdi_host.ecu.bindings import TABLES, Ecu, EcuError
 from fdi_host.quality.report import markdown, write_json, write_markdown
-from fdi_host.quality.suite import CASE_SEEDS, DEFAULT_SIZES, SHAPES, QualityError, SuiteConfig, run_suite
+from fdi_host.quality.suite import CASE_SEEDS, DEFAULT_SIZES, SHAPES, SuiteConfig, run_suite
 from fdi_host.sim.scenario import SCENARIOS
 
 EXAMPLES = """examples:
@@ -127,7 +128,7 @@ def main(argv: list[str] | None = None) -> int:
             return _survey(cfg, args.out)
         with _progress("quality", "run") as progress:
             result = run_suite(cfg, progress)
-    except (QualityError, OSError) as exc:
+    except (FdiError, OSError) as exc:
         return fail("fdi-quality", exc)
     except KeyboardInterrupt:
         print("fdi-quality: interrupted", file=sys.stderr)
@@ -180,7 +181,7 @@ def _fleet(args: argparse.Namespace) -> int:
             model_plant_seeds=tuple(args.seeds) if args.seeds else base.model_plant_seeds)
         with _progress("fleet", "task") as progress:
             result = fleet.run_fleet_suite(cfg, progress)
-    except (QualityError, OSError) as exc:
+    except (FdiError, OSError) as exc:
         return fail("fdi-quality", exc)
     print(fleet_report.markdown(result))
     if args.out is not None:
@@ -246,7 +247,7 @@ def _trace(args: argparse.Namespace) -> int:
                 png = args.out / f"linearity-{fault}-{scenario}-{seed}{'' if shape == 'step' else '-' + shape}.png"
                 linearity.plot(lin, png)
                 print(f"wrote {png}")
-    except (QualityError, OSError) as exc:
+    except (FdiError, OSError) as exc:
         return fail("fdi-quality", exc)
     return 0
 

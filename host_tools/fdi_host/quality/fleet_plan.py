@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
+from fdi_host.errors import FdiHostError
 from fdi_host.sim.scenario import FLEET_SCENARIOS, load_scenario
 from fdi_host.tuning.seeds import CALIBRATION_SEEDS, CONFIRM_SEED_OFFSETS, SWEEP_SEEDS
 
@@ -21,7 +22,7 @@ FIRST_EVALUATION_VEHICLE = EVALUATION_VEHICLES.start
 REPETITIONS = 4  # noise seeds per vehicle and scenario
 
 
-class PlanError(ValueError):
+class PlanError(FdiHostError, ValueError):
     """Calibration and evaluation would share a vehicle or a noise seed."""
 
 

@@ -16,6 +16,7 @@ from collections import defaultdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from fdi_host.errors import FdiHostError
 from fdi_host.quality.fleet import MODEL, TRUTH
 
 if TYPE_CHECKING:
@@ -24,7 +25,7 @@ if TYPE_CHECKING:
 MDF_GOAL = 1.5  # issue 45's goal: minimum detectable fault at most 1.5x the required size
 
 
-class FleetReportError(ValueError):
+class FleetReportError(FdiHostError, ValueError):
     """A saved fleet report that cannot be drawn (not a fleet.json, or one without the keys a plot needs)."""
 
 

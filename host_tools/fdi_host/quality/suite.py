@@ -44,6 +44,7 @@ from fdi_host.can.traffic import build_frames
 from fdi_host.ecu.bindings import EcuResult, TableInfo, table_info
 from fdi_host.ecu.offline import replay
 from fdi_host.ecu.records import isolates_fault
+from fdi_host.errors import FdiHostError
 from fdi_host.sim.faults import FAULT_IDS, FaultSpec
 from fdi_host.sim.scenario import FAULT_SIZES_FILE, SCENARIOS, load_scenario
 from fdi_host.sim.vehicle_sim import SimResult, faulty_drive, simulate
@@ -59,7 +60,7 @@ CASE_SEEDS: tuple[int, ...] = (2001, 2002, 2003)
 SHAPES = ("step", "ramp")  # fault shapes of the cases (a ramp reaches its size after SuiteConfig.ramp_s)
 
 
-class QualityError(ValueError):
+class QualityError(FdiHostError, ValueError):
     """A suite configuration or data file that cannot be used."""
 
 

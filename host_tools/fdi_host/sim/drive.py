@@ -13,7 +13,7 @@ from tqdm import tqdm
 from fdi_host.sim.faults import FaultSpecError, ground_truth, parse_fault
 from fdi_host.sim.plant import Plant
 from fdi_host.sim.scenario import ScenarioError, load_scenario
-from fdi_host.sim.vehicle_envelope import vehicle_from_option
+from fdi_host.sim.vehicle_envelope import VehicleDrawError, vehicle_from_option
 from fdi_host.sim.vehicle_sim import SimConfig, SimResult, default_plant, simulate
 
 
@@ -50,12 +50,18 @@ class Drive:
 def simulate_from_args(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Drive:
     """Scenario, scenario faults (unless --no-scenario-faults) and --fault specs, duration, seed and noise from
     the common options of `fdi-sim` and `fdi-sim live`, on the model plant or (--truth-vehicle) the truth plant;
-    simulates with a progress bar (a bad option: ap.error)."""
+    simulates with a progress bar. A bad option (an unknown scenario name, a bad fault spec or vehicle draw) is a
+    usage error (ap.error: exit 2); a scenario file that is not one raises its ScenarioError (exit 1)."""
     try:
         sc = load_scenario(args.scenario)
+    except ScenarioError as exc:
+        if Path(args.scenario).is_file():
+            raise
+        ap.error(str(exc))
+    try:
         extra = [parse_fault(f) for f in args.fault]
         vehicle = vehicle_from_option(getattr(args, "truth_vehicle", None))
-    except (ScenarioError, FaultSpecError, ValueError) as exc:
+    except (FaultSpecError, VehicleDrawError) as exc:
         ap.error(str(exc))
     faults = ([] if args.no_scenario_faults else list(sc.faults)) + extra
     duration = args.duration if args.duration is not None else sc.duration

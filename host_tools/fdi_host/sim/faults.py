@@ -25,12 +25,14 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
+from fdi_host.errors import FdiHostError
+
 FAULT_IDS: tuple[str, ...] = tuple(f"f{k}" for k in range(1, 26))
 Shape = Literal["step", "ramp", "intermittent"]
 FloatArray = NDArray[np.float64]
 
 
-class FaultSpecError(ValueError):
+class FaultSpecError(FdiHostError, ValueError):
     """A fault given in a form that cannot be understood."""
 
 

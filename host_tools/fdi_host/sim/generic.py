@@ -21,11 +21,12 @@ from numpy.typing import NDArray
 
 from fdi_analysis.model import Model
 from fdi_analysis.residuals.solvability import Solution, Solver
+from fdi_host.errors import FdiHostError
 
 FloatArray = NDArray[np.float64]
 
 
-class GenericPlantError(ValueError):
+class GenericPlantError(FdiHostError, ValueError):
     """A model the generic simulator cannot order causally (an algebraic loop, a state without a derivative)."""
 
 

@@ -41,6 +41,7 @@ from fdi_analysis.model import Equation, Model
 from fdi_analysis.model_loader import load_model
 from fdi_analysis.names import natural_sorted
 from fdi_analysis.resources import MODELS
+from fdi_host.errors import FdiHostError
 
 DEFAULT_MODEL = MODELS.path() / "romo_quasistatic.toml"  # analysis/models/ in a checkout, the copy in a wheel
 
@@ -82,7 +83,7 @@ class _Printer(PythonCodePrinter):  # type: ignore[misc]
         return f"_heaviside({self._print(expr.args[0])})"
 
 
-class PlantError(RuntimeError):
+class PlantError(FdiHostError, RuntimeError):
     """The model cannot be turned into a simulation (no causal ordering, non-affine loop, ...)."""
 
 

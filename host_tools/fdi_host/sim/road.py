@@ -26,11 +26,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from fdi_host.errors import FdiHostError
+
 FloatArray = NDArray[np.float64]
 SIDES = ("both", "left", "right")
 
 
-class RoadError(ValueError):
+class RoadError(FdiHostError, ValueError):
     """A [road] table that is not well formed."""
 
 

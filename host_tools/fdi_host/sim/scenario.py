@@ -49,6 +49,7 @@ from numpy.typing import NDArray
 from scipy.signal import lfilter
 
 from fdi_host import resources
+from fdi_host.errors import FdiHostError
 from fdi_host.sim.faults import FaultSpec, fault_from_table
 from fdi_host.sim.road import Road, RoadError, road_from_dict
 
@@ -63,7 +64,7 @@ CHANNELS: tuple[str, ...] = ("speed", "sideslip", "yaw_rate")
 FloatArray = NDArray[np.float64]
 
 
-class ScenarioError(ValueError):
+class ScenarioError(FdiHostError, ValueError):
     """A scenario file that is not well formed."""
 
 

@@ -40,7 +40,7 @@ from fdi_host.sim.truth_plant import (
 from fdi_host.sim.truth_sensors import clean_readings, measured_readings
 from fdi_host.sim.tyre import parameter_array
 from fdi_host.sim.vehicle_envelope import NOMINAL, Vehicle
-from fdi_host.sim.vehicle_sim import SENSOR_FAULTS, SimConfig, SimResult
+from fdi_host.sim.vehicle_sim import SENSOR_FAULTS, SimConfig, SimResult, SimulationDivergedError
 
 FloatArray = NDArray[np.float64]
 TRUTH_PLANT = "truth plant"
@@ -54,7 +54,7 @@ READING_NAMES = ("delta1_m", "delta2_m", "delta3_m", "delta4_m", "iTM1_m", "iTM2
 _step: Callable[..., bool] = step  # the compiled step (numba's dispatcher, called with the road's arrays)
 
 
-class TruthDivergedError(FloatingPointError):
+class TruthDivergedError(SimulationDivergedError):
     """The truth plant's state became non-finite."""
 
 

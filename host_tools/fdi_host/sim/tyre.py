@@ -31,6 +31,8 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
+from fdi_host.errors import FdiHostError
+
 FloatArray = NDArray[np.float64]
 
 # The parameter names of CommonRoad's tyre file, in the order of the array the compiled functions take.
@@ -48,7 +50,7 @@ R_VY1, R_VY4, R_VY5, R_VY6 = (_I[n] for n in ("r_vy1", "r_vy4", "r_vy5", "r_vy6"
 SOURCE = "commonroad-vehicle-models: vehiclemodels/parameters/parameters_tire.yaml"
 
 
-class TyreParameterError(ValueError):
+class TyreParameterError(FdiHostError, ValueError):
     """CommonRoad's tyre file is missing or lacks a parameter."""
 
 

@@ -34,7 +34,13 @@ from typing import Any
 
 import numpy as np
 
+from fdi_host.errors import FdiHostError
+
 GROUPS: tuple[str, ...] = ("imu", "velocity", "wheel", "brake")  # sensor groups (latency, filter)
+
+
+class VehicleDrawError(FdiHostError, ValueError):
+    """A ``--truth-vehicle`` that is neither ``nominal`` nor a seed."""
 
 
 @dataclass(frozen=True)
@@ -209,12 +215,13 @@ def fleet(n: int, first: int) -> list[Vehicle]:
 
 
 def vehicle_from_option(text: str | None) -> Vehicle | None:
-    """The command lines' ``--vehicle-draw``: None (no option: the model plant), "nominal", or a seed."""
+    """The command lines' ``--truth-vehicle``: None (no option: the model plant), "nominal", or a seed."""
     if text is None:
         return None
     if text == "nominal":
         return NOMINAL
     try:
-        return draw_vehicle(int(text))
-    except ValueError as exc:
-        raise ValueError(f"--vehicle-draw {text!r}: expected 'nominal' or an integer seed") from exc
+        seed = int(text)
+    except ValueError:
+        raise VehicleDrawError(f"--truth-vehicle {text!r}: expected 'nominal' or an integer seed") from None
+    return draw_vehicle(seed)

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from fdi_host.errors import FdiHostError
 from fdi_host.sim.controller import ControllerConfig, GeometricController, VehicleConstants
 from fdi_host.sim.faults import FAULT_IDS, FaultSpec, fault_matrix
 from fdi_host.sim.plant import RECORDED, STATES, Plant
@@ -36,6 +37,10 @@ from fdi_host.sim.sensors import add_noise
 from fdi_host.sim.vehicle_envelope import Vehicle
 
 FloatArray = NDArray[np.float64]
+
+
+class SimulationDivergedError(FdiHostError, FloatingPointError):
+    """A simulated state became non-finite (a fault or an input far beyond what the vehicle can follow)."""
 
 
 @dataclass(frozen=True)
@@ -144,7 +149,7 @@ def simulate(
                 *(x[3 + i] + h * xdot[3 + i] / (1.0 - h * jac[i]) for i in range(4)),
             ]
         if not all(math.isfinite(v) for v in x):
-            raise FloatingPointError(f"simulation diverged at t = {t[k]:.3f} s: {x}")
+            raise SimulationDivergedError(f"simulation diverged at t = {t[k]:.3f} s: {x}")
         if progress is not None and (k - last >= 1000 or k == n - 1):
             progress(k + 1 - last)
             last = k + 1

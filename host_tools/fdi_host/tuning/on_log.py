@@ -18,12 +18,13 @@ from numpy.typing import NDArray
 
 from fdi_analysis.residuals.evaluate import FilterDesign, evaluable_segments
 from fdi_analysis.residuals.generator import Generator
+from fdi_host.errors import FdiHostError
 from fdi_host.tuning.calibrate import first_alarm
 
 FloatArray = NDArray[np.float64]
 
 
-class LogError(ValueError):
+class LogError(FdiHostError, ValueError):
     """A log that the generators cannot be evaluated on."""
 
 

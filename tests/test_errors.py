@@ -1,0 +1,173 @@
+"""One error hierarchy per package: every exception class of `fdi_analysis` derives from `FdiError`, every one of
+`fdi_host` from `FdiHostError` (itself an `FdiError`), each keeping the built-in base it had so that ``except
+ValueError`` callers still catch it; and `fdi_analysis.cli.common.run` turns exactly those (and a missing file)
+into one line and exit 1, anything else into its traceback and exit 70."""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import json
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from fdi_analysis.cli import common
+from fdi_analysis.cli.common import EXIT_BUG, EXIT_ERROR, EXIT_INTERRUPTED, PENDING_FDI_ERRORS, is_input_error, run
+from fdi_analysis.errors import ComputationError, FdiError, InputError
+from fdi_host.errors import FdiHostError
+
+REPO = Path(__file__).resolve().parents[1]
+ROOTS = {"fdi_analysis": REPO / "analysis", "fdi_host": REPO / "host_tools"}
+
+# Each class and the built-in base it keeps beside its root (issue 47: the 27 classes without a common root, and
+# the ones added since). A class of a module that another change is rewriting is in PENDING_FDI_ERRORS instead.
+KEEPS: dict[str, type[BaseException] | None] = {
+    "fdi_analysis.api.ApiError": ValueError,
+    "fdi_analysis.errors.ComputationError": RuntimeError,
+    "fdi_analysis.errors.FdiError": None,
+    "fdi_analysis.errors.InputError": ValueError,
+    "fdi_analysis.export.c_expr.CExprError": ValueError,
+    "fdi_analysis.export.c_names.CNameError": ValueError,
+    "fdi_analysis.export.fault_sizes.FaultSizesError": ValueError,
+    "fdi_analysis.export.generators.EmitError": ValueError,
+    "fdi_analysis.export.signals.SignalsError": ValueError,
+    "fdi_analysis.export.table.ExportError": ValueError,
+    "fdi_analysis.export.thresholds.MissingSigmaError": ValueError,
+    "fdi_analysis.expressions.ExpressionError": ValueError,
+    "fdi_analysis.model.ModelError": ValueError,
+    "fdi_analysis.residuals.reasons.NotRealizableError": ValueError,
+    "fdi_analysis.residuals.selected.SelectionError": ValueError,
+    "fdi_analysis.selection.exact.SearchTimeoutError": None,
+    "fdi_analysis.selection.practical.ScreeningError": ValueError,
+    "fdi_analysis.selection.sat.SatTimeoutError": None,
+    "fdi_analysis.selection.sat.SatUnavailableError": RuntimeError,
+    "fdi_analysis.structure.StructureError": ValueError,
+    "fdi_host.can.dbc.E2EError": ValueError,
+    "fdi_host.ecu.bindings.EcuError": RuntimeError,
+    "fdi_host.errors.FdiHostError": None,
+    "fdi_host.executors.ExecutorError": ValueError,
+    "fdi_host.quality.fleet_plan.PlanError": ValueError,
+    "fdi_host.quality.fleet_plots.FleetReportError": ValueError,
+    "fdi_host.quality.suite.QualityError": ValueError,
+    "fdi_host.sim.faults.FaultSpecError": ValueError,
+    "fdi_host.sim.generic.GenericPlantError": ValueError,
+    "fdi_host.sim.plant.PlantError": RuntimeError,
+    "fdi_host.sim.road.RoadError": ValueError,
+    "fdi_host.sim.scenario.ScenarioError": ValueError,
+    "fdi_host.sim.truth_sim.TruthDivergedError": FloatingPointError,
+    "fdi_host.sim.tyre.TyreParameterError": ValueError,
+    "fdi_host.sim.vehicle_envelope.VehicleDrawError": ValueError,
+    "fdi_host.sim.vehicle_sim.SimulationDivergedError": FloatingPointError,
+    "fdi_host.tuning.on_log.LogError": ValueError,
+}
+
+
+def _module_name(pkg: str, path: Path) -> str:
+    parts = list(path.relative_to(ROOTS[pkg]).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def exception_classes() -> dict[str, type[BaseException]]:
+    """Every class defined at the top level of a module of the two packages that is an exception (not a
+    warning), by qualified name (found in the source, then imported)."""
+    out: dict[str, type[BaseException]] = {}
+    for pkg, root in ROOTS.items():
+        for path in sorted((root / pkg).rglob("*.py")):
+            tree = ast.parse(path.read_text(encoding="utf-8"))
+            names = [n.name for n in tree.body if isinstance(n, ast.ClassDef) and n.bases]
+            if not names or not any(("Error" in ast.unparse(b) or "Exception" in ast.unparse(b))
+                                    for n in tree.body if isinstance(n, ast.ClassDef) for b in n.bases):
+                continue
+            module = _module_name(pkg, path)
+            mod = importlib.import_module(module)
+            for name in names:
+                cls = getattr(mod, name)
+                if isinstance(cls, type) and issubclass(cls, BaseException) and not issubclass(cls, Warning):
+                    out[f"{module}.{name}"] = cls
+    return out
+
+
+def test_every_exception_class_has_its_package_root() -> None:
+    found = exception_classes()
+    pending = {n for n, c in found.items()
+               if any(f"{b.__module__}.{b.__qualname__}" in PENDING_FDI_ERRORS for b in c.__mro__)}
+    rooted = {n: c for n, c in found.items() if n not in pending}
+    assert sorted(rooted) == sorted(KEEPS), "a new exception class: give it its package root and list it in KEEPS"
+    wrong = [n for n, c in rooted.items() if not issubclass(c, FdiHostError if n.startswith("fdi_host.") else FdiError)]
+    assert not wrong, f"not under the package's root: {wrong}"
+    lost = [n for n, base in KEEPS.items() if base is not None and not issubclass(rooted[n], base)]
+    assert not lost, f"lost the built-in base its callers catch: {lost}"
+    assert not any(issubclass(c, FdiHostError) for n, c in rooted.items() if n.startswith("fdi_analysis."))
+
+
+def test_pending_errors_are_real_classes() -> None:
+    """`PENDING_FDI_ERRORS` names classes that exist (a typo would silently stop catching them); once a class
+    derives from FdiError its name should leave the list."""
+    for name in PENDING_FDI_ERRORS:
+        module, _, cls_name = name.rpartition(".")
+        cls = getattr(importlib.import_module(module), cls_name)
+        assert isinstance(cls, type) and issubclass(cls, Exception), name
+        assert is_input_error(cls("x")), name
+
+
+def test_roots() -> None:
+    assert issubclass(FdiHostError, FdiError) and not issubclass(FdiError, (ValueError, RuntimeError))
+    assert issubclass(InputError, ValueError) and issubclass(ComputationError, RuntimeError)
+    from fdi_analysis.model import ModelError
+
+    err = ModelError("bad symbol", file="m.toml", equation="e1", symbol="x")  # typed data stays on the class
+    assert (str(err), err.file, err.equation, err.symbol) == ("m.toml: equation 'e1': bad symbol", "m.toml", "e1", "x")
+    with pytest.raises(ValueError):  # an existing `except ValueError` still catches it
+        raise err
+
+
+def _raising(exc: BaseException) -> int:
+    raise exc
+
+
+@pytest.mark.parametrize("exc, code, line", [
+    (InputError("m.toml: bad"), EXIT_ERROR, "prog: error: m.toml: bad"),
+    (FdiHostError("log.blf: holds no data frames"), EXIT_ERROR, "prog: error: log.blf: holds no data frames"),
+    (FileNotFoundError(2, "No such file or directory", "a/b.toml"), EXIT_ERROR,
+     "prog: error: a/b.toml: No such file or directory"),
+    (tomllib.TOMLDecodeError("Expected '='"), EXIT_ERROR, "prog: error: Expected '='"),
+    (json.JSONDecodeError("Expecting value", "{", 1), EXIT_ERROR, "prog: error: Expecting value: line 1 column 2 "
+     "(char 1)"),
+    (KeyboardInterrupt(), EXIT_INTERRUPTED, "prog: interrupted"),
+])
+def test_run_reports_input_errors_as_one_line(exc: BaseException, code: int, line: str,
+                                              capsys: pytest.CaptureFixture[str]) -> None:
+    assert run("prog", lambda: _raising(exc)) == code
+    assert capsys.readouterr().err.splitlines() == [line]
+
+
+@pytest.mark.parametrize("exc", [ValueError("bare"), KeyError("k"), ZeroDivisionError("z"), RuntimeError("r"),
+                                 TypeError("t")])
+def test_run_reports_anything_else_as_a_bug(exc: Exception, capsys: pytest.CaptureFixture[str]) -> None:
+    assert run("prog", lambda: _raising(exc)) == EXIT_BUG
+    err = capsys.readouterr().err
+    assert err.startswith("Traceback (most recent call last)") and f"\n{type(exc).__name__}: " in err
+    assert err.splitlines()[-1].startswith(f"prog: internal error ({type(exc).__name__})")
+
+
+def test_run_names_extra_errors_and_lets_usage_errors_through(capsys: pytest.CaptureFixture[str]) -> None:
+    assert run("prog", lambda: _raising(KeyError("k")), errors=(KeyError,)) == EXIT_ERROR
+    assert capsys.readouterr().err == "prog: error: 'k'\n"
+    with pytest.raises(SystemExit):  # argparse's exit 2 is not swallowed
+        run("prog", lambda: _raising(SystemExit(2)))
+
+
+def test_pending_errors_are_matched_by_name(monkeypatch: pytest.MonkeyPatch) -> None:
+    class LogError(ValueError):
+        pass
+
+    LogError.__module__, LogError.__qualname__ = "fdi_host.can.logs", "LogError"
+
+    class MalformedLogError(LogError):
+        pass
+
+    assert is_input_error(MalformedLogError("x")) and is_input_error(LogError("x"))
+    monkeypatch.setattr(common, "PENDING_FDI_ERRORS", frozenset())
+    assert not is_input_error(LogError("x"))
