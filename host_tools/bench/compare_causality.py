@@ -6,8 +6,8 @@ fault-free drives as `fdi-tune calibrate` (as the ECU sees them) and swept with 
 `fdi-tune fault-sizes` (cornering, 3 s steps, an alarm with every seed). Prints, per variant, the fault-free
 sigma, RMS and peak, and the smallest detected size of every fault of the signature. Nothing is hard-coded.
 
-    python analysis/bench/compare_causality.py                      # ~5 min on 2 cores
-    python analysis/bench/compare_causality.py --seeds 777 --calibration-seeds   # quicker, fewer drives
+    python host_tools/bench/compare_causality.py                      # ~5 min on 2 cores
+    python host_tools/bench/compare_causality.py --seeds 777 --calibration-seeds   # quicker, fewer drives
 """
 
 from __future__ import annotations

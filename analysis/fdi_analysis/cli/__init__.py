@@ -13,18 +13,20 @@ import argparse
 from collections.abc import Sequence
 
 from fdi_analysis.cli.common import add_version, run_subcommand
-from fdi_analysis.resources import shipped_models
+from fdi_analysis.resources import shipped_models, shipped_thresholds
 
 EPILOG = """examples:
   fdi-analyze report analysis/models/romo_quasistatic.toml -o out/romo
   fdi-analyze mso analysis/models/romo_grouped.toml
   fdi-analyze robustness analysis/models/romo_grouped.toml --mso -o out/robustness
   fdi-analyze select analysis/models/romo_grouped.toml -o out/grouped
-  fdi-analyze export-c analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \
-      --fault-sizes host_tools/scenarios/fault_sizes.toml --out fw/generated
+  fdi-analyze export-c analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \\
+      --fault-sizes host_tools/scenarios/fault_sizes.toml --out fw/vehicles/romo/generated
+  fdi-analyze report romo_grouped -o out/grouped          (a model shipped with the package, by name)
   fdi-analyze convert analysis/models/romo_grouped.toml --to-fdt out/romo_grouped_fdt.json
 (the closed-loop steps on simulated drives, screen, calibrate, fault-sizes and residuals, are fdi-tune's)
 MODEL is a file, or the name of a model shipped with the package: {models}
+THRESHOLDS (--thresholds) likewise: a file, or the name of a shipped one: {thresholds}
 """
 
 
@@ -32,7 +34,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="fdi-analyze",
         description="Structural fault diagnosis analysis of a model file (TOML) or an FDT structure (JSON).",
-        epilog=EPILOG.format(models=", ".join(shipped_models())),
+        epilog=EPILOG.format(models=", ".join(shipped_models()), thresholds=", ".join(shipped_thresholds())),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     add_version(parser)

@@ -26,7 +26,7 @@ from fdi_analysis.selection.practical import (
 )
 
 EXAMPLE = ("example: fdi-analyze practical analysis/models/romo_grouped.toml --screening "
-           "analysis/models/romo_screening.json --thresholds analysis/models/romo_thresholds.toml -o out/practical")
+           "analysis/models/romo_screening.json.gz --thresholds analysis/models/romo_thresholds.toml -o out/practical")
 
 
 def register(sub: Any) -> None:

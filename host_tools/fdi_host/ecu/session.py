@@ -69,7 +69,7 @@ def _get(obj: Any, *names: str, default: Any = None) -> Any:
 
 
 def table_classes(ecu: Any) -> TableClasses:
-    """Signatures and structural isolability classes of the ECU's table (`ecu_lib.TableInfo`, or an `Ecu`).
+    """Signatures and structural isolability classes of the ECU's table (`bindings.TableInfo`, or an `Ecu`).
 
     A fault's signature counts only the tests that have an on-board generator (the others are never
     evaluable, so they cannot detect anything); its class is the table's structural isolability class.
@@ -88,7 +88,7 @@ def table_classes(ecu: Any) -> TableClasses:
 
 @dataclass
 class EcuSession:
-    """Feeds frames with absolute timestamps [s] to an `ecu_lib.Ecu`; collects what it sends."""
+    """Feeds frames with absolute timestamps [s] to an `fdi_host.ecu.bindings.Ecu`; collects what it sends."""
 
     table: str = "kin"
     origin: float | None = None

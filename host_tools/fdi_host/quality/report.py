@@ -116,7 +116,7 @@ def markdown(result: SuiteResult) -> str:
         f"Fault-free: {ff['drives']} drives, {ff['minutes']:.1f} simulated minutes ({', '.join(ff['scenarios'])}): "
         f"{ff['detection_events']} false detections, {ff['isolation_events']} false isolations, "
         f"{ff['alarm_steps']} steps with an alarm. Goal (0 over >= 30 min): "
-        + ("met." if goal else "**NOT met**" + (" (under 30 minutes: quick mode)." if ff["minutes"] < 30 else ".")),
+        + ("met." if goal else "**NOT met**" + (" (under 30 minutes driven)." if ff["minutes"] < 30 else ".")),
     ]
     pre = sum(c.pre_onset_detections for c in result.cases)
     lines.append(f"Detections before the fault onset in the fault cases: {pre}.")

@@ -15,7 +15,7 @@ SUBCOMMANDS = (screen, calibrate, residuals, uncertainty, kin)
 
 EPILOG = """examples:
   fdi-tune screen analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \\
-      --sizes host_tools/scenarios/fault_sizes.toml --out analysis/models/romo_screening.json
+      --sizes host_tools/scenarios/fault_sizes.toml --out analysis/models/romo_screening.json.gz
   fdi-tune calibrate analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml
   fdi-tune fault-sizes analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \\
       --sizes host_tools/scenarios/fault_sizes.toml
@@ -24,6 +24,7 @@ EPILOG = """examples:
   fdi-tune uncertainty analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \\
       --sizes host_tools/scenarios/fault_sizes.toml --out out/uncertainty
   fdi-tune kin-calibration --out fw/vehicles/romo/generated/fdi_kin_calibration.h
+MODEL and --thresholds: a file, or the name of one shipped with the package (romo_grouped, romo_thresholds, ...)
 """
 
 

@@ -13,7 +13,7 @@ from fdi_host.tuning.seeds import CALIBRATION_SEEDS
 
 EXAMPLE = ("example: fdi-tune screen analysis/models/romo_grouped.toml --thresholds "
            "analysis/models/romo_thresholds.toml --sizes host_tools/scenarios/fault_sizes.toml "
-           "--out analysis/models/romo_screening.json")
+           "--out analysis/models/romo_screening.json.gz")
 # Noise seeds of the screening's sigma drives besides each scenario's own: the calibration's, so that the selection
 # judges a test by the sigma it ships with (`fdi-tune calibrate` of the selected tests). With two seeds the sigmas
 # came out up to 46 % smaller than the calibration's, and tests were selected for faults they then saw only near
