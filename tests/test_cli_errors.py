@@ -131,3 +131,122 @@ def test_a_bug_keeps_its_traceback(prog: str, tmp_path: Path, capfd: pytest.Capt
     assert got == EXIT_BUG, (got, err)
     assert "Traceback (most recent call last)" in err and f"{case.bug.__name__}: " in err and "injected" in err, err
     assert f"{prog}: internal error ({case.bug.__name__})" in err and ": error:" not in err, err
+
+
+# ------------------------------------------------------------------------ issue 47 item 5, the last programs
+def _one_error_line(err: str, prog: str) -> str:
+    lines = [ln for ln in err.split("\n") if ln.strip() and "\r" not in ln]
+    assert len(lines) == 1 and lines[0].startswith(f"{prog}: error: ") and "Traceback" not in err, err
+    return lines[0]
+
+
+def test_replay_of_a_missing_log_is_one_line_and_exit_1(tmp_path: Path, capfd: pytest.CaptureFixture[str]) -> None:
+    """A log that does not exist is a bad input, not a usage error: no usage text, exit 1, the file named."""
+    missing = tmp_path / "nosuch.blf"
+    assert _call("fdi-replay", [str(missing)]) == EXIT_ERROR
+    err = capfd.readouterr().err
+    assert "usage:" not in err, err
+    assert _one_error_line(err, "fdi-replay") == f"fdi-replay: error: {missing}: no such file"
+
+
+@pytest.mark.parametrize("content, says", [
+    ("{", "not a JSON file of fault signatures"),
+    ("[13, 14]", "expected an object with a 'signature' list"),
+    ('{"test_names": ["r1"]}', "expected an object with a 'signature' list"),
+    ('{"signature": ["13"]}', "'signature' must list one test bitmask"),
+    ('{"signature": [13], "test_names": "r1"}', "'test_names' must be a list of names"),
+    ('{"signature": [13], "dt": 0}', "'dt' must be the diagnosis step in seconds (> 0), not 0"),
+    (b"\xff\xfe{", "not a JSON file of fault signatures"),
+    (None, "No such file or directory"),
+])
+def test_monitor_with_a_bad_classes_file_is_one_line_naming_it(content: str | bytes | None, says: str, tmp_path: Path,
+                                                                 capfd: pytest.CaptureFixture[str]) -> None:
+    """``fdi-monitor --classes FILE``: a file that is not fault signatures is one line naming it, exit 1, before
+    the bus is opened."""
+    path = tmp_path / "classes.json"
+    if isinstance(content, str):
+        path.write_text(content, encoding="utf-8")
+    elif isinstance(content, bytes):
+        path.write_bytes(content)
+    assert _call("fdi-monitor", ["--classes", str(path), "--interface", "no-such-interface"]) == EXIT_ERROR
+    line = _one_error_line(capfd.readouterr().err, "fdi-monitor")
+    assert line.startswith(f"fdi-monitor: error: --classes {path}: ") and says in line, line
+
+
+def test_monitor_reads_a_good_classes_file(tmp_path: Path) -> None:
+    from fdi_host.monitor.cli import read_classes
+
+    path = tmp_path / "classes.json"
+    path.write_text('{"signature": [3, 3, 4, 0], "test_names": ["r1", "r2", "r3"], "dt": 0.02}', encoding="utf-8")
+    classes, step = read_classes(path)
+    assert classes.signature == (3, 3, 4, 0) and classes.iso_class == (3, 3, 4, 0) and step == 0.02
+    assert classes.test_names == ("r1", "r2", "r3")
+
+
+def test_monitor_classes_bug_keeps_its_traceback(monkeypatch: pytest.MonkeyPatch,
+                                                 capfd: pytest.CaptureFixture[str]) -> None:
+    """The catch around the fault signatures takes the project's errors, a missing file and missing bindings
+    only: a bare ValueError, KeyError or RuntimeError from there is a bug."""
+    for exc in (ValueError, KeyError, RuntimeError):
+        _patch(monkeypatch, "fdi_host.monitor.cli:classes_for", exc)
+        assert _call("fdi-monitor", ["--interface", "no-such-interface"]) == EXIT_BUG
+        err = capfd.readouterr().err
+        assert f"fdi-monitor: internal error ({exc.__name__})" in err and ": error:" not in err, err
+
+
+@pytest.mark.parametrize("prog, argv", [
+    ("fdi-replay", ["one.log", "--interface", "no-such-interface"]),
+    ("fdi-monitor", ["--classes", "classes.json", "--interface", "no-such-interface"]),
+])
+def test_a_bus_that_cannot_be_opened_is_the_common_error_line(prog: str, argv: list[str], tmp_path: Path,
+                                                              capfd: pytest.CaptureFixture[str]) -> None:
+    files = _files(tmp_path)
+    (tmp_path / "classes.json").write_text('{"signature": [1, 2, 4]}', encoding="utf-8")
+    argv = [str(files[a.split(".")[0]]) if a.split(".")[0] in files else a for a in argv]
+    assert _call(prog, argv) == EXIT_ERROR
+    line = _one_error_line(capfd.readouterr().err, prog)
+    assert line.startswith(f"{prog}: error: cannot open the CAN bus (no-such-interface): "), line
+
+
+def test_ecu_that_cannot_load_its_table_is_one_line_and_a_bare_runtime_error_a_bug(
+        monkeypatch: pytest.MonkeyPatch, capfd: pytest.CaptureFixture[str]) -> None:
+    from fdi_host.ecu.bindings import EcuError
+
+    argv = ["--interface", "no-such-interface"]
+    _patch(monkeypatch, "fdi_host.live.ecu:EcuSession", EcuError)
+    assert _call("fdi-ecu", argv) == EXIT_ERROR
+    line = _one_error_line(capfd.readouterr().err, "fdi-ecu")
+    assert line.startswith("fdi-ecu: error: cannot load the ECU bindings (injected"), line
+    for exc in (RuntimeError, ValueError):
+        _patch(monkeypatch, "fdi_host.live.ecu:EcuSession", exc)
+        assert _call("fdi-ecu", argv) == EXIT_BUG
+        assert f"fdi-ecu: internal error ({exc.__name__})" in capfd.readouterr().err
+
+
+def test_replay_offline_ecu_error_is_one_line_and_a_bare_runtime_error_a_bug(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capfd: pytest.CaptureFixture[str]) -> None:
+    from fdi_host.ecu.bindings import EcuError
+
+    argv = [str(_files(tmp_path)["one"]), "--offline"]
+    _patch(monkeypatch, "fdi_host.replay:replay_columns", ImportError)
+    assert _call("fdi-replay", argv) == EXIT_ERROR
+    line = _one_error_line(capfd.readouterr().err, "fdi-replay")
+    assert line.startswith("fdi-replay: error: cannot load the ECU bindings (injected"), line
+    _patch(monkeypatch, "fdi_host.replay:replay_columns", EcuError)
+    assert _call("fdi-replay", argv) == EXIT_ERROR
+    line = _one_error_line(capfd.readouterr().err, "fdi-replay")  # an EcuError mid-log: run()'s one line
+    assert line == "fdi-replay: error: injected: a bug, not a bad input", line
+    _patch(monkeypatch, "fdi_host.replay:replay_columns", RuntimeError)
+    assert _call("fdi-replay", argv) == EXIT_BUG
+    assert "fdi-replay: internal error (RuntimeError)" in capfd.readouterr().err
+
+
+def test_tune_residuals_log_reader_bug_keeps_its_traceback(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                          capfd: pytest.CaptureFixture[str]) -> None:
+    """``fdi-tune residuals`` catches the log's LogError (an FdiError) and an unreadable file, not a bare
+    ValueError from the reader."""
+    _patch(monkeypatch, "fdi_host.can.logs:read_log", ValueError)
+    argv = ["residuals", "romo_grouped", "--thresholds", "romo_thresholds", "--log", str(_files(tmp_path)["one"])]
+    assert _call("fdi-tune", argv) == EXIT_BUG
+    err = capfd.readouterr().err
+    assert "fdi-tune: internal error (ValueError)" in err and ": error:" not in err, err

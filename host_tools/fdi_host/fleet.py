@@ -37,6 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from fdi_host.can.logs import LogError, formats_text, is_log, looks_like_log
+from fdi_host.errors import FdiHostError
 from fdi_host.executors import ExecutorError, run_tasks
 from fdi_host.monitor.score import FaultScore
 from fdi_host.sim.faults import FAULT_IDS
@@ -44,7 +45,7 @@ from fdi_host.sim.faults import FAULT_IDS
 GLOB_CHARS = frozenset("*?[")
 
 
-class FleetError(ValueError):
+class FleetError(FdiHostError, ValueError):
     """A fleet that cannot be run: no log found, a missing path, no Dask, a scheduler that cannot be reached."""
 
 

@@ -8,9 +8,10 @@ and skipped, as the ECU skips a bad frame; ``--strict`` makes it an error naming
 On a bus the frames keep their relative timing, at ``--speed`` times real time (``max``: as fast as
 python-can sends). ``--offline`` skips the bus: every frame goes through the ECU bindings with its log
 timestamp on the time base of `fdi_host.ecu.session` (the one ``fdi-ecu`` uses live), as fast as possible, and
-the speed against real time is printed. By default in one C call (`ecu_lib.Ecu.process`: rx then poll per
-frame; the C core runs the steps due before a frame inside rx, so this equals EcuSession's poll-then-rx
-order, tested); with ``--ecu-log`` frame by frame through `EcuSession`, recording every step's residuals.
+the speed against real time is printed. By default in one C call (`fdi_host.ecu.bindings.Ecu.process_arrays`,
+`Ecu.process` on the log's columns: rx then poll per frame; the C core runs the steps due before a frame inside
+rx, so this equals EcuSession's poll-then-rx order, tested); with ``--ecu-log`` frame by frame through
+`EcuSession`, recording every step's residuals.
 With ``--truth`` the offline diagnosis is scored and reported like ``fdi-monitor`` does.
 
 Many logs (several files, a folder, a glob pattern) are a fleet (`fdi_host.fleet`): each log offline through
@@ -38,7 +39,6 @@ from fdi_host.can.dbc import RomoDatabase
 from fdi_host.can.frame import Frame
 from fdi_host.can.log_columns import FrameColumns, frame_columns, read_columns_checked
 from fdi_host.can.logs import LogError, LogIssues, formats_text, is_log, read_log_checked
-from fdi_host.ecu.bindings import EcuError
 from fdi_host.ecu.records import DiagRecord
 from fdi_host.ecu.session import DIAG_ID, ORIGIN_LEAD, EcuSession, table_classes
 from fdi_host.live.bus import BusOptions, StopFlag, add_bus_arguments, open_cli_bus
@@ -124,10 +124,11 @@ def _diag_decoder(db: RomoDatabase) -> Callable[[bytes], list[list[int]]]:
 
 
 def replay_columns(columns: FrameColumns, table: str) -> FastResult:
-    """A whole log, as columns in file order, through the ECU in one C call (`ecu_lib.Ecu.process_arrays`: rx then
-    poll per frame), same time base as `EcuSession` (first frame at 0.5 ms after a step boundary); the ECU's own
-    diagnosis frames in the log are left out. Only the diagnosis frames come back (no residuals): the fast path
-    for scoring and for measuring speed. `wall` runs from the columns to the records."""
+    """A whole log, as columns in file order, through the ECU in one C call
+    (`fdi_host.ecu.bindings.Ecu.process_arrays`: rx then poll per frame), same time base as `EcuSession` (first
+    frame at 0.5 ms after a step boundary); the ECU's own diagnosis frames in the log are left out. Only the
+    diagnosis frames come back (no residuals): the fast path for scoring and for measuring speed. `wall` runs from
+    the columns to the records."""
     session = EcuSession(table)
     ecu = session.ecu
     decode = _diag_decoder(RomoDatabase())
@@ -158,7 +159,9 @@ def replay_offline_fast(frames: Sequence[Frame], table: str) -> FastResult:
     return replace(res, wall=res.wall + convert)
 
 
-LOG_ERRORS: tuple[type[BaseException], ...] = (*INPUT_ERRORS, EcuError)  # a bad log, truth file or table
+# A bad log, truth file or table: the project's typed errors (LogError, EcuError, ...: FdiError) and a file that
+# cannot be read, as a command line reports them (`fdi_analysis.cli.common.INPUT_ERRORS`)
+LOG_ERRORS: tuple[type[BaseException], ...] = INPUT_ERRORS
 
 
 def no_frames(issues: LogIssues) -> LogError:
@@ -256,13 +259,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     if fleet.is_fleet(args.logs) or args.scheduler is not None or args.workers is not None:
         if args.truth is not None or args.ecu_log is not None:
             ap.error("--truth and --ecu-log are for one log (a fleet's truth files lie beside its logs)")
-        return run("fdi-replay", lambda: _fleet(args), (fleet.FleetError,))
+        return run("fdi-replay", lambda: _fleet(args))
     args.log = Path(args.logs[0])
     if not is_log(args.log):
         ap.error(f"{args.log}: unsupported extension; use {formats_text()}")
-    if not args.log.is_file():
-        ap.error(f"{args.log}: no such file")
-    return run("fdi-replay", lambda: _one_log(args), (EcuError,))
+    if not args.log.is_file():  # a runtime error, not a usage error: one line, exit 1
+        return fail("fdi-replay", f"{args.log}: no such file")
+    return run("fdi-replay", lambda: _one_log(args))
 
 
 def _one_log(args: argparse.Namespace) -> int:
@@ -319,11 +322,9 @@ def _offline(args: argparse.Namespace, source: list[Frame] | FrameColumns) -> in
             ecu, records, steps, speed, wall = res.session.ecu, res.session.records(), res.session.steps, \
                 res.speed, res.wall
             n, dur = len(source), source[-1].timestamp - source[0].timestamp
-    except (ImportError, OSError, RuntimeError) as exc:
-        print(f"fdi-replay: cannot load the ECU bindings ({exc}); build them with `pip install -e .`",
-              file=sys.stderr)
-        return EXIT_ERROR
-    mode = "per frame, with ECU log" if args.ecu_log is not None else "one C call (Ecu.process)"
+    except (ImportError, OSError) as exc:  # not built (an EcuError, an FdiError, goes to `run`: one line too)
+        return fail("fdi-replay", f"cannot load the ECU bindings ({one_line(exc)}); build them with `pip install -e .`")
+    mode = "per frame, with ECU log" if args.ecu_log is not None else "one C call (Ecu.process_arrays)"
     print(f"offline ({mode}): {n} frames, {dur:.2f} s of log in {wall:.3f} s = {speed:.0f}x real time; "
           f"{len(records)} diagnosis steps; {sum(1 for r in records if r.alarm_mask)} with an alarm")
     c = ecu.counters()

@@ -178,7 +178,7 @@ def test_this_machine_is_never_called_vcan_without_af_can() -> None:
 def test_a_bus_that_cannot_be_opened_is_one_error_line(capsys: pytest.CaptureFixture[str]) -> None:
     assert open_cli_bus("fdi-x", BusOptions(interface="socketcan", channel="fdi-no-such-if")) is None
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and err[0].startswith("fdi-x: cannot open the CAN bus (socketcan fdi-no-such-if): ")
+    assert len(err) == 1 and err[0].startswith("fdi-x: error: cannot open the CAN bus (socketcan fdi-no-such-if): ")
     assert open_cli_bus("fdi-x", BusOptions(interface="no-such-interface")) is None
     assert "Unknown interface type" in capsys.readouterr().err
 

@@ -116,8 +116,8 @@ def test_replay_onto_a_bus_delivers_every_frame(short_drive: Path) -> None:
 def test_replay_rejects_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from fdi_host.replay import main as replay_main
 
-    with pytest.raises(SystemExit):
-        replay_main([str(tmp_path / "missing.blf"), "--offline"])
+    assert replay_main([str(tmp_path / "missing.blf"), "--offline"]) == 1  # a bad input, not a usage error
+    assert "missing.blf: no such file" in capsys.readouterr().err
     bad = tmp_path / "x.txt"
     bad.write_text("hello")
     with pytest.raises(SystemExit):

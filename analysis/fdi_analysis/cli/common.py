@@ -42,15 +42,6 @@ EXIT_INTERRUPTED = 130
 INPUT_ERRORS: tuple[type[BaseException], ...] = (
     FdiError, OSError, tomllib.TOMLDecodeError, json.JSONDecodeError, UnicodeDecodeError, EOFError)
 
-# Typed errors of modules that do not derive from FdiError yet, by qualified name (this module cannot import
-# them: they live in fdi_host). Each is a one-line change in its module (``class LogError(FdiHostError,
-# ValueError)``); then its name goes from here. tests/test_errors.py keeps the list true.
-PENDING_FDI_ERRORS: frozenset[str] = frozenset({
-    "fdi_host.can.logs.LogError",
-    "fdi_host.live.bus.BusConfigError",
-    "fdi_host.fleet.FleetError",
-})
-
 
 def add_version(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     """``--version``: prints ``PROG VERSION`` and exits 0."""
@@ -74,13 +65,6 @@ def fail(prog: str, message: str | BaseException) -> int:
     return EXIT_ERROR
 
 
-def is_input_error(exc: BaseException, errors: tuple[type[BaseException], ...] = ()) -> bool:
-    """Whether a command line reports `exc` as one line and `EXIT_ERROR`: one of `INPUT_ERRORS` or `errors`, or
-    a class of `PENDING_FDI_ERRORS`."""
-    return isinstance(exc, (*INPUT_ERRORS, *errors)) or any(
-        f"{c.__module__}.{c.__qualname__}" in PENDING_FDI_ERRORS for c in type(exc).__mro__)
-
-
 def run(prog: str, body: Callable[[], int], errors: tuple[type[BaseException], ...] = ()) -> int:
     """`body`'s exit code; an exception of `INPUT_ERRORS` or `errors` becomes one line and `EXIT_ERROR`, Ctrl-C
     `EXIT_INTERRUPTED`. Anything else is a bug: its traceback, a line saying so, and `EXIT_BUG`. (argparse's
@@ -94,9 +78,9 @@ def run(prog: str, body: Callable[[], int], errors: tuple[type[BaseException], .
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except (*INPUT_ERRORS, *errors) as exc:
+        return fail(prog, exc)
     except Exception as exc:
-        if is_input_error(exc, errors):
-            return fail(prog, exc)
         traceback.print_exc()
         print(f"{prog}: internal error ({type(exc).__name__}): a bug; please report it with the traceback above",
               file=sys.stderr)

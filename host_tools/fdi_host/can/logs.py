@@ -40,6 +40,7 @@ from can.io import MESSAGE_READERS, MESSAGE_WRITERS
 from can.io.generic import MessageReader, TextIOMessageReader
 
 from fdi_host.can.frame import Frame
+from fdi_host.errors import FdiHostError
 
 _PREFERRED = (".log", ".asc", ".blf", ".trc", ".csv", ".mf4", ".db")
 # every format python-can both reads and writes (in the installed version), the common ones first
@@ -58,7 +59,7 @@ _RESUME_FILLER: dict[type[MessageReader], str | None] = {
     can.CanutilsLogReader: None, can.ASCReader: "\n", can.CSVReader: "\n", can.TRCReader: ";\n"}
 
 
-class LogError(ValueError):
+class LogError(FdiHostError, ValueError):
     """A log file that cannot be written or read (format, missing file, corrupt content)."""
 
 

@@ -41,6 +41,8 @@ from typing import Any, NamedTuple
 
 import can
 
+from fdi_analysis.cli.common import fail, one_line
+from fdi_host.errors import FdiHostError
 from fdi_host.live.netns import have_af_can, vcan_available
 
 SIMULATED_INTERFACE = "udp_multicast"  # the simulated bus: works across processes without a CAN kernel
@@ -77,7 +79,7 @@ the kernel has it, else the simulated bus (udp_multicast 239.74.163.2), with a n
 """
 
 
-class BusConfigError(ValueError):
+class BusConfigError(FdiHostError, ValueError):
     """Bus options or a python-can configuration that cannot be used (a missing file or section, a bad value)."""
 
 
@@ -312,7 +314,8 @@ def open_bus(options: BusOptions | str | None = None, channel: str | None = None
 
 def open_cli_bus(prog: str, options: BusOptions) -> tuple[can.BusABC, BusConfig] | None:
     """The bus of a command line: the fallback note (if any) as one line on stderr; None after one error line
-    ``PROG: cannot open the CAN bus (...): why`` if it cannot be opened."""
+    ``PROG: error: cannot open the CAN bus (...): why`` (`fdi_analysis.cli.common.fail`) if it cannot be opened:
+    the caller then exits with `fdi_analysis.cli.common.EXIT_ERROR`."""
     what = options.interface or "configured"
     try:
         cfg = resolve_bus(options)
@@ -321,8 +324,7 @@ def open_cli_bus(prog: str, options: BusOptions) -> tuple[can.BusABC, BusConfig]
             print(f"{prog}: {cfg.note}", file=sys.stderr, flush=True)
         return cfg.open(), cfg
     except BUS_ERRORS as exc:
-        print(f"{prog}: cannot open the CAN bus ({what}): {' '.join(str(exc).split()) or type(exc).__name__}",
-              file=sys.stderr)
+        fail(prog, f"cannot open the CAN bus ({what}): {one_line(exc)}")
         return None
 
 

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import argparse
 import gc
-import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -32,8 +31,9 @@ from typing import Any
 
 import can
 
-from fdi_analysis.cli.common import EXIT_ERROR, add_version
+from fdi_analysis.cli.common import EXIT_ERROR, add_version, fail, one_line
 from fdi_analysis.cli.common import run as run_main
+from fdi_analysis.errors import FdiError
 from fdi_host.can.frame import Frame
 from fdi_host.can.logs import write_log
 from fdi_host.ecu.session import DIAG_ID, EcuSession
@@ -196,9 +196,8 @@ def serve(args: argparse.Namespace) -> int:
     stop = StopFlag()
     try:
         session = EcuSession(args.table)
-    except (ImportError, OSError, RuntimeError, ValueError) as exc:
-        print(f"fdi-ecu: cannot load the ECU bindings ({exc}); build them with `pip install -e .`", file=sys.stderr)
-        return EXIT_ERROR
+    except (ImportError, OSError, FdiError) as exc:  # not built, or the library lacks the table (EcuError)
+        return fail("fdi-ecu", f"cannot load the ECU bindings ({one_line(exc)}); build them with `pip install -e .`")
     opened = open_cli_bus("fdi-ecu", BusOptions.from_args(args))
     if opened is None:
         return EXIT_ERROR

@@ -25,10 +25,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from fdi_analysis.cli.common import EXIT_ERROR, add_version, run, use_file_backend
+from fdi_analysis.cli.common import EXIT_ERROR, add_version, fail, one_line, run, use_file_backend
+from fdi_analysis.errors import FdiError
 from fdi_host.can.dbc import RomoDatabase
 from fdi_host.ecu.records import DiagRecord, TableClasses
 from fdi_host.ecu.session import DIAG_ID, ORIGIN_LEAD, load_steps
+from fdi_host.errors import FdiHostError
 from fdi_host.live.bus import BusOptions, StopFlag, add_bus_arguments, open_cli_bus, signal_ready
 from fdi_host.monitor.frames import FrameStats
 from fdi_host.monitor.gaps import Gap, GapTracker, gap_summary
@@ -136,11 +138,38 @@ class Monitor:
         return score_run(self.records, windows_from_truth(truth), self.classes, grace, gaps)
 
 
+class ClassesFileError(FdiHostError, ValueError):
+    """A ``--classes`` file that is not fault signatures as JSON; the message names the file."""
+
+
+CLASSES_FORMAT = '{"signature": [13, 14, ...], "test_names": ["r1", ...], "dt": 0.01}'
+
+
+def read_classes(path: Path) -> tuple[TableClasses, float]:
+    """Structural classes and step from a JSON file of fault signatures (``signature``: per fault the bitmask of
+    the tests sensitive to it; optional ``test_names`` and ``dt`` [s], default 0.01). `ClassesFileError` naming
+    the file when it is not one; OSError when it cannot be read."""
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ClassesFileError(f"{path}: not a JSON file of fault signatures ({one_line(exc)})") from exc
+    if not isinstance(doc, dict) or not isinstance(doc.get("signature"), list):
+        raise ClassesFileError(f"{path}: expected an object with a 'signature' list, e.g. {CLASSES_FORMAT}")
+    signature, names, dt = doc["signature"], doc.get("test_names", []), doc.get("dt", 0.01)
+    if not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in signature):
+        raise ClassesFileError(f"{path}: 'signature' must list one test bitmask (an integer >= 0) per fault")
+    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+        raise ClassesFileError(f"{path}: 'test_names' must be a list of names")
+    if isinstance(dt, bool) or not isinstance(dt, int | float) or not dt > 0:
+        raise ClassesFileError(f"{path}: 'dt' must be the diagnosis step in seconds (> 0), not {dt!r}")
+    return TableClasses.from_signatures(signature, names), float(dt)
+
+
 def classes_for(table: str, classes_file: Path | None) -> tuple[TableClasses, float]:
-    """Structural classes and step of the table: from a JSON file, or from the ECU bindings' table."""
+    """Structural classes and step of the table: from a JSON file (`read_classes`), or from the ECU bindings'
+    table."""
     if classes_file is not None:
-        doc = json.loads(classes_file.read_text(encoding="utf-8"))
-        return TableClasses.from_signatures(doc["signature"], doc.get("test_names", ())), float(doc.get("dt", 0.01))
+        return read_classes(classes_file)
     from fdi_host.ecu.bindings import table_info
     from fdi_host.ecu.session import table_classes
 
@@ -183,9 +212,8 @@ def finish(mon: Monitor, args: argparse.Namespace) -> int:
         return 0
     try:
         truth = json.loads(args.truth.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        print(f"fdi-monitor: cannot read the truth file {args.truth}: {exc}", file=sys.stderr)
-        return EXIT_ERROR
+    except (OSError, json.JSONDecodeError, UnicodeDecodeError) as exc:
+        return fail("fdi-monitor", f"cannot read the truth file {args.truth}: {one_line(exc)}")
     score = mon.score(truth, args.grace)
     print(score_table(score), flush=True)
     windows = windows_from_truth(truth)
@@ -223,9 +251,10 @@ def monitor(args: argparse.Namespace) -> int:
     stop = StopFlag()
     try:
         classes, step = classes_for(args.table, args.classes)
-    except (ImportError, OSError, RuntimeError, KeyError, ValueError) as exc:
-        print(f"fdi-monitor: no fault signatures for table {args.table}: {exc}", file=sys.stderr)
-        return EXIT_ERROR
+    except (ImportError, OSError, FdiError) as exc:
+        if args.classes is not None:  # ClassesFileError or OSError: the message names the file
+            return fail("fdi-monitor", f"--classes {one_line(exc)}")
+        return fail("fdi-monitor", f"no fault signatures for table {args.table}: {one_line(exc)}")
     mon = Monitor(RomoDatabase(), classes, step, gap_threshold=args.gap_threshold)
     opened = open_cli_bus("fdi-monitor", BusOptions.from_args(args))
     if opened is None:

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from fdi_analysis.cli.common import EXIT_ERROR
+from fdi_analysis.errors import FdiError
 
 if TYPE_CHECKING:
     from fdi_host.can.frame import Frame
@@ -76,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
     design = FilterDesign(th.design[0], th.design[1], th.design[2])
     try:
         frames = sorted(read_log(args.log), key=lambda f: f.timestamp)
-    except (OSError, ValueError) as exc:
+    except (OSError, FdiError) as exc:  # fdi_host.can.logs.LogError names the file and what is wrong
         print(f"fdi-tune: error: cannot read {args.log}: {exc}", file=sys.stderr)
         return EXIT_ERROR
     if len(frames) < 2:
