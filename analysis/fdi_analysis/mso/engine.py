@@ -31,6 +31,7 @@ import numpy as np
 import numpy.typing as npt
 from tqdm import tqdm
 
+from ..errors import ComputationError
 from ..structure import Structure
 from . import _core
 from .results import MsoSummary, SignatureEntry, lex_before
@@ -337,6 +338,43 @@ def _run_serial(p: Prepared, tasks: list[tuple[int, int]], acc: _Acc, bar: tqdm[
     return complete
 
 
+class _ParentStop:
+    """The parent's Ctrl-C during a parallel search: the first one is a request, passed on to the workers, which
+    send what they finished; the parent keeps collecting (a KeyboardInterrupt in the middle of merging a
+    worker's table would lose or double it). A second Ctrl-C stops at once (KeyboardInterrupt)."""
+
+    GRACE_S = 10.0  # how long the parent waits for the workers' partial tables after a request
+
+    def __init__(self, procs: list[Any]) -> None:
+        self.procs = procs
+        self.requested_at: float | None = None
+        self.previous: Any = None
+        self.installed = False
+
+    def __enter__(self) -> _ParentStop:
+        try:
+            self.previous = signal.signal(signal.SIGINT, self._handle)
+            self.installed = True
+        except ValueError:  # not the main thread: Python delivers no SIGINT here anyway
+            pass
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.installed:
+            signal.signal(signal.SIGINT, self.previous)
+
+    def _handle(self, signum: int, frame: FrameType | None) -> None:
+        if self.requested_at is not None:
+            raise KeyboardInterrupt
+        self.requested_at = time.monotonic()
+        for proc in self.procs:
+            if proc.is_alive() and proc.pid is not None:
+                os.kill(proc.pid, signal.SIGINT)
+
+    def expired(self) -> bool:
+        return self.requested_at is not None and time.monotonic() - self.requested_at > self.GRACE_S
+
+
 def _run_parallel(p: Prepared, tasks: list[tuple[int, int]], acc: _Acc, bar: tqdm[Any], workers: int) -> bool:
     ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else mp.get_context("spawn")
     task_q = ctx.Queue()
@@ -348,37 +386,33 @@ def _run_parallel(p: Prepared, tasks: list[tuple[int, int]], acc: _Acc, bar: tqd
     procs = [ctx.Process(target=_worker, args=(p.args, task_q, result_q), daemon=True) for _ in range(workers)]
     for proc in procs:
         proc.start()
-    complete = True
+    interrupted = False
+    finished = 0
     pending = workers
     try:
-        while pending:
-            msg = result_q.get()
-            if msg[0] == "done":
-                bar.update(1)
-            else:
-                acc.add(msg[1])
-                complete = complete and not msg[2]
-                pending -= 1
-    except KeyboardInterrupt:
-        complete = False
-        for proc in procs:
-            if proc.is_alive() and proc.pid is not None:
-                os.kill(proc.pid, signal.SIGINT)
-        deadline = time.monotonic() + 10.0
-        while pending and time.monotonic() < deadline:
-            try:
-                msg = result_q.get(timeout=max(0.05, deadline - time.monotonic()))
-            except queue.Empty:
-                break
-            except KeyboardInterrupt:
-                break
-            if msg[0] == "result":
-                acc.add(msg[1])
-                pending -= 1
+        with _ParentStop(procs) as stop:
+            while pending and not stop.expired():
+                try:
+                    msg = result_q.get(timeout=0.1)
+                except queue.Empty:
+                    if not any(proc.is_alive() for proc in procs):
+                        raise ComputationError(
+                            f"{pending} of {workers} search processes ended without their result "
+                            f"(exit codes {[proc.exitcode for proc in procs]})"
+                        ) from None
+                    continue
+                if msg[0] == "done":
+                    finished += 1
+                    bar.update(1)
+                else:
+                    acc.add(msg[1])
+                    interrupted = interrupted or bool(msg[2])
+                    pending -= 1
     finally:
         for proc in procs:
             proc.join(timeout=1.0)
             if proc.is_alive():
                 proc.terminate()
                 proc.join()
-    return complete
+    # a Ctrl-C that came after every task finished loses nothing: the result is then complete
+    return not (interrupted or pending > 0 or finished < len(tasks))
