@@ -23,6 +23,9 @@ set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$top"
 [ -x .venv/bin/python ] || bash scripts/bootstrap.sh
+# this run's output becomes section bench_fw of docs/results.md: scripts/results_doc.py runs the script under it
+[ -n "${FDI_RESULTS_SECTION:-}" ] || exec .venv/bin/python scripts/results_doc.py bench_fw --run \
+  --display "bash scripts/bench_fw.sh" -- bash scripts/bench_fw.sh "$@"
 goal_insn=5000
 goal_ram=4096
 goal_lib=32768

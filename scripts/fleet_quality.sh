@@ -19,6 +19,10 @@ n="${1:-27}"
 table="${2:-romo}"
 case "$n" in ''|*[!0-9]*) echo "N: the number of vehicles, a whole number" >&2; exit 2 ;; esac
 [ -x .venv/bin/python ] || bash scripts/bootstrap.sh
+# this run's output becomes section fleet_quality (or $FDI_RESULTS_NAME) of docs/results.md: scripts/results_doc.py
+# runs the script under it
+[ -n "${FDI_RESULTS_SECTION:-}" ] || exec .venv/bin/python scripts/results_doc.py "${FDI_RESULTS_NAME:-fleet_quality}" \
+  --run --markdown --display "bash scripts/fleet_quality.sh $*" -- bash scripts/fleet_quality.sh "$@"
 .venv/bin/python -m pip install -q --no-deps --no-build-isolation -e .
 args=(--fleet "$n" --table "$table" --out out/fleet "${@:3}")
 if [ -n "${FDI_SCHEDULER:-}" ]; then args+=(--scheduler "$FDI_SCHEDULER"); fi

@@ -1,6 +1,8 @@
 """Every module a document names exists: the dotted names of the two packages (``fdi_host.ecu.bindings``,
 ``fdi_analysis.residuals.uncertainty_sensitivity.offset_like``: a module, then a name it defines) and the ``.py``
-paths (``sim/plant.py``, ``tests/host/test_plant.py``, a bare ``e2e.py``) in the project's documents."""
+paths (``sim/plant.py``, ``tests/host/test_plant.py``, a bare ``e2e.py``) in the project's documents. Every relative
+link of a document leads to a file of the checkout, and the README stays a manual under 15 KB (its commands are run
+by tests/test_readme_commands.py)."""
 
 from __future__ import annotations
 
@@ -14,9 +16,11 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 ROOTS = {"fdi_analysis": REPO / "analysis", "fdi_host": REPO / "host_tools"}
 DOCUMENTS = ("ARCHITECTURE.md", "README.md", "host_tools/README.md", "analysis/models/README.md", "fw/README.md",
-             "fw/ecu/README.md", "fw/MISRA_DEVIATIONS.md")
+             "fw/ecu/README.md", "fw/MISRA_DEVIATIONS.md", "CHANGELOG.md", "docs/results.md")
+README_LIMIT_BYTES = 15_000
 SOURCE_FOLDERS = ("analysis", "host_tools", "tests", "fw", "scripts", "examples", "cmake", "dbc")
 
+LINK = re.compile(r"\]\(([^)\s]+)\)")
 DOTTED = re.compile(r"\b(?:fdi_analysis|fdi_host)(?:\.[A-Za-z_]\w*)+")
 PY_PATH = re.compile(r"(?<![\w./-])([\w./-]*\w\.py)\b")
 
@@ -31,11 +35,37 @@ def module_path(name: str) -> Path | None:
     return None
 
 
+def _exported(body: list[ast.stmt]) -> set[str]:
+    """The names of a module's ``__all__``, given as a literal or as ``list(NAMES)`` / ``tuple(NAMES)`` of a literal
+    of the module: a lazy facade (PEP 562 ``__getattr__``) defines them only there."""
+    literals: dict[str, list[str]] = {}
+    exported: set[str] = set()
+    for node in body:
+        if not (isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name)):
+            continue
+        value = node.value
+        if isinstance(value, ast.Call) and isinstance(value.func, ast.Name) and value.func.id in ("list", "tuple") \
+                and len(value.args) == 1:
+            value = value.args[0]
+        if isinstance(value, ast.Name):
+            names = literals.get(value.id, [])
+        elif isinstance(value, (ast.List, ast.Tuple)):
+            names = [e.value for e in value.elts if isinstance(e, ast.Constant) and isinstance(e.value, str)]
+        else:
+            continue
+        literals[node.targets[0].id] = names
+        if node.targets[0].id == "__all__":
+            exported |= set(names)
+    return exported
+
+
 @functools.cache
 def defined_names(path: Path) -> dict[str, set[str] | None]:
-    """Top-level names of a module: a class maps to the names of its body, anything else to None."""
-    out: dict[str, set[str] | None] = {}
-    for node in ast.parse(path.read_text(encoding="utf-8")).body:
+    """Top-level names of a module (and those its ``__all__`` exports): a class maps to the names of its body,
+    anything else to None."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    out: dict[str, set[str] | None] = dict.fromkeys(_exported(tree.body))
+    for node in tree.body:
         if isinstance(node, ast.ClassDef):
             members: set[str] = set()
             for item in node.body:
@@ -112,6 +142,44 @@ def test_the_check_finds_stale_names() -> None:
     assert dotted_exists("fdi_analysis.residuals.uncertainty_sensitivity.offset_like")
     assert not dotted_exists("fdi_analysis.candidates_mtes") and not dotted_exists("fdi_host.ecu.bindings.Nothing")
     assert not dotted_exists("fdi_host.ecu.bindings.Ecu.nothing")
+    assert dotted_exists("fdi_host.simulate") and not dotted_exists("fdi_host.nothing")  # the lazy facade's names
     assert py_path_exists("sim/plant.py", doc) and py_path_exists("tests/host/test_plant.py", doc)
     assert py_path_exists("fdi_host/can/log_columns.py", doc) and py_path_exists("e2e.py", doc)
     assert not py_path_exists("ecu_lib.py", doc) and not py_path_exists("analysis/bench/compare_causality.py", doc)
+
+
+def broken_links(doc: Path) -> list[str]:
+    """The relative links of a Markdown document (``[text](path#anchor)``, images too) whose file does not exist."""
+    bad = []
+    for target in LINK.findall(doc.read_text(encoding="utf-8")):
+        if re.match(r"^[a-z]+:", target) or target.startswith("#"):
+            continue  # a URL, or an anchor in the document itself
+        path = (doc.parent / target.split("#")[0]).resolve()
+        if path.exists():
+            continue
+        bad.append(target)
+    return bad
+
+
+@pytest.mark.parametrize("document", DOCUMENTS)
+def test_every_link_of_a_document_exists(document: str) -> None:
+    broken = broken_links(REPO / document)
+    assert not broken, f"{document} links files that do not exist: {broken}"
+
+
+def test_the_link_check_finds_broken_links(tmp_path: Path) -> None:
+    doc = tmp_path / "doc.md"
+    doc.write_text("[a](README.md) [b](nothing.md#x) ![c](pic.png) [d](https://example.org/x) [e](#top)\n",
+                   encoding="utf-8")
+    (tmp_path / "README.md").write_text("x", encoding="utf-8")
+    assert broken_links(doc) == ["nothing.md#x", "pic.png"]
+
+
+def test_the_readme_is_a_manual() -> None:
+    """Under 15 KB; results and history live elsewhere, and the README links them."""
+    readme = REPO / "README.md"
+    assert readme.stat().st_size < README_LIMIT_BYTES, f"README.md is {readme.stat().st_size} bytes"
+    text = readme.read_text(encoding="utf-8")
+    for target in ("docs/results.md", "CHANGELOG.md", "ARCHITECTURE.md", "fw/README.md", "host_tools/README.md",
+                   "analysis/models/README.md", "docs/robust_diagnosis.md", "examples/romo_tour.ipynb"):
+        assert f"]({target}" in text, f"README.md does not link {target}"

@@ -37,6 +37,7 @@ import io
 import math
 import multiprocessing as mp
 import os
+import shlex
 import sys
 import time
 from collections.abc import Callable
@@ -285,4 +286,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    # the run's output becomes section bench_mso of docs/results.md (exit 1, a goal missed, is a result too)
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
+    import results_doc
+
+    raise SystemExit(results_doc.tee_main("bench_mso", main, shlex.join(["python", "analysis/bench/bench_mso.py",
+                                                                          *sys.argv[1:]]), ok_codes=(0, 1)))
