@@ -14,10 +14,12 @@
 #           (MinSizeRel); whether the host and the target compute the same bits at every step of the drive
 #           (scripts/check_identity.sh); per function on the M4 (scripts/profile_m4.sh): instructions per step, calls
 #           per step and instructions a call, for both tables; the const data of the hand-written kinematic table
-# and the goals of issue 21 with PASS/MISS: <= 5,000 instructions per step on the M4 (largest step of the ROMO table
-# in the ECU's configuration, isolation included; with every sensitivity reported as information), sizeof(fdi_diag_t)
-# <= 4 KB on the M4, <= 32 KB of text for the ROMO diagnosis as the ECU links it (libfdi.a + libfdi_romo.a; the
-# generic core alone as information).
+# and the goals of issue 45 with PASS/MISS, for the robust diagnosis the ECU ships (fdi_diag_config_default: on-line
+# estimators and adaptive thresholds): <= 25,000 instructions for the largest step on the M4 (ROMO table in the ECU's
+# configuration, isolation included, under 2 % of a 168 MHz core at 100 Hz; with every sensitivity reported as
+# information), sizeof(fdi_diag_t) <= 4 KB on the M4, <= 128 KB of text for the ROMO diagnosis as the ECU links it
+# (libfdi.a + libfdi_romo.a; the generic core alone as information). (Issue 21's goals, 5,000 instructions and 32 KB,
+# were those of the fixed-gate diagnosis, before estimators and adaptive thresholds; issue 45 replaced them.)
 # Usage: scripts/bench_fw.sh
 set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -26,9 +28,9 @@ cd "$top"
 # this run's output becomes section bench_fw of docs/results.md: scripts/results_doc.py runs the script under it
 [ -n "${FDI_RESULTS_SECTION:-}" ] || exec .venv/bin/python scripts/results_doc.py bench_fw --run \
   --display "bash scripts/bench_fw.sh" -- bash scripts/bench_fw.sh "$@"
-goal_insn=5000
+goal_insn=25000
 goal_ram=4096
-goal_lib=32768
+goal_lib=131072
 
 mkdir -p build/bench
 drive="$top/build/bench/fdi_bench_drive.bin"
@@ -125,7 +127,7 @@ for table in romo kin; do
   bash scripts/profile_m4.sh "$table" off --top 20 | sed -n '/^== per phase/,$p'
 done
 
-echo "== goals (issue 21)"
+echo "== goals (issue 45: the robust diagnosis, estimators and adaptive thresholds included)"
 verdict() { if [ "$1" -le "$2" ]; then echo PASS; else echo MISS; fi; }
 worst_of() { echo "$1" | awk -v k="generated ROMO table, sensitivities $2" \
   'index($0, k) {for (i = 1; i <= NF; ++i) if ($i == "worst") {print $(i + 1); exit}}'; }

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates every committed generated file from its source (tests fail when a committed copy is stale):
-#   analysis/models/romo_thresholds.toml [selection], [generated]  <- the screening of the candidates + drives;
+#   analysis/models/romo_thresholds.toml [selection], [generated], [estimation]  <- the screening of the candidates +
+#     the truth-plant calibration fleet;
 #   fw/vehicles/romo/generated/fdi_romo_{table,generators,signals}.{h,c}  <- analysis/models/romo_grouped.toml +
 #     romo_thresholds.toml + fault sizes;  fdi_kin_calibration.h <- simulated drives;
 #   fw/vehicles/romo/generated/can/  <- dbc/romo.dbc (cantools code + the ECU core's bus description);
@@ -23,10 +24,12 @@ fi
 #   the report in out/practical/)
 .venv/bin/fdi-analyze practical analysis/models/romo_grouped.toml --screening analysis/models/romo_screening.json.gz \
   --thresholds analysis/models/romo_thresholds.toml -o out/practical
-# analysis/models/romo_thresholds.toml [generated]  <- fault-free simulated drives, their CAN frames as the ECU's
-#   steps see them (fdi_host.can.ecu_view), through the generators (12 noise seeds per scenario, ~3 min; checked by
-#   test_calibration_current.py)
-.venv/bin/fdi-tune calibrate analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml
+# analysis/models/romo_thresholds.toml [generated], [estimation], [envelope_limits]  <- the fault-free drives of the
+#   truth-plant calibration vehicles 1 .. 12 in every fleet scenario, their CAN frames as the ECU's steps see them
+#   (fdi_host.can.ecu_view), each test with its on-line estimator and adaptive threshold (what it estimates, its sigma;
+#   fdi_host.tuning.fleet_calibration; ~7 min; checked by test_calibration_current.py)
+.venv/bin/fdi-tune calibrate analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \
+  --fleet 12
 # host_tools/scenarios/fault_sizes.toml [per_test.*]  <- step-fault sweep through the generators in cornering, the
 # pairs it leaves without a size in the other scenarios [per_test_scenario.*] (~25 min; only with FDI_SWEEP_SIZES=1;
 # extra information next to the [requirement] sizes; tests/analysis/test_residual_faults.py checks the committed

@@ -6,7 +6,7 @@ cd "$top"
 bash scripts/bootstrap.sh
 # Rebuild the native parts of the Python package (cheap when nothing changed).
 .venv/bin/python -m pip install -q --no-deps --no-build-isolation -e .
-echo "== ruff"; .venv/bin/ruff check analysis host_tools tests fw/bench
+echo "== ruff"; .venv/bin/ruff check analysis host_tools tests fw/bench scripts
 echo "== mypy"; .venv/bin/mypy
 echo "== fw (C library)"; bash scripts/test_fw.sh
 echo "== pytest"; .venv/bin/python -m pytest -q --junitxml=build/pytest-junit.xml

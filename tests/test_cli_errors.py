@@ -1,7 +1,7 @@
 """Every command line of the project answers a bad input file with one line on stderr and exit 1, a bad option
 with argparse's usage text and exit 2, and an exception that is not one of the project's errors (a bug: here a
 library function made to raise ZeroDivisionError, KeyError or a bare ValueError) with its traceback and exit 70
-(`EXIT_BUG`), never with the one line of a bad input (fdi-quality, which has its own main, lets it propagate)."""
+(`EXIT_BUG`), never with the one line of a bad input."""
 
 from __future__ import annotations
 
@@ -122,10 +122,6 @@ def test_a_bug_keeps_its_traceback(prog: str, tmp_path: Path, capfd: pytest.Capt
                                    monkeypatch: pytest.MonkeyPatch) -> None:
     case = _cases(_files(tmp_path), tmp_path)[prog]
     _patch(monkeypatch, case.bug_target, case.bug)
-    if prog == "fdi-quality":  # no common run(): the exception propagates (Python prints it, exit 1)
-        with pytest.raises(case.bug, match="injected"):
-            _call(prog, case.bug_argv)
-        return
     got = _call(prog, case.bug_argv)
     err = capfd.readouterr().err
     assert got == EXIT_BUG, (got, err)
@@ -250,3 +246,34 @@ def test_tune_residuals_log_reader_bug_keeps_its_traceback(tmp_path: Path, monke
     assert _call("fdi-tune", argv) == EXIT_BUG
     err = capfd.readouterr().err
     assert "fdi-tune: internal error (ValueError)" in err and ": error:" not in err, err
+
+
+@pytest.mark.parametrize(("content", "says"), [
+    ("gate = [", "not a TOML file"),
+    ("gate = 5.0\n[design]\ndt = 0.01\n", "no 'cutoff_hz'"),
+    ("gate = 5.0\nvariance = 3\n[design]\ndt = 0.01\ncutoff_hz = 5.0\nzeta = 0.7\nobs_gain = 1.0\n",
+     "a value of the wrong type"),
+])
+def test_a_bad_thresholds_file_is_an_input_error_naming_it(content: str, says: str, tmp_path: Path) -> None:
+    from fdi_analysis.errors import InputError
+    from fdi_analysis.export.thresholds import Thresholds
+
+    bad = tmp_path / "bad_thresholds.toml"
+    bad.write_text(content, encoding="utf-8")
+    with pytest.raises(InputError, match=rf"bad_thresholds\.toml: {says}"):
+        Thresholds.load(bad)
+
+
+@pytest.mark.parametrize(("name", "content", "says"), [
+    ("s.json.gz", b"not gzip", "not a screening"),
+    ("s.json", b"{", "not a screening"),
+    ("s.json", b"[1, 2]", r"not a screening \(a JSON object expected"),
+    ("s.json", b'{"detect_s": 0.27, "seeds": [1], "candidates": []}', "no 'model'"),
+])
+def test_a_bad_screening_is_a_screening_error_naming_it(name: str, content: bytes, says: str, tmp_path: Path) -> None:
+    from fdi_analysis.selection.practical import Screening, ScreeningError
+
+    bad = tmp_path / name
+    bad.write_bytes(content)
+    with pytest.raises(ScreeningError, match=rf"{name.replace('.', chr(92) + '.')}: {says}"):
+        Screening.load(bad)

@@ -37,6 +37,7 @@ KEEPS: dict[str, type[BaseException] | None] = {
     "fdi_analysis.export.thresholds.MissingSigmaError": ValueError,
     "fdi_analysis.expressions.ExpressionError": ValueError,
     "fdi_analysis.model.ModelError": ValueError,
+    "fdi_analysis.residuals.estimation.EstimationError": ValueError,
     "fdi_analysis.residuals.reasons.NotRealizableError": ValueError,
     "fdi_analysis.residuals.selected.SelectionError": ValueError,
     "fdi_analysis.selection.exact.SearchTimeoutError": None,
@@ -65,6 +66,7 @@ KEEPS: dict[str, type[BaseException] | None] = {
     "fdi_host.sim.tyre.TyreParameterError": ValueError,
     "fdi_host.sim.vehicle_envelope.VehicleDrawError": ValueError,
     "fdi_host.sim.vehicle_sim.SimulationDivergedError": FloatingPointError,
+    "fdi_host.tuning.fleet_calibration.CalibrationError": ValueError,
     "fdi_host.tuning.on_log.LogError": ValueError,
 }
 

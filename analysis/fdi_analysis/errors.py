@@ -22,6 +22,10 @@ equation and symbol; `fdi_analysis.residuals.reasons.NotRealizableError`'s typed
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
 
 class FdiError(Exception):
     """The root of the project's errors: a bad input, or a result that could not be computed (never a bug)."""
@@ -34,3 +38,17 @@ class InputError(FdiError, ValueError):
 class ComputationError(FdiError, RuntimeError):
     """A result that could not be computed from good input: a solver without an answer, a proof not found within
     its time limit."""
+
+
+@contextmanager
+def fields_of(path: Path | str, error: type[FdiError]) -> Iterator[None]:
+    """Inside, reading a parsed file's fields: a missing key or a value of the wrong type (KeyError, TypeError,
+    ValueError, AttributeError) becomes `error` naming the file and the key; an `FdiError` passes as it is."""
+    try:
+        yield
+    except FdiError:
+        raise
+    except KeyError as exc:
+        raise error(f"{path}: no {exc.args[0]!r}") from exc
+    except (TypeError, ValueError, AttributeError) as exc:
+        raise error(f"{path}: a value of the wrong type: {exc}") from exc

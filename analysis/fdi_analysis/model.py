@@ -66,7 +66,8 @@ class Nuisance:
     * ``constant``: an unknown constant parameter (a sensor bias); ``slow``: one that varies slowly, at most
       `drift` units per second (a bias with drift, the payload). Decoupled as an unknown with a zero derivative.
     * ``input``: an unknown input (road grade, bank, driving resistance). Decoupled as an unknown without an
-      equation of its own.
+      equation of its own. Its `drift`, when given, is the fastest change (units per second) the on-line
+      estimators follow (fw/include/fdi_est.h); without one no estimator follows it (a road's friction).
 
     The nominal model sets it to `value`; `range` is what a vehicle may hold."""
 

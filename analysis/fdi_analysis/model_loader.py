@@ -252,9 +252,7 @@ class _ModelBuilder:
     def _nuisances(self, variables: Mapping[str, Variable], params: Mapping[str, Parameter]) -> list[Nuisance]:
         out: list[Nuisance] = []
         for table in _NUISANCE_TABLES:
-            allowed = {"name", "unit", "desc", "value", "range"}
-            if table == "unknown_parameter":
-                allowed.add("drift")
+            allowed = {"name", "unit", "desc", "value", "range", "drift"}
             for raw in self._entries(table):
                 name = raw.get("name")
                 if not isinstance(name, str) or not name.isidentifier():

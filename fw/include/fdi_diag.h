@@ -11,10 +11,13 @@
  *   for each test i:
  *   if gen == NULL or (usable & input_mask_i) != input_mask_i
  *      or the frame is outside the generator's operating domain (fdi_gen_in_domain, e.g. a tyre-law
- *      residual near standstill):  status_i = NOT_EVALUABLE, re-arm warm-up
+ *      residual near standstill) or its range (fdi_gen_in_range, e.g. the tyres far from their linear range):
+ *      status_i = NOT_EVALUABLE, re-arm warm-up
  *   else if first usable step since then: restart the test (a hand-written generator resets its filters, a slot of
  *        the set restarts its observer; the bank is shared and keeps running), restart the evaluator and count
- *        warmup_steps steps with status NOT_EVALUABLE (the filters settle), then
+ *        warmup_steps steps with status NOT_EVALUABLE (the filters settle; reentry_steps for a slot of the set that
+ *        only its range or the envelope held out, its signals usable and in its domain all along: its filters ran
+ *        on), then
  *   status_i = fdi_eval(r_i)  (OK or ALARM); a non-finite residual is rejected (NOT_EVALUABLE, re-arm)
  *   the set's residuals (and, when asked for, all its sensitivities) are computed in one call of its step (shared
  *   terms once), then
@@ -87,19 +90,23 @@
  * + 2 a_i (the uncertainty may hide up to a_i of it and has raised the threshold by as much). Without
  * cfg->adaptive, or for hand-written generators, a_i = 0: the fixed gates.
  *
- * On-line offset estimation (cfg->estimate, fdi_est.h): for each test of the mask, the slowly varying offset of its
- * residual (the lumped sensor biases and gravity components on a grade or bank of the inertial tests) is estimated from
- * the residual and removed before the evaluation: the test evaluates r_i - b_i at its fixed gate (its spread is not
- * added: the estimator takes that uncertainty), and its result's residual is r_i - b_i. After its warm-up, the test
- * averages estimate_startup samples into b_i before it becomes evaluable (default 1 s: the mean within a tenth
- * of sigma); then b_i forgets with estimate_tau. The estimate
- * is frozen while the test alarms and for the rest of an isolation episode in which it alarmed (it is accused), so a
- * fault that set its alarm is never absorbed; other tests' episodes do not hold it (a false alarm of an unrelated test
- * would leave it stale for as long); |b_i| is bounded by the generator's spread a_i at the step (what the declared
- * uncertainty explains) plus estimate_limit * sigma_i. A test restarted for lack of inputs or domain keeps its
- * estimate. What the estimator cannot tell from a fault (one present at start-up, one slower than the nuisance may
- * change, up to the bound) is stated in fdi_est.h. Only tests whose uncertainty enters with a constant sensitivity (an
- * offset) belong in the mask (fdi_analysis.residuals.uncertainty_sensitivity.is_offset_like).
+ * On-line estimation (cfg->estimate, fdi_est.h): for each test of the mask, a Kalman filter estimates the deviations
+ * of the quantities its generator declares estimable (fdi_gen_desc_t.est: a few of the table's uncertain quantities,
+ * e.g. a rolling radius and the mass for a wheel's spin test; quantities entering as constants lumped into one offset,
+ * e.g. an accelerometer bias plus the grade) from the residual, their sensitivities at the step as regressors
+ * (io->reg of the set's step; 1 for a hand-written generator's offsets). The test evaluates the innovation
+ * nu_i = r_i - h_i . theta_i against gate_i * sigma_i + kappa * sqrt(h_i' P_i h_i) + a_i, a_i the generator's spread
+ * over the quantities it does not estimate (so with estimation the threshold is adaptive whatever cfg->adaptive
+ * says): as wide as the declared envelope while the filter knows nothing of the vehicle, narrowing to the test's own
+ * noise as it learns; after the test's first warm-up the filter learns for estimate_startup steps before the test is
+ * evaluable. Its result's residual is nu_i and its offset h_i . theta_i (what the estimate removed). The
+ * filter is frozen (it predicts only: the estimate stays, its uncertainty grows by the declared drift) while the
+ * test alarms and for the rest of an isolation episode that accuses it, so a fault that set its alarm is not
+ * absorbed; other tests' episodes do not hold it. It updates only while the test is evaluable (after the warm-up, in
+ * its domain and envelope); a restarted test keeps its estimate. What the estimator cannot tell from a fault (one
+ * present at start-up, one slower than the quantities' declared drift, up to their declared bounds) is stated in
+ * fdi_est.h. Without cfg->estimate but with cfg->adaptive, a_i also holds the estimable quantities at their
+ * declared widths: the whole envelope.
  *
  * Fault sensitivities: at every step with cfg->sensitivities the diagnoser asks every generator for d r / d f_j
  * of the faults of its sens_mask (fdi_gen.h) and keeps the last ones: the result lists them per test (sens_offset,
@@ -118,10 +125,11 @@
  * simulated drive on x86-64 with callgrind and on Cortex-M4F under qemu -icount (fault-free, in an episode with one
  * class left, in one with several (undecided), largest step), and on the Cortex-M4F per function: instructions per
  * step, calls per step and instructions a call (its profile, scripts/profile_m4.sh).
- * Memory: sizeof(fdi_diag_t) <= 200 + 2 * sizeof(void *) + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) +
- * sizeof(fdi_obs_t) + 37) + 12 * FDI_DIAG_MAX_FILTERS + 4 * FDI_DIAG_MAX_SENS + 10 * FDI_TABLE_MAX_FAULTS +
- * 2 * FDI_GEN_MAX_SLOTS + 4 * FDI_DIAG_MAX_SENS_EVERY bytes (asserted below; scripts/bench_fw.sh prints the
- * value), caller-owned (static or stack); the library itself has no .data/.bss.
+ * Memory: sizeof(fdi_diag_t) <= 224 + 2 * sizeof(void *) + FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) +
+ * sizeof(fdi_obs_t) + sizeof(fdi_est_t) + 43) + 12 * FDI_DIAG_MAX_FILTERS + 4 * FDI_DIAG_MAX_SENS +
+ * 10 * FDI_TABLE_MAX_FAULTS + 2 * FDI_GEN_MAX_SLOTS + 4 * FDI_DIAG_MAX_SENS_EVERY bytes (asserted below;
+ * scripts/bench_fw.sh prints the value), caller-owned (static or stack); the library itself has no .data/.bss. A
+ * step also takes 4 * FDI_DIAG_MAX_TESTS * (1 + FDI_EST_MAX_PARAMS) bytes of stack for the residuals and regressors.
  */
 #ifndef FDI_DIAG_H
 #define FDI_DIAG_H
@@ -176,6 +184,9 @@ typedef struct
     uint16_t set_count;       /* consecutive raw alarms to set an alarm, >= 1 */
     uint16_t clear_count;     /* consecutive quiet samples to clear it, >= 1 */
     uint16_t warmup_steps;    /* steps after (re)start before a test is evaluable, >= the settling time */
+    uint16_t reentry_steps;   /* steps a generated test waits back in its range or the envelope, its signals usable
+                                 and in its domain all along (its filters ran on; its observer restarts),
+                                 1 .. warmup_steps */
     fdi_iso_mode_t mode;      /* isolation with or without exoneration */
     uint16_t episode_clear_steps; /* steps without any alarm that end an episode, >= 1 */
     float noise_allowance;        /* sigmas of an alarmed residual not counted as fault response, >= 0 */
@@ -186,14 +197,15 @@ typedef struct
     bool adaptive;                /* adaptive thresholds: each test of the set alarms beyond gate * sigma plus its
                                      generator's spread over the table's uncertainty at the step (fdi_gen.h); false:
                                      the fixed gates */
-    uint32_t estimate;            /* tests (bit i: test i) whose residual's slow offset is estimated on line and
-                                     removed ("On-line offset estimation" above); 0: none */
-    float estimate_tau;           /* [s] the estimators' forgetting time constant, >= the step (read when
-                                     estimate != 0) */
-    float estimate_limit;         /* [sigma] bound of an estimate beyond its test's spread, >= 0 (read when
-                                     estimate != 0) */
-    uint16_t estimate_startup;    /* samples an estimator averages before its test is evaluable, 1 ..
-                                     estimate_tau / dt (read when estimate != 0) */
+    uint32_t estimate;            /* tests (bit i: test i) whose generator's estimable quantities are estimated on
+                                     line ("On-line estimation" above; each must declare some); 0: none */
+    float estimate_kappa;         /* the threshold's multiple of an estimate's prediction spread sqrt(h' P h), >= 0
+                                     (read when estimate != 0) */
+    float estimate_decorrelation; /* D >= 1: the estimators take the residual's variance per sample as sigma^2 * D
+                                     and the declared drifts' q as D q (what the model leaves unexplained is
+                                     correlated over about D samples; fdi_est.h) (read when estimate != 0) */
+    uint16_t estimate_startup;    /* updates an estimator makes after its test's first warm-up before the test is
+                                     evaluable (it learns the vehicle; later restarts keep the estimate) */
 } fdi_diag_config_t;
 
 typedef struct
@@ -203,6 +215,7 @@ typedef struct
     fdi_gen_param_t par;
     fdi_iso_mode_t mode;
     uint16_t warmup_steps;
+    uint16_t reentry_steps; /* fdi_diag_config_t.reentry_steps */
     uint16_t episode_clear_steps;
     uint16_t set_count; /* the evaluators' alarm delay, added to every test's response_steps */
     float noise_allowance;
@@ -217,16 +230,20 @@ typedef struct
     bool sensitivities;
     bool adaptive;      /* fdi_diag_config_t.adaptive */
     uint32_t estimate;  /* fdi_diag_config_t.estimate */
-    float est_limit;    /* fdi_diag_config_t.estimate_limit */
+    float est_kappa;    /* fdi_diag_config_t.estimate_kappa */
+    float est_decorrelation; /* fdi_diag_config_t.estimate_decorrelation */
+    uint16_t est_startup;    /* fdi_diag_config_t.estimate_startup */
     uint8_t sens_every; /* fdi_diag_config_t.sens_every */
     uint8_t n_domains;  /* runs of consecutive tests whose generators share a domain function (runnable()) */
     uint32_t signals;   /* signals read by some test (finiteness checked once per step) */
     uint32_t accused;   /* tests in alarm at some step of the current episode (0: no episode) */
     uint32_t rearm;     /* tests whose generator must be reset at the next usable step */
+    uint32_t held;      /* tests of rearm held out by their range or the envelope only: back after reentry_steps */
     uint32_t alarm;     /* tests in alarm (last step) */
     uint32_t evaluable; /* tests evaluable (last step) */
     uint32_t set_tests; /* tests whose generator is a slot of the set */
     uint32_t gen_tests; /* tests with a generator */
+    uint32_t range_tests; /* tests whose generator has a range (fdi_gen_desc_t.in_range) */
     uint32_t inputs;    /* signals read by some test */
     uint32_t sens_tests; /* tests whose generator outputs at least one sensitivity */
     bool slots_in_order; /* every test of the set is its slot (masks of tests are masks of slots) */
@@ -242,7 +259,7 @@ typedef struct
     uint32_t size_cleared; /* faults the reaction-size rule clears (fdi_iso_size_cleared) */
     fdi_eval_t eval[FDI_DIAG_MAX_TESTS];
     fdi_obs_t obs[FDI_DIAG_MAX_TESTS];     /* observer state of test i's generator */
-    fdi_est_t est[FDI_DIAG_MAX_TESTS];     /* test i's offset estimator (estimate) */
+    fdi_est_t est[FDI_DIAG_MAX_TESTS];     /* test i's estimator (estimate) */
     fdi_svf_t filt[FDI_DIAG_MAX_FILTERS];  /* the set's bank, then the hand-written generators' filters */
     uint8_t filt_base[FDI_DIAG_MAX_TESTS]; /* hand-written test i: its filters at filt[filt_base[i]] */
     uint8_t slot_test[FDI_GEN_MAX_SLOTS];  /* slot k of the set -> its test */
@@ -252,7 +269,9 @@ typedef struct
     float residual[FDI_DIAG_MAX_TESTS];
     float ratio[FDI_DIAG_MAX_TESTS];
     float spread[FDI_DIAG_MAX_TESTS]; /* test i's adaptive threshold term at the step (0: the fixed gate) */
+    float correction[FDI_DIAG_MAX_TESTS]; /* test i's estimate's share of its residual, h . theta, at the step */
     uint16_t warm[FDI_DIAG_MAX_TESTS];
+    uint16_t est_seen[FDI_DIAG_MAX_TESTS]; /* updates of test i's estimator so far, up to est_startup */
     uint16_t quiet_run[FDI_DIAG_MAX_TESTS]; /* consecutive evaluable steps without alarm (saturating) */
     uint16_t alarm_run[FDI_DIAG_MAX_TESTS]; /* consecutive steps in alarm (saturating) */
     uint32_t clears[FDI_DIAG_MAX_TESTS];    /* faults each settled quiet test clears on line (last decision) */
@@ -272,9 +291,9 @@ typedef struct
 } fdi_diag_t; /* opaque by convention */
 
 /* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
-FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (208U + (sizeof(void *) * 2U) +
+FDI_STATIC_ASSERT(sizeof(fdi_diag_t) <= (224U + (sizeof(void *) * 2U) +
                                          (FDI_DIAG_MAX_TESTS * (sizeof(fdi_eval_t) + sizeof(fdi_obs_t) +
-                                                                sizeof(fdi_est_t) + 37U)) +
+                                                                sizeof(fdi_est_t) + 43U)) +
                                          (sizeof(fdi_svf_t) * FDI_DIAG_MAX_FILTERS) +
                                          (sizeof(float) * FDI_DIAG_MAX_SENS) +
                                          (((2U * sizeof(float)) + sizeof(uint16_t)) * FDI_TABLE_MAX_FAULTS) +
@@ -293,7 +312,10 @@ typedef struct
                                            spread, with an adaptive threshold */
     float spread[FDI_DIAG_MAX_TESTS];   /* last adaptive threshold term: the residual's worst-case spread over the
                                            table's uncertainty (units of r; 0 with the fixed gate) */
-    float offset[FDI_DIAG_MAX_TESTS];   /* test i's estimated offset, removed from its residual (0: not estimated) */
+    float offset[FDI_DIAG_MAX_TESTS];   /* test i's estimate's share of its residual, h . theta, removed from it (0: not
+                                           estimated) */
+    float estimate[FDI_DIAG_MAX_TESTS][FDI_EST_MAX_PARAMS]; /* test i's estimated deviations, in the order of its
+                                                               generator's est (0: not estimated) */
     uint32_t accused_mask;              /* tests accused in the current isolation episode */
     fdi_iso_result_t iso;               /* candidates and isolability class (detected: episode active) */
     bool in_envelope;                   /* the frame was inside the table's calibrated envelope (or it has none):
@@ -305,11 +327,11 @@ typedef struct
 } fdi_diag_result_t;
 
 /* Defaults for `table`: CUSUM k 1.5, h 150 (as validated in tests/fw/test_fdi_diag.c), set 3, clear 100,
-   warm-up = the design point's settling time + 20 steps, exoneration, episodes ending after 3 s without alarm,
-   noise allowance 3 sigma, generator parameters 0, no reported sensitivities, the fixed gates (adaptive thresholds
-   are opt-in: over the whole declared envelope they hide most faults at their required sizes, README "Robust
-   diagnosis"), no offset estimation (estimate 0; tau 10 s, limit 0 sigma, a start-up average of 1 s when set), each test's sensitivities
-   every 4th step of an episode. BAD_ARG on NULL; BAD_TABLE when
+   warm-up = the design point's settling time + 20 steps, re-entry 0.5 s (at most the warm-up), exoneration, episodes
+   ending after 3 s without alarm, noise allowance 3 sigma, generator parameters 0, no reported sensitivities, adaptive thresholds, on-line
+   estimation for every test whose generator declares estimable quantities (kappa 3, decorrelation 10, a start-up of
+   1 s), each test's
+   sensitivities every 4th step of an episode. BAD_ARG on NULL; BAD_TABLE when
    the design point has no finite settling time (the table itself is checked by fdi_diag_init). */
 fdi_status_t fdi_diag_config_default(fdi_diag_config_t *cfg, const fdi_table_t *table);
 

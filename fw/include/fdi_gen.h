@@ -62,6 +62,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "fdi_est.h"
 #include "fdi_frame.h"
 #include "fdi_obs.h"
 #include "fdi_static_assert.h"
@@ -144,6 +145,15 @@ typedef struct
                                       the diagnoser bounds how far such a fault has moved by it (fdi_diag.h) */
     const float *rate_gain;        /* the rate gains d r / d (d f_j / dt), finite and non-zero; non-NULL when
                                       rate_mask is non-zero */
+    uint8_t n_est;                 /* the vehicle's uncertain quantities (or lumped offsets) the diagnoser may
+                                      estimate on line for this test, <= FDI_EST_MAX_PARAMS (fdi_est.h); 0: none */
+    const fdi_est_param_t *est;    /* their declarations (n_est entries; NULL when n_est is 0). A slot of a set
+                                      writes their regressors d r / d theta (io->reg); a hand-written generator's
+                                      are offsets (regressor 1) */
+    fdi_gen_domain_fn_t in_range;  /* NULL: always; else where the model's physics holds within the domain (e.g. a
+                                      tyre law near its linear range): outside it the test is not evaluable, but
+                                      its filters run on, so back in range it waits the diagnoser's re-entry, not
+                                      its whole warm-up */
 } fdi_gen_desc_t;
 
 /* A hand-written generator's instance: a view on the caller's storage (fdi_gen_init). */
@@ -190,8 +200,12 @@ typedef struct
     uint32_t sens_mask;         /* slots of run whose sensitivities to compute */
     float *spread;              /* out, NULL: not computed: each slot of run whose residual depends on the
                                    vehicle's uncertain quantities writes at spread[at[k]] its worst-case spread over
-                                   them, sum |d r / d theta| * dtheta (the adaptive threshold's term, >= 0; a slot
-                                   without one leaves its entry as it is: the caller sets 0) */
+                                   those it does not estimate (desc->est), sum |d r / d theta| * dtheta (the adaptive
+                                   threshold's term, >= 0; a slot without one leaves its entry as it is: the caller
+                                   sets 0) */
+    float *reg;                 /* out, non-NULL when spread is: each slot of run with estimated quantities writes
+                                   their regressors d r / d theta_e (desc->est order) at
+                                   reg[at[k] * FDI_EST_MAX_PARAMS + e] */
     uint32_t failed;            /* out (the caller sets 0): slots of run with a non-finite residual, state or spread */
 } fdi_gen_io_t;
 
@@ -215,8 +229,8 @@ fdi_status_t fdi_gen_param_init(fdi_gen_param_t *par, const fdi_gen_config_t *cf
 
 /* A usable descriptor: name non-NULL, non-zero input mask, n_obs <= 1, rate_mask disjoint from sens_mask with a
    finite non-zero gain per bit, and either a hand-written generator (step non-NULL, no set, n_filters <=
-   FDI_GEN_MAX_FILTERS) or a slot of a usable set (step NULL, n_filters 0, slot < set->n_slots). FDI_OK or
-   FDI_BAD_ARG. */
+   FDI_GEN_MAX_FILTERS) or a slot of a usable set (step NULL, n_filters 0, slot < set->n_slots), and its estimated
+   quantities none or usable declarations (fdi_est_check). FDI_OK or FDI_BAD_ARG. */
 fdi_status_t fdi_gen_desc_check(const fdi_gen_desc_t *desc);
 
 /* A usable set: name and step non-NULL, 1..FDI_GEN_MAX_SLOTS slots, every bank filter fed by a signal of the
@@ -276,5 +290,9 @@ uint32_t fdi_gen_sens_count(const fdi_gen_desc_t *desc);
  * "not evaluable" and restarts it on re-entry. Cannot fail.
  */
 bool fdi_gen_in_domain(const fdi_gen_desc_t *desc, const fdi_frame_t *in);
+
+/* Whether `in` lies in the range of `desc` (desc->in_range; true without one); false for a NULL descriptor or frame.
+   Cannot fail. */
+bool fdi_gen_in_range(const fdi_gen_desc_t *desc, const fdi_frame_t *in);
 
 #endif /* FDI_GEN_H */

@@ -11,6 +11,10 @@
 
 #define FDI_TWO_PI_F 6.28318530717959f
 #define WARMUP_MARGIN_STEPS 20U
+/* the default re-entry of a generated test after its domain or the envelope held it out, its signals usable throughout
+   (fdi_diag_config_t.reentry_steps): its filters ran on, its observer restarts and settles within 6 / (12.6 1/s) of
+   the generated observers' error pole (fdi_analysis.residuals.generator) */
+#define REENTRY_S 0.5f
 /* Isolation episodes end after 3 s without any alarm; an alarmed residual's first 3 sigma are taken as noise
    when it implies a fault size. */
 #define EPISODE_CLEAR_S 3.0f
@@ -40,10 +44,14 @@
 /* During an episode a test's sensitivities are computed every SENS_EVERY steps, the tests in turn (40 ms at 10 ms:
    a quarter of the tests' sensitivity code per step; the rule's decisions are confirmed over CLEAR_CONFIRM_S). */
 #define SENS_EVERY 4U
-/* the default forgetting time constant of the offset estimators (fdi_diag_config_t.estimate_tau) */
-#define ESTIMATE_TAU_S 10.0f
-/* the default start-up average of an offset estimator (fdi_diag_config_t.estimate_startup): 1 s, the mean of ~100
-   samples at 10 ms, within a tenth of the residual's sigma */
+/* the default multiple of an estimate's prediction spread in its test's threshold (fdi_diag_config_t.estimate_kappa):
+   three standard deviations */
+#define ESTIMATE_KAPPA 3.0f
+/* the default decorrelation factor of the estimators (fdi_diag_config_t.estimate_decorrelation): what a residual's model
+   leaves unexplained follows the manoeuvre over about 0.1 s (10 steps at 10 ms) */
+#define ESTIMATE_DECORRELATION 10.0f
+/* the default start-up of an estimated test (fdi_diag_config_t.estimate_startup): its estimator learns for 1 s after
+   the warm-up before the test is evaluable */
 #define ESTIMATE_STARTUP_S 1.0f
 
 /* The position of the lowest set bit of x != 0 (de Bruijn: x & -x times the sequence 0x077CB531 has a distinct top
@@ -144,15 +152,30 @@ fdi_status_t fdi_diag_config_default(fdi_diag_config_t *cfg, const fdi_table_t *
             cfg->set_count = SET_COUNT;
             cfg->clear_count = 100U;
             cfg->warmup_steps = (uint16_t)(settle + WARMUP_MARGIN_STEPS);
+            cfg->reentry_steps = steps_of(REENTRY_S, table->design.dt);
+            if (cfg->reentry_steps > cfg->warmup_steps)
+            {
+                cfg->reentry_steps = cfg->warmup_steps;
+            }
             cfg->mode = FDI_ISO_EXONERATION;
             cfg->episode_clear_steps = steps_of(EPISODE_CLEAR_S, table->design.dt);
             cfg->noise_allowance = NOISE_ALLOWANCE_SIGMA;
             cfg->sensitivities = false;
             cfg->sens_every = SENS_EVERY;
-            cfg->adaptive = false; /* opt-in until on-line estimators narrow the envelope (fdi_diag.h) */
+            /* robust by default: every test with estimable quantities estimates them, every test's threshold
+               adapts to what its model does not know (fdi_diag.h) */
+            cfg->adaptive = true;
             cfg->estimate = 0U;
-            cfg->estimate_tau = ESTIMATE_TAU_S;
-            cfg->estimate_limit = 0.0f;
+            for (i = 0U; (i < (uint32_t)table->n_tests) && (i < 32U); ++i)
+            {
+                const fdi_gen_desc_t *g = table->tests[i].gen;
+                if ((g != NULL) && (g->n_est > 0U))
+                {
+                    cfg->estimate |= (uint32_t)1U << i;
+                }
+            }
+            cfg->estimate_kappa = ESTIMATE_KAPPA;
+            cfg->estimate_decorrelation = ESTIMATE_DECORRELATION;
             cfg->estimate_startup = steps_of(ESTIMATE_STARTUP_S, table->design.dt);
             st = FDI_OK;
         }
@@ -170,11 +193,13 @@ static void domain_layout(fdi_diag_t *self, const fdi_table_t *t)
     uint32_t i;
     self->gen_tests = 0U;
     self->inputs = 0U;
+    self->range_tests = 0U;
     for (i = 0U; i < (uint32_t)t->n_tests; ++i)
     {
         const fdi_gen_desc_t *g = t->tests[i].gen;
         if (g != NULL)
         {
+            self->range_tests |= (g->in_range != NULL) ? ((uint32_t)1U << i) : 0U;
             if ((n == 0U) || (g->in_domain != fn))
             {
                 fn = g->in_domain;
@@ -365,6 +390,22 @@ static uint32_t undecided_faults(const fdi_diag_t *self)
     return undecided;
 }
 
+/* Whether every test of `tests` is a test of the table whose generator declares estimable quantities. */
+static bool estimable(const fdi_table_t *t, uint32_t tests)
+{
+    uint32_t left = tests;
+    uint32_t i;
+    for (i = 0U; (left != 0U) && (i < (uint32_t)t->n_tests); ++i)
+    {
+        const uint32_t bit = (uint32_t)1U << i;
+        if (((left & bit) != 0U) && (t->tests[i].gen != NULL) && (t->tests[i].gen->n_est > 0U))
+        {
+            left &= ~bit;
+        }
+    }
+    return left == 0U;
+}
+
 static fdi_status_t check_config(const fdi_diag_config_t *cfg)
 {
     fdi_status_t st = fdi_table_check(cfg->table);
@@ -385,22 +426,20 @@ static fdi_status_t check_config(const fdi_diag_config_t *cfg)
         st = FDI_BAD_ARG;
     }
     else if ((cfg->estimate != 0U) &&
-             (!fdi_float_is_finite(cfg->estimate_tau) || !fdi_float_is_finite(cfg->estimate_limit)))
+             (!fdi_float_is_finite(cfg->estimate_kappa) || !fdi_float_is_finite(cfg->estimate_decorrelation)))
     {
         st = FDI_NOT_FINITE;
     }
-    else if ((cfg->estimate != 0U) &&
-             ((cfg->estimate_tau < cfg->table->design.dt) || (cfg->estimate_limit < 0.0f) ||
-              (cfg->estimate_startup == 0U) ||
-              ((((float)cfg->estimate_startup - 1.0f) * cfg->table->design.dt) >= cfg->estimate_tau) ||
-              (((uint32_t)cfg->table->n_tests < 32U) && ((cfg->estimate >> cfg->table->n_tests) != 0U))))
+    else if ((cfg->estimate != 0U) && ((cfg->estimate_kappa < 0.0f) || (cfg->estimate_decorrelation < 1.0f) ||
+                                       !estimable(cfg->table, cfg->estimate)))
     {
         st = FDI_BAD_ARG;
     }
     else
     {
         const uint32_t need = settle_steps(&cfg->table->design);
-        if ((need == 0U) || ((uint32_t)cfg->warmup_steps < need))
+        if ((need == 0U) || ((uint32_t)cfg->warmup_steps < need) || (cfg->reentry_steps == 0U) ||
+            (cfg->reentry_steps > cfg->warmup_steps))
         {
             st = FDI_BAD_ARG;
         }
@@ -450,11 +489,11 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             self->residual[i] = 0.0f;
             self->ratio[i] = 0.0f;
             self->spread[i] = 0.0f;
-            if (st == FDI_OK)
+            self->correction[i] = 0.0f;
+            self->est_seen[i] = 0U;
+            if ((st == FDI_OK) && ((cfg->estimate & ((uint32_t)1U << i)) != 0U))
             {
-                const bool est = (cfg->estimate & ((uint32_t)1U << i)) != 0U;
-                st = est ? fdi_est_init(&self->est[i], t->design.dt, cfg->estimate_tau, cfg->estimate_startup)
-                         : fdi_est_init(&self->est[i], t->design.dt, t->design.dt, 1U);
+                st = fdi_est_init(&self->est[i], d->gen->est, (uint32_t)d->gen->n_est);
             }
             self->warm[i] = cfg->warmup_steps;
             self->quiet_run[i] = 0U;
@@ -491,11 +530,15 @@ fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
             self->sensitivities = cfg->sensitivities;
             self->adaptive = cfg->adaptive;
             self->estimate = cfg->estimate;
-            self->est_limit = cfg->estimate_limit;
+            self->est_kappa = cfg->estimate_kappa;
+            self->est_decorrelation = cfg->estimate_decorrelation;
+            self->est_startup = cfg->estimate_startup;
             self->sens_every = (cfg->sens_every > 1U) ? (uint8_t)cfg->sens_every : 1U;
             sens_turns(self, (uint32_t)self->sens_every);
             self->sens_known = 0U;
             self->rearm = 0xFFFFFFFFU;
+            self->held = 0U;
+            self->reentry_steps = cfg->reentry_steps;
             self->alarm = 0U;
             self->evaluable = 0U;
             self->in_envelope = true;
@@ -609,7 +652,8 @@ static uint32_t tests_of(const fdi_diag_t *self, uint32_t slots)
 /* The generators of the tests of `run` (inputs usable, in their domain): the set's slots in one call, the
    hand-written ones one by one; r[i] and the returned mask (bit i: finite residual and sensitivities). The
    sensitivities of the tests of `want` are computed into self->sens (and the tests marked fresh). */
-static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t run, uint32_t want, float *r)
+static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t run, uint32_t want, float *r,
+                               float *reg)
 {
     const uint32_t hand = run & ~self->set_tests;
     const uint32_t set = run & self->set_tests;
@@ -653,8 +697,9 @@ static uint32_t run_generators(fdi_diag_t *self, const fdi_frame_t *in, uint32_t
         io.run = slots_of(self, set);
         io.restart = slots_of(self, set & self->rearm);
         io.sens_mask = slots_of(self, with_sens);
-        /* slots without an uncertainty term keep 0; the estimated tests' spread bounds their estimate */
+        /* slots without an uncertainty term keep 0; the regressors of the estimable quantities come with it */
         io.spread = (self->adaptive || (self->estimate != 0U)) ? self->spread : NULL;
+        io.reg = (io.spread != NULL) ? reg : NULL;
         io.failed = 0U;
         self->set->step(&io);
         failed = tests_of(self, io.failed & io.run);
@@ -712,39 +757,56 @@ static uint32_t sens_turn(const fdi_diag_t *self)
     return self->turns[(uint32_t)sat_inc(self->episode_age) % (uint32_t)self->sens_every];
 }
 
-/* The residual test i evaluates: with an offset estimator (fdi_diag.h, fdi_est.h), r minus its estimate (updated
-   unless the test alarms or an episode accuses it, bounded by its spread plus estimate_limit sigmas); false while the
-   estimator still averages its start-up samples (the test is not evaluable yet). The test's threshold spread:
-   the generator's without an estimator and with adaptive thresholds, else 0. */
-static bool corrected(fdi_diag_t *self, uint32_t i, float *r)
+/* The residual test i evaluates and its threshold's spread (fdi_diag.h "On-line estimation", "Adaptive thresholds"):
+   with an estimator, the innovation r - h . theta (the filter updated unless the test alarms or an episode accuses
+   it) and kappa times the estimate's prediction spread plus the generator's spread over what it does not estimate;
+   without one, r and, with adaptive thresholds, the generator's spread plus the estimable quantities at their
+   declared widths (the whole envelope), else 0. reg: the test's regressors (FDI_EST_MAX_PARAMS entries; a
+   hand-written generator's estimable quantities are offsets, regressor 1). */
+static bool corrected(fdi_diag_t *self, uint32_t i, const float *reg, float *r)
 {
-    const uint32_t bit = (uint32_t)1U << i;
     bool ready = true;
-    if ((self->estimate & bit) != 0U)
+    const uint32_t bit = (uint32_t)1U << i;
+    const fdi_gen_desc_t *g = self->table->tests[i].gen;
+    const uint32_t n = (g != NULL) ? (uint32_t)g->n_est : 0U;
+    float h[FDI_EST_MAX_PARAMS] = {0};
+    uint32_t e;
+    for (e = 0U; e < FDI_EST_MAX_PARAMS; ++e)
     {
-        /* frozen while the test alarms and for the rest of an episode it is accused in (the start-up average,
-           while the test cannot alarm, never) */
-        const bool freeze = (((self->alarm | self->accused) & bit) != 0U);
-        float limit = self->spread[i];
-        float rc = *r;
-        if (self->est_limit > 0.0f)
-        {
-            limit += self->est_limit * sqrtf(self->table->tests[i].variance);
-        }
-        if (fdi_est_update(&self->est[i], *r, limit, freeze, &rc) == FDI_OK)
-        {
-            *r = rc;
-        }
-        ready = fdi_est_ready(&self->est[i]);
-        self->spread[i] = 0.0f;
+        h[e] = ((e < n) && (g->set != NULL)) ? reg[e] : 1.0f;
     }
-    else if (!self->adaptive)
+    if (((self->estimate & bit) != 0U) && (g != NULL)) /* fdi_diag_init admits only tests with estimable quantities */
     {
-        self->spread[i] = 0.0f;
+        /* frozen while the test alarms and for the rest of an episode it is accused in */
+        const bool freeze = (((self->alarm | self->accused) & bit) != 0U);
+        float nu = *r;
+        float a = 0.0f;
+        const float noise = self->table->tests[i].variance * self->est_decorrelation;
+        if (fdi_est_update(&self->est[i], g->est, n, h, *r, noise, self->est_decorrelation, freeze, &nu, &a) ==
+            FDI_OK)
+        {
+            self->correction[i] = *r - nu;
+            *r = nu;
+            self->spread[i] += self->est_kappa * a;
+        }
+        if (self->est_seen[i] < self->est_startup)
+        {
+            self->est_seen[i]++; /* the start-up: the estimator learns, the test is not evaluable yet */
+            ready = false;
+        }
+    }
+    else if (self->adaptive)
+    {
+        for (e = 0U; e < n; ++e)
+        {
+            const float lo = -g->est[e].lo;
+            const float width = (g->est[e].hi > lo) ? g->est[e].hi : lo;
+            self->spread[i] += fabsf(h[e]) * width;
+        }
     }
     else
     {
-        /* the adaptive threshold's spread */
+        self->spread[i] = 0.0f;
     }
     return ready;
 }
@@ -752,7 +814,7 @@ static bool corrected(fdi_diag_t *self, uint32_t i, float *r)
 /* Evaluation of test i after its generator ran (ok: a finite residual r and spread) against its gate widened by the
    spread (the adaptive threshold, fdi_eval.h; 0 without one), with its offset estimate removed; true if it is
    evaluable this step (then *alarm is set). */
-static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r_gen, bool *alarm)
+static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r_gen, const float *reg, bool *alarm)
 {
     const uint32_t bit = (uint32_t)1U << i;
     bool evaluable = false;
@@ -761,7 +823,8 @@ static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r_gen, bool *a
     if ((st == FDI_OK) && ((self->rearm & bit) != 0U))
     {
         st = fdi_eval_reset(&self->eval[i]);
-        self->warm[i] = self->warmup_steps;
+        self->warm[i] = ((self->held & bit) != 0U) ? self->reentry_steps : self->warmup_steps;
+        self->held &= ~bit;
         self->rearm &= ~bit;
     }
     if (st != FDI_OK)
@@ -778,7 +841,7 @@ static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r_gen, bool *a
         self->warm[i]--;
         self->residual[i] = r;
         self->ratio[i] = 0.0f;
-        if (!self->adaptive || ((self->estimate & bit) != 0U))
+        if (!self->adaptive && ((self->estimate & bit) == 0U))
         {
             self->spread[i] = 0.0f;
         }
@@ -787,16 +850,14 @@ static bool evaluate(fdi_diag_t *self, uint32_t i, bool ok, float r_gen, bool *a
     {
         self->rearm |= bit;
     }
-    else if (!corrected(self, i, &r))
-    {
-        self->residual[i] = r;
-        self->ratio[i] = 0.0f;
-    }
     else /* fdi_eval_step()'s evaluation inline: eval[i] is initialised, r checked here */
     {
         float ratio = 0.0f;
-        evaluable = true;
-        *alarm = fdi_eval_update(&self->eval[i], r, self->spread[i], &ratio);
+        if (corrected(self, i, reg, &r))
+        {
+            evaluable = true;
+            *alarm = fdi_eval_update(&self->eval[i], r, self->spread[i], &ratio);
+        }
         self->residual[i] = r;
         self->ratio[i] = ratio;
     }
@@ -1245,6 +1306,24 @@ static uint32_t runnable(const fdi_diag_t *self, const fdi_frame_t *in, uint32_t
     return run;
 }
 
+/* Of the tests of `run`, those whose generator's range holds the frame (fdi_gen_in_range). */
+static uint32_t in_range(const fdi_diag_t *self, const fdi_frame_t *in, uint32_t run)
+{
+    uint32_t out = run;
+    uint32_t left = run & self->range_tests;
+    uint32_t i;
+    for (i = 0U; (left != 0U) && (i < (uint32_t)self->n_tests); ++i)
+    {
+        const uint32_t bit = (uint32_t)1U << i;
+        if (((left & bit) != 0U) && !fdi_gen_in_range(self->table->tests[i].gen, in))
+        {
+            out &= ~bit;
+        }
+        left &= ~bit;
+    }
+    return out;
+}
+
 fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t validity)
 {
     fdi_status_t st = FDI_OK;
@@ -1261,12 +1340,14 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
         const uint32_t undecided = episode ? self->undecided : 0U;
         uint32_t want = 0U;
         uint32_t run;
+        uint32_t ready = 0U;
         uint32_t alarm = 0U;
         uint32_t evaluable = 0U;
         uint32_t idle;
         uint32_t ok;
         uint32_t i;
         float r[FDI_DIAG_MAX_TESTS];
+        float reg[FDI_DIAG_MAX_TESTS * FDI_EST_MAX_PARAMS] = {0}; /* the estimable quantities' regressors */
         self->fresh = 0U;
         if (self->set != NULL)
         {
@@ -1281,11 +1362,17 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
         }
         /* outside the calibrated envelope no test is evaluable (fdi_table.h, fdi_diag.h) */
         self->in_envelope = inside_envelope(self->table->envelope, frame, usable);
-        run = self->in_envelope ? runnable(self, in, usable) : 0U;
+        ready = runnable(self, in, usable);
+        run = self->in_envelope ? in_range(self, in, ready) : 0U;
         /* the tests that do not run (none in steady state): restarted once they run again; the mask of all tests
            written out as fdi_frame_low_mask() computes it: with the inline call instead, gcc -O3 lays out this step
            so that it costs 30 more instructions per fault-free step on the Cortex-M4F (bench_fw.sh: 8,880 -> 8,910) */
         idle = ~run & (((uint32_t)self->n_tests >= 32U) ? 0xFFFFFFFFU : (((uint32_t)1U << self->n_tests) - 1U));
+        /* a generated test held out only by its range or the envelope, its signals usable and inside its domain
+           throughout, comes back after reentry_steps (its filters ran on); one whose signals were lost or that left
+           its domain takes the whole warm-up */
+        self->held = (self->held & ~(idle & ~self->rearm)) | (idle & ~self->rearm & ready & self->set_tests);
+        self->held &= ~(idle & ~ready);
         for (i = 0U; (idle != 0U) && (i < (uint32_t)self->n_tests); ++i)
         {
             const uint32_t bit = (uint32_t)1U << i;
@@ -1313,7 +1400,7 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
         {
             /* none needed */
         }
-        ok = run_generators(self, in, run, want, r);
+        ok = run_generators(self, in, run, want, r, reg);
         /* each test: its evaluation; its residual's averages over SETTLE_FAST_S and SETTLE_SLOW_S (restarted when it
            becomes evaluable again); its quiet and alarm runs. Outside the envelope no test runs, so the runs start
            again, and an open episode holds, its accusations and result too: there is no evidence for or against
@@ -1325,7 +1412,8 @@ fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t 
             bool test_alarm = false;
             const bool test_ok = (ok & bit) != 0U; /* r[i] holds the generator's residual */
             const bool test_evaluable =
-                ((run & bit) != 0U) && evaluate(self, i, test_ok, test_ok ? r[i] : 0.0f, &test_alarm);
+                ((run & bit) != 0U) &&
+                evaluate(self, i, test_ok, test_ok ? r[i] : 0.0f, &reg[(size_t)i * FDI_EST_MAX_PARAMS], &test_alarm);
             const float ri = self->residual[i];
             if (test_evaluable && ((self->evaluable & bit) != 0U))
             {
@@ -1358,6 +1446,7 @@ fdi_status_t fdi_diag_result(const fdi_diag_t *self, fdi_diag_result_t *out)
     if ((self != NULL) && (out != NULL) && (self->table != NULL))
     {
         uint32_t i;
+        uint32_t e;
         out->n_tests = self->n_tests;
         out->alarm_mask = self->alarm;
         out->evaluable_mask = self->evaluable;
@@ -1376,7 +1465,12 @@ fdi_status_t fdi_diag_result(const fdi_diag_t *self, fdi_diag_result_t *out)
             out->residual[i] = used ? self->residual[i] : 0.0f;
             out->ratio[i] = used ? self->ratio[i] : 0.0f;
             out->spread[i] = used ? self->spread[i] : 0.0f;
-            out->offset[i] = (used && ((self->estimate & bit) != 0U)) ? fdi_est_offset(&self->est[i]) : 0.0f;
+            out->offset[i] = (used && ((self->estimate & bit) != 0U)) ? self->correction[i] : 0.0f;
+            for (e = 0U; e < FDI_EST_MAX_PARAMS; ++e)
+            {
+                out->estimate[i][e] = (used && ((self->estimate & bit) != 0U)) ? fdi_est_value(&self->est[i], e)
+                                                                                : 0.0f;
+            }
         }
         out->accused_mask = self->accused;
         out->iso = self->iso;

@@ -122,7 +122,8 @@ fdi_status_t fdi_gen_desc_check(const fdi_gen_desc_t *desc)
 {
     fdi_status_t st = FDI_BAD_ARG;
     if ((desc != NULL) && (desc->name != NULL) && (desc->input_mask != 0U) && (desc->n_obs <= 1U) &&
-        rates_usable(desc))
+        rates_usable(desc) &&
+        ((desc->n_est == 0U) || (fdi_est_check(desc->est, (uint32_t)desc->n_est) == FDI_OK)))
     {
         if ((desc->step != NULL) && (desc->set == NULL))
         {
@@ -276,6 +277,16 @@ bool fdi_gen_in_domain(const fdi_gen_desc_t *desc, const fdi_frame_t *in)
     if ((desc != NULL) && (in != NULL))
     {
         ok = (desc->in_domain == NULL) || desc->in_domain(in);
+    }
+    return ok;
+}
+
+bool fdi_gen_in_range(const fdi_gen_desc_t *desc, const fdi_frame_t *in)
+{
+    bool ok = false;
+    if ((desc != NULL) && (in != NULL))
+    {
+        ok = (desc->in_range == NULL) || desc->in_range(in);
     }
     return ok;
 }

@@ -49,7 +49,7 @@ def main() -> int:
     model = load_model(args.model)
     say(f"synthesising the generators of {model.name} ...")
     reference = observer_reference(th)
-    _, gens = selected_generators(model, reference, selection=th.selection)
+    _, gens = selected_generators(model, reference, selection=th.selection, max_tyre_accel=th.max_tyre_accel)
     pairs = [(g, synthesize(model, g.equations, g.name, reference=reference, causality="integral"))
              for g in gens if g.note]
     if not pairs:

@@ -44,6 +44,7 @@ int main(int argc, char **argv) {
     static float set_r[FDI_GEN_MAX_SLOTS];
     static float set_sens[256];
     static float set_spread[FDI_GEN_MAX_SLOTS];
+    static float set_reg[FDI_GEN_MAX_SLOTS * FDI_EST_MAX_PARAMS]; /* the regressors, written with the spread */
     static unsigned counts[FDI_GEN_MAX_SLOTS];
     static uint8_t at[FDI_GEN_MAX_SLOTS], sens_at[FDI_GEN_MAX_SLOTS];
     fdi_gen_param_t par;
@@ -96,6 +97,7 @@ int main(int argc, char **argv) {
             io.sens_at = sens_at;
             for (i = 0; i < (int)FDI_GEN_MAX_SLOTS; ++i) set_spread[i] = 0.0f;
             io.spread = with_spread ? set_spread : NULL;
+            io.reg = with_spread ? set_reg : NULL; /* fdi_gen.h: non-NULL when spread is */
             set->step(&io);
             if ((failed != 0U) || (io.failed != 0U)) return 4;
         }

@@ -1,7 +1,8 @@
-"""The calibrated sigmas of the generated residuals (analysis/models/romo_thresholds.toml [generated]) are
-reproducible and up to date: `fdi-tune calibrate --check` recomputes them (in another process, on another
-floating-point path) from the fault-free drives as the
-ECU sees them and finds the committed table equal (~3 min); a stale table is reported and left untouched."""
+"""The calibrated sigmas of the generated residuals and what each test estimates on line
+(analysis/models/romo_thresholds.toml [generated], [estimation], [envelope_limits]) are reproducible and up to date:
+`fdi-tune calibrate --fleet 12 --check` recomputes them (in another process, on another floating-point path) from the
+truth-plant calibration fleet's fault-free drives as the ECU sees them and finds the committed tables equal (~7 min);
+a stale table is reported and left untouched."""
 
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from fdi_host.tuning.cli import main
 
 MODEL = "analysis/models/romo_grouped.toml"
 THRESHOLDS = "analysis/models/romo_thresholds.toml"
+FLEET = 12  # calibration vehicles (scripts/generate.sh)
 
 
 def test_committed_sigmas_are_up_to_date(
@@ -24,7 +26,7 @@ def test_committed_sigmas_are_up_to_date(
     # in another process on another floating-point path (OpenBLAS kernel and threads, no numpy SIMD): the
     # committed sigmas must come out the same on any machine; from the repository root, as scripts/generate.sh
     res = other_fp_path([sys.executable, "-m", "fdi_host.tuning.cli", "calibrate", MODEL, "--thresholds", THRESHOLDS,
-                         "--check"])
+                         "--fleet", str(FLEET), "--check"])
     assert res.returncode == 0, res.stderr
 
 

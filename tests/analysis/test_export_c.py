@@ -108,7 +108,9 @@ def test_generated_table_compiles_and_passes_the_firmware_check(
     # one generator set: one step for all slots, one block per slot, one descriptor per slot pointing to the set
     assert len(re.findall(r"^static void romo_gen_step\(", gens_c, flags=re.M)) == 2  # declaration, definition
     assert len(re.findall(r"^    if \(\(run & 0x[0-9A-F]{8}U\) != 0U\) /\* MSO", gens_c, flags=re.M)) == int(n_tests)
-    descriptor = r"&fdi_romo_gen_set, \d+U,\n     FDI_GEN_SENS_MASK\(0x[0-9A-F]{8}U\), (NULL|&romo_rate_gain\[\d+\])\}"
+    # ... with its rate gains, its estimable quantities (every ROMO test has some) and its range (the tyre-law tests)
+    descriptor = (r"&fdi_romo_gen_set, \d+U,\n     FDI_GEN_SENS_MASK\(0x[0-9A-F]{8}U\), (NULL|&romo_rate_gain\[\d+\]), "
+                  r"[1-3]U, romo_est_\d+, (NULL|romo_gen_\d+_in_range)\}")
     assert len(re.findall(descriptor, gens_c)) == int(n_tests)
     # the rate gains: the vx and vy offsets in the a_x and a_y kinematics (MSO1, MSO2), each -1
     assert "static const float romo_rate_gain[2] = {-1.0f, -1.0f};" in gens_c

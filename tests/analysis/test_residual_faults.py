@@ -229,3 +229,5 @@ def test_confirmation_raises_sizes_that_not_every_seed_detects(monkeypatch: pyte
                            300, None)
     assert out == {"T1": 0.2, "T2": 0.07}  # T1 raised one step; T3 would need 1.0 > the limit 0.7
     assert calls[0] == ([0.07, 0.15, 0.5], [777, 778, 877, 878, 977, 978, 1077, 1078])
+    # the second round tries the next grid values at once (T1 from 0.2, T3 0.7, up to the limit): two rounds in all
+    assert [c[0] for c in calls[1:]] == [[0.2, 0.3, 0.5, 0.7]]

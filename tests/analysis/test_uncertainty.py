@@ -22,6 +22,8 @@ from fdi_analysis.residuals.causality import synthesize
 from fdi_analysis.residuals.evaluate import residual, sensitivity_series
 from fdi_analysis.residuals.uncertainty_sensitivity import (
     UncertaintySolver,
+    bounded_whole,
+    far_end,
     is_offset_like,
     offset_like,
     spread_series,
@@ -145,6 +147,7 @@ def test_bad_declarations_name_the_file_and_the_symbol(tmp_path: Path, text: str
 def test_romo_declares_the_truth_plant_envelope(repo: Path) -> None:
     """Every quantity of the truth plant's envelope that the model holds lies inside the model's declared
     range (the model may be wider, never narrower)."""
+    from fdi_host.sim.scenario import load_scenario
     from fdi_host.sim.vehicle_envelope import ENVELOPE, NOMINAL
 
     m = load_model(repo / "analysis/models/romo_quasistatic.toml")
@@ -157,13 +160,16 @@ def test_romo_declares_the_truth_plant_envelope(repo: Path) -> None:
 
     pairs = {
         "m": envelope("m", NOMINAL.m), "Iz": envelope("Iz", NOMINAL.Iz), "h_CoG": envelope("h", NOMINAL.h),
-        "R": envelope("R", NOMINAL.R[0]), "K_TM": envelope("K_TM", NOMINAL.K_TM[0]),
+        **{f"R{i}": envelope("R", NOMINAL.R[i - 1]) for i in (1, 2, 3, 4)}, "K_TM": envelope("K_TM", NOMINAL.K_TM[0]),
         "mu_DB": envelope("pad_mu", NOMINAL.pad_mu[0]), "mu_max": envelope("mu_peak", 1.0),
         "k_t": tuple(x * p["k_t"].value for x in envelope("tyre_stiffness", 1.0)),
         "g_x": tuple(p["g"].value * math.sin(math.atan(x)) for x in envelope("grade", 1.0)),
         "g_y": tuple(p["g"].value * math.sin(math.atan(x)) for x in envelope("bank", 1.0)),
         "b_ax": envelope("bias_ax", 1.0), "b_ay": envelope("bias_ay", 1.0), "b_r": envelope("bias_yaw", 1.0),
     }
+    # the road's friction: the wet patch and the split friction of the scenarios scale the dry peak friction
+    patches = [p.mu for sc in ("wet_patch", "country_road", "urban") for p in load_scenario(sc).road.patches]
+    pairs["mu_max"] = (pairs["mu_max"][0] * min(patches, default=1.0), pairs["mu_max"][1])
     for name, (lo, hi) in pairs.items():
         d_lo, d_hi = declared[name]
         tol = 1e-9 * max(abs(lo), abs(hi))
@@ -175,6 +181,32 @@ def test_romo_declares_the_truth_plant_envelope(repo: Path) -> None:
     _, _, c_rr = ENVELOPE["c_rr"]
     load = envelope("m", NOMINAL.m)[1] * 9.81 / 4 * 1.2
     assert c_rr * load * envelope("R", NOMINAL.R[0])[1] <= declared["M_rr1"][1]
+
+
+def test_romo_declares_the_accelerometer_tilt_of_the_truth_plant(repo: Path) -> None:
+    """The body-fixed accelerometer of the truth plant pitches and rolls with the body: it reads g sin(pitch) per
+    m/s^2 of longitudinal acceleration and g sin(roll) per m/s^2 of lateral acceleration more (suspension
+    compliance; the model's c_ax, c_ay). Measured on the nominal vehicle and on the envelope's corners that tilt it
+    most and least (heaviest and highest CoG, lightest and lowest), in the slalom (both accelerations): inside the
+    declared ranges."""
+    import dataclasses
+
+    from fdi_host.sim.scenario import load_scenario
+    from fdi_host.sim.truth_sim import simulate_truth
+    from fdi_host.sim.vehicle_envelope import ENVELOPE, NOMINAL
+
+    declared = {u.name: u.range for u in uncertainties(load_model(repo / "analysis/models/romo_quasistatic.toml"))}
+    corners = [NOMINAL]
+    for a in (1, 2):
+        m = NOMINAL.m * ENVELOPE["m"][a]
+        h = NOMINAL.h * ENVELOPE["h"][a]
+        corners.append(dataclasses.replace(NOMINAL, name=f"corner {a}", m=m, h=h))
+    for v in corners:
+        tr = simulate_truth(load_scenario("slalom"), [], vehicle=v, seed=1, duration=12.0).true
+        pitch_gain = float(np.polyfit(tr["ax"], 9.81 * np.sin(-tr["pitch"]), 1)[0])
+        roll_gain = float(np.polyfit(tr["ay"], 9.81 * np.sin(tr["roll"]), 1)[0])
+        assert declared["c_ax"][0] <= pitch_gain <= declared["c_ax"][1], (v.name, pitch_gain)
+        assert declared["c_ay"][0] <= roll_gain <= declared["c_ay"][1], (v.name, roll_gain)
 
 
 # ------------------------------------------------------------------------------------------------ decoupling
@@ -282,14 +314,15 @@ def test_uncertainty_sensitivities_are_the_finite_differences(repo: Path) -> Non
     """d r / d theta of the wheel-2 spin test against central differences of the residual of generators
     designed for vehicles at theta0 +- h (r ~ s (theta_vehicle - theta_model): -dr/dtheta_model = s), on a
     cornering drive; h a thousandth of the quantity's half range (the tyre law's Max is a kink in R and the
-    wheel speed: a wider step straddles it)."""
+    wheel speed: a wider step straddles it). The road's friction, an input that may sit anywhere in its range
+    (`bounded_whole`), against the secant of generators for the nominal and the far-end vehicle."""
     m = load_model(repo / "analysis/models/romo_grouped.toml")
     us = UncertaintySolver(m)
     g = synthesize(m, MSO7, "MSO7")
     sens = uncertainty_sensitivities(m, g, us)
     names = [n for n, _ in sens]
-    assert {"m", "h_CoG", "R", "mu_max", "k_t", "K_TM", "mu_DB", "b_ax", "b_ay", "b_r", "g_x", "g_y",
-            "M_rr2"} == set(names)
+    assert {"m", "h_CoG", "R2", "mu_max", "k_t", "K_TM", "mu_DB", "b_ax", "b_ay", "b_r", "g_x", "g_y",
+            "M_rr2", "c_ax", "c_ay"} == set(names)
     assert "M_rr1" not in names and "Iz" not in names  # not in the equations of wheel 2's test
     # noise-free: the residual is cleared of its divisions (which hold R), so on noisy data a generator for
     # another R also scales the noise; the sensitivity is that of consistent data
@@ -297,14 +330,19 @@ def test_uncertainty_sensitivities_are_the_finite_differences(repo: Path) -> Non
     k = slice(300, None)
     by = {u.name: u for u in us.quantities}
     for name, expr in sens:
-        if name not in ("m", "R", "k_t", "mu_max", "b_ax", "g_x", "M_rr2"):
+        if name not in ("m", "R2", "k_t", "mu_max", "b_ax", "g_x", "M_rr2", "c_ax"):
             continue
         series = sensitivity_series(replace(g, sensitivities=((name, expr),)), sig)[name][k]
         u = by[name]
-        h = 1e-3 * u.half_width
-        up = residual(synthesize(at_values(m, {name: u.nominal + h}), MSO7, "up"), sig)[k]
-        dn = residual(synthesize(at_values(m, {name: u.nominal - h}), MSO7, "dn"), sig)[k]
-        fd = -(up - dn) / (2 * h)
+        if bounded_whole(u):  # the road's friction: the secant to the far end of its range (dry to ice)
+            far = far_end(u)
+            there = residual(synthesize(at_values(m, {name: u.nominal + far}), MSO7, "far"), sig)[k]
+            fd = -(there - residual(g, sig)[k]) / far
+        else:
+            h = 1e-3 * u.half_width
+            up = residual(synthesize(at_values(m, {name: u.nominal + h}), MSO7, "up"), sig)[k]
+            dn = residual(synthesize(at_values(m, {name: u.nominal - h}), MSO7, "dn"), sig)[k]
+            fd = -(up - dn) / (2 * h)
         scale = np.max(np.abs(series))
         assert scale > 0.0, name
         assert np.max(np.abs(fd - series)) <= 1e-3 * scale, name

@@ -159,8 +159,8 @@ static fdi_diag_config_t good_config(const fdi_table_t *t)
     c.sensitivities = false;
     c.adaptive = false;
     c.estimate = 0U;
-    c.estimate_tau = 10.0f;
-    c.estimate_limit = 0.0f;
+    c.estimate_kappa = 3.0f;
+    c.estimate_decorrelation = 10.0f;
     c.estimate_startup = 100U;
     c.sens_every = 4U; /* the default's turns */
     c.cusum_k = 1.5f;
@@ -168,6 +168,7 @@ static fdi_diag_config_t good_config(const fdi_table_t *t)
     c.set_count = 10U;
     c.clear_count = 100U;
     c.warmup_steps = 400U; /* > the settling time of the kin design point (300 steps) */
+    c.reentry_steps = 50U;
     c.mode = FDI_ISO_EXONERATION;
     c.noise_allowance = 3.0f;
     c.episode_clear_steps = 300U;
@@ -267,6 +268,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     c.set_count = (uint16_t)fz_u8(&in);
     c.clear_count = (uint16_t)fz_u8(&in);
     c.warmup_steps = (uint16_t)(fz_u32(&in) & 0x0FFFU);
+    c.reentry_steps = (uint16_t)(fz_u32(&in) & 0x0FFFU);
     c.mode = (fdi_iso_mode_t)(fz_u8(&in) % 3U);
     c.noise_allowance = fz_f32(&in);
     c.episode_clear_steps = (uint16_t)fz_u8(&in);

@@ -80,9 +80,9 @@ static fdi_status_t gen2_step(fdi_gen_t *g, const fdi_gen_param_t *par, const fd
     return FDI_OK;
 }
 
-static const fdi_gen_desc_t gen0 = {"t0", gen0_step, NULL, 0x07U, 0x3U, 0U, 0U, NULL, 0U, 0U, NULL};
-static const fdi_gen_desc_t gen1 = {"t1", gen1_step, NULL, 0x18U, 0x2U, 0U, 0U, NULL, 0U, 0U, NULL};
-static const fdi_gen_desc_t gen2 = {"t2", gen2_step, NULL, 0x60U, 0x1U, 0U, 0U, NULL, 0U, 0U, NULL};
+static const fdi_gen_desc_t gen0 = {"t0", gen0_step, NULL, 0x07U, 0x3U, 0U, 0U, NULL, 0U, 0U, NULL, 0U, NULL, NULL};
+static const fdi_gen_desc_t gen1 = {"t1", gen1_step, NULL, 0x18U, 0x2U, 0U, 0U, NULL, 0U, 0U, NULL, 0U, NULL, NULL};
+static const fdi_gen_desc_t gen2 = {"t2", gen2_step, NULL, 0x60U, 0x1U, 0U, 0U, NULL, 0U, 0U, NULL, 0U, NULL, NULL};
 static const fdi_test_desc_t tests[3] = {
     {&gen0, "t0", 1U, 0x3U, 0x07U, 5.0f, 1.0f, RESP},
     {&gen1, "t1", 2U, 0x2U, 0x18U, 5.0f, 1.0f, RESP},
@@ -120,8 +120,8 @@ static fdi_status_t gen0n_step(fdi_gen_t *g, const fdi_gen_param_t *par, const f
     return FDI_OK;
 }
 
-static const fdi_gen_desc_t gen0z = {"t0z", gen0z_step, NULL, 0x07U, 0x1U, 0U, 0U, NULL, 0U, 0U, NULL};
-static const fdi_gen_desc_t gen0n = {"t0n", gen0n_step, NULL, 0x07U, 0x0U, 0U, 0U, NULL, 0U, 0U, NULL};
+static const fdi_gen_desc_t gen0z = {"t0z", gen0z_step, NULL, 0x07U, 0x1U, 0U, 0U, NULL, 0U, 0U, NULL, 0U, NULL, NULL};
+static const fdi_gen_desc_t gen0n = {"t0n", gen0n_step, NULL, 0x07U, 0x0U, 0U, 0U, NULL, 0U, 0U, NULL, 0U, NULL, NULL};
 static const fdi_test_desc_t tests_zero_b[3] = {
     {&gen0z, "t0", 1U, 0x3U, 0x07U, 5.0f, 1.0f, RESP},
     {&gen1, "t1", 2U, 0x2U, 0x18U, 5.0f, 1.0f, RESP},
@@ -141,7 +141,7 @@ static const fdi_table_t table_no_sens = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f
 /* table_rate_b: test 0 as in table_zero_b, and b's rate gain listed (d r0 / d (db/dt) = -0.5): each step of its
    alarm bounds how far b has moved */
 static const float rate_gain_b[1] = {-0.5f};
-static const fdi_gen_desc_t gen0r = {"t0r", gen0z_step, NULL, 0x07U, 0x1U, 0U, 0U, NULL, 0U, 0x2U, rate_gain_b};
+static const fdi_gen_desc_t gen0r = {"t0r", gen0z_step, NULL, 0x07U, 0x1U, 0U, 0U, NULL, 0U, 0x2U, rate_gain_b, 0U, NULL, NULL};
 static const fdi_test_desc_t tests_rate_b[3] = {
     {&gen0r, "t0", 1U, 0x3U, 0x07U, 5.0f, 1.0f, RESP},
     {&gen1, "t1", 2U, 0x2U, 0x18U, 5.0f, 1.0f, RESP},
@@ -151,7 +151,7 @@ static const fdi_table_t table_rate_b = {FDI_TABLE_FORMAT_VERSION, {0.01f, 1.0f,
                                          signal_names, fault_names, tests_rate_b, signature, iso_class, test_size,
                                          2.0f, 1.5f, NULL};
 /* table_two_quiet: test 2 sees b instead of a (r2 = frame[5], d r2 / d b = frame[6]): two quiet tests of b */
-static const fdi_gen_desc_t gen2b = {"t2b", gen2_step, NULL, 0x60U, 0x2U, 0U, 0U, NULL, 0U, 0U, NULL};
+static const fdi_gen_desc_t gen2b = {"t2b", gen2_step, NULL, 0x60U, 0x2U, 0U, 0U, NULL, 0U, 0U, NULL, 0U, NULL, NULL};
 static const fdi_test_desc_t tests_two_quiet[3] = {
     {&gen0, "t0", 1U, 0x3U, 0x07U, 5.0f, 1.0f, RESP},
     {&gen1, "t1", 2U, 0x2U, 0x18U, 5.0f, 1.0f, RESP},

@@ -397,6 +397,22 @@ static uint32_t out_of_domain(const fdi_frame_t *in)
     return m;
 }
 
+/* `steps` steps with the tests of `held` not evaluable, then one with every test of `all` evaluable */
+static void back_after(fdi_diag_t *d, const fdi_frame_t *in, int steps, uint32_t held, uint32_t all)
+{
+    fdi_diag_result_t res;
+    int n;
+    for (n = 0; n < steps; ++n)
+    {
+        assert_int_equal(fdi_diag_step(d, in, ROMO_SIGM_ALL), FDI_OK);
+        assert_int_equal(fdi_diag_result(d, &res), FDI_OK);
+        assert_int_equal(res.evaluable_mask & held, 0U);
+    }
+    assert_int_equal(fdi_diag_step(d, in, ROMO_SIGM_ALL), FDI_OK);
+    assert_int_equal(fdi_diag_result(d, &res), FDI_OK);
+    assert_int_equal(res.evaluable_mask, all);
+}
+
 static void test_operating_domain(void **state)
 {
     fdi_frame_t in;
@@ -405,8 +421,8 @@ static void test_operating_domain(void **state)
     const fdi_diag_config_t cfg = {.table = &fdi_romo_table,
                                    .gen_param = {(float)VEH_DX, (float)VEH_DY, 0.0f, 0.0f},
                                    .cusum_k = 1.5f, .cusum_h = 150.0f, .set_count = 1U, .clear_count = 1U,
-                                   .warmup_steps = 300U, .mode = FDI_ISO_EXONERATION, .episode_clear_steps = 1U,
-                                   .noise_allowance = 3.0f, .sensitivities = false};
+                                   .warmup_steps = 300U, .reentry_steps = 50U, .mode = FDI_ISO_EXONERATION,
+                                   .episode_clear_steps = 1U, .noise_allowance = 3.0f, .sensitivities = false};
     const uint32_t all = ((uint32_t)1U << fdi_romo_table.n_tests) - 1U;
     uint32_t low;
     uint32_t readers;
@@ -450,15 +466,15 @@ static void test_operating_domain(void **state)
     }
     assert_int_equal(res.alarm_mask & low, 0U); /* out of domain neither accuses nor exonerates */
     frame(&in, 20.0f); /* back in the domain: restart and warm up again */
-    for (n = 0; n < 300; ++n)
-    {
-        assert_int_equal(fdi_diag_step(&d, &in, ROMO_SIGM_ALL), FDI_OK);
-        assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
-        assert_int_equal(res.evaluable_mask & low, 0U);
-    }
+    back_after(&d, &in, 300, low, all);
+    /* out of the tyre laws' range (the vehicle at 0.6 g: fdi_gen_desc_t.in_range) and back, its signals usable and in
+       its domain all along: its filters ran on, so the re-entry's 50 steps and not the whole warm-up */
+    in.value[ROMO_SIG_AY_M] = 6.0f;
     assert_int_equal(fdi_diag_step(&d, &in, ROMO_SIGM_ALL), FDI_OK);
     assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
-    assert_int_equal(res.evaluable_mask, all);
+    assert_int_equal(res.evaluable_mask & low, 0U);
+    in.value[ROMO_SIG_AY_M] = 0.0f;
+    back_after(&d, &in, 50, low, all);
     /* a signal missing: the tests that read it stop, the others of the same domain function run on */
     readers = 0U;
     for (n = 0; n < (int)fdi_romo_table.n_tests; ++n)
@@ -474,6 +490,18 @@ static void test_operating_domain(void **state)
     assert_int_equal(fdi_diag_step(&d, &in, ROMO_SIGM_ALL & ~ROMO_SIGM_OMEGA1_M), FDI_OK);
     assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
     assert_int_equal(res.evaluable_mask, all & ~low & ~readers);
+    /* back in the domain with every signal: the tests that lost omega1 and those that left their domain take the
+       whole warm-up */
+    frame(&in, 20.0f);
+    for (n = 0; n < 300; ++n)
+    {
+        assert_int_equal(fdi_diag_step(&d, &in, ROMO_SIGM_ALL), FDI_OK);
+        assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
+        assert_int_equal(res.evaluable_mask & (readers | low), 0U);
+    }
+    assert_int_equal(fdi_diag_step(&d, &in, ROMO_SIGM_ALL), FDI_OK);
+    assert_int_equal(fdi_diag_result(&d, &res), FDI_OK);
+    assert_int_equal(res.evaluable_mask, all);
 }
 
 /* With sensitivities requested every generated generator computes the same residual, bit for bit, as without,
@@ -536,7 +564,9 @@ static void test_diag_sensitivities(void **state)
     cfg.gen_param[FDI_ROMO_KIN_PARAM_D_X] = (float)VEH_DX;
     cfg.gen_param[FDI_ROMO_KIN_PARAM_D_Y] = (float)VEH_DY;
     cfg.warmup_steps = 300U;
+    cfg.reentry_steps = 50U;
     cfg.sensitivities = true;
+    cfg.estimate = 0U; /* the generators' own residuals, not innovations */
     assert_int_equal(fdi_diag_init(&d, &cfg), FDI_OK);
     params(&p);
     test_set_init(&ts, &fdi_romo_gen_set, fdi_romo_generators);
@@ -610,6 +640,8 @@ static void test_diag_slots_out_of_order(void **state)
         cfg.gen_param[FDI_ROMO_KIN_PARAM_D_X] = (float)VEH_DX;
         cfg.gen_param[FDI_ROMO_KIN_PARAM_D_Y] = (float)VEH_DY;
         cfg.warmup_steps = 300U;
+        cfg.reentry_steps = 50U;
+        cfg.estimate = 0U; /* the order of the slots, not what an estimator makes of them */
         cfg.sensitivities = true;
         assert_int_equal(fdi_diag_init((n == 0) ? &d0 : &d1, &cfg), FDI_OK);
     }

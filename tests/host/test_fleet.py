@@ -20,10 +20,11 @@ from fdi_host.monitor.score import score_run, windows_from_truth
 from fdi_host.replay import main as replay_main
 from fdi_host.replay import replay_fleet, replay_log, replay_offline_fast
 
-DRIVES = {  # name: fdi-sim arguments (8 s each)
-    "a/f10": ["--scenario", "cornering", "--no-scenario-faults", "--fault", "f10@3s:-120", "--seed", "1"],
-    "a/f4": ["--scenario", "cornering", "--no-scenario-faults", "--fault", "f4@3s:0.5", "--seed", "2"],
-    "b/f22": ["--scenario", "slalom", "--no-scenario-faults", "--fault", "f22@3s:2", "--seed", "3"],
+# name: fdi-sim arguments (8 s each; the faults from 5 s, after the ECU's warm-up and its estimators' start-up, 4.2 s)
+DRIVES = {
+    "a/f10": ["--scenario", "cornering", "--no-scenario-faults", "--fault", "f10@5s:-120", "--seed", "1"],
+    "a/f4": ["--scenario", "cornering", "--no-scenario-faults", "--fault", "f4@5s:0.5", "--seed", "2"],
+    "b/f22": ["--scenario", "slalom", "--no-scenario-faults", "--fault", "f22@5s:2", "--seed", "3"],
     "b/free": ["--scenario", "straight", "--no-scenario-faults", "--seed", "4"],
 }
 

@@ -27,13 +27,13 @@ from fdi_host.sim.faults import FaultSpec
 from fdi_host.sim.vehicle_envelope import NOMINAL, draw_vehicle
 
 REPO = Path(__file__).resolve().parents[2]
-ONSET = 3.0
+ONSET = 5.0  # after the ECU's warm-up and its estimators' start-up (4.2 s)
 
 
 @pytest.fixture(scope="module")
 def drive() -> api.Drive:
-    """A short straight drive with the v_x sensor fault f4 at 3 s (the model plant, seeded noise)."""
-    return fdi_host.simulate("straight", faults=[f"f4@{ONSET}s:0.5"], duration=6.0)
+    """A short straight drive with the v_x sensor fault f4 at 5 s (the model plant, seeded noise)."""
+    return fdi_host.simulate("straight", faults=[f"f4@{ONSET}s:0.5"], duration=8.0)
 
 
 @pytest.fixture(scope="module")
@@ -154,8 +154,8 @@ def test_plots_take_ax(drive: api.Drive, diagnosis: Diagnosis) -> None:
 
 def test_simulate_reads_faults_and_vehicles(drive: api.Drive) -> None:
     assert drive.faults == (FaultSpec("f4", ONSET, 0.5),)
-    assert repr(drive).startswith("Drive(straight, model plant: 6.0 s") and len(repr(drive)) < 300
-    assert "<th" in drive._repr_html_() and "f4@3s:0.5" in drive._repr_html_()
+    assert repr(drive).startswith("Drive(straight, model plant: 8.0 s") and len(repr(drive)) < 300
+    assert "<th" in drive._repr_html_() and f"f4@{ONSET:g}s:0.5" in drive._repr_html_()
     own = fdi_host.simulate("straight", duration=0.5)
     assert own.faults == own.result.scenario.faults  # None: the scenario's own faults
     assert fdi_host.simulate("straight", faults=[], duration=0.5).faults == ()
@@ -164,7 +164,7 @@ def test_simulate_reads_faults_and_vehicles(drive: api.Drive) -> None:
     assert api._vehicle(7) == draw_vehicle(7)
     with pytest.raises(ValueError, match="vehicle"):
         api._vehicle("heavy")
-    base = fdi_host.simulate("straight", faults=[], duration=6.0)
+    base = fdi_host.simulate("straight", faults=[], duration=8.0)
     added = base.with_fault(f"f4@{ONSET}s:0.5")
     assert added.faults == drive.faults
     assert np.allclose(added.result.measured["vx_m"], drive.result.measured["vx_m"])

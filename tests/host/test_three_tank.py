@@ -53,7 +53,8 @@ def gens(repo: Path, model: Model, scenario: generic.Scenario) -> list[Generator
     th = Thresholds.load(repo / THRESHOLDS)
     from fdi_analysis.residuals.selected import selected_generators
 
-    return selected_generators(model, th.observer_reference(), selection=th.selection, sensitivities=True)[1]
+    return selected_generators(model, th.observer_reference(), selection=th.selection, max_tyre_accel=th.max_tyre_accel,
+                               sensitivities=True)[1]
 
 
 def test_model_analyses(model: Model) -> None:

@@ -24,7 +24,7 @@ def test_spread_of_one_test(repo: Path) -> None:
     sigma, gate = 2.0, 5.0
     row = generator_spread(m, g, sigma, gate, {"f7": 0.06, "f23": 3.0}, {"cornering": sig}, FilterDesign(),
                            UncertaintySolver(m))
-    assert {"R", "mu_max", "k_t", "g_x", "M_rr2"} <= set(row.uncertain)
+    assert {"R2", "mu_max", "k_t", "g_x", "M_rr2"} <= set(row.uncertain)
     sc = row.scenarios["cornering"]
     assert sc.steps > 200 and sc.spread_median > 0.0 and sc.spread_p95 >= sc.spread_median
     assert sc.top in row.uncertain and 0.0 < sc.top_share <= sc.spread_p95

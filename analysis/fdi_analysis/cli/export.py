@@ -66,22 +66,25 @@ def generate_all(model_path: Path, thresholds_path: Path, out: Path, name: str, 
                  report_dir: Path | None = None) -> dict[str, str]:
     """The table and the generated residual generators of the optimal selection among realizable MSOs (and the
     generator report in `report_dir`)."""
+    from fdi_analysis.residuals.estimation import estimated
     from fdi_analysis.residuals.evaluate import FilterDesign, response_time
     from fdi_analysis.residuals.selected import selected_generators
-    from fdi_analysis.residuals.uncertainty_sensitivity import half_widths
+    from fdi_analysis.residuals.uncertainty_sensitivity import half_widths, uncertainties
 
     model = load_model(model_path)
     command = command_line(model_path, thresholds_path, out, name, sizes_path)
     sizes = FaultSizes.load(sizes_path) if sizes_path is not None else None
     thresholds = Thresholds.load(thresholds_path)
     tests, gens = selected_generators(model, thresholds.observer_reference(), workers=workers, progress=progress,
-                                      selection=thresholds.selection, sensitivities=True, uncertainty=True)
+                                      selection=thresholds.selection, max_tyre_accel=thresholds.max_tyre_accel,
+                                      sensitivities=True, uncertainty=True)
     names = VehicleNames.of_table(name)
     top = banner(command)
     design = FilterDesign(*thresholds.design[:3])
     response = [response_time(g, design) for g in gens]
     header, source = emit_table.render_file(emit_table.table_file(model, tests, thresholds, names, top, sizes=sizes,
-                                                                  response_s=response))
+                                                                  response_s=response,
+                                                                  domain_inputs=[emit_c.inputs(g) for g in gens]))
     if report_dir is not None:
         sigmas = thresholds.sigmas(gens)
         rows = report.rows(gens, sigmas, thresholds.gate, sizes, sizes.limits if sizes is not None else {})
@@ -89,8 +92,11 @@ def generate_all(model_path: Path, thresholds_path: Path, out: Path, name: str, 
                                  sizes_path.as_posix() if sizes_path is not None else "(no fault-size file)"):
             print(f"wrote {path}")
     faults = [f.name for f in model.faults]
+    quantities = {u.name: u for u in uncertainties(model)}
+    est = {g.name: estimated(g, thresholds.estimation.get(" ".join(g.equations), ()), quantities, design.dt)
+           for g in gens}
     gh, gc = emit_c.render(emit_c.generators_file(gens, names, faults, top, signals=[k.name for k in model.knowns],
-                                                  widths=half_widths(model)))
+                                                  widths=half_widths(model), estimation=est))
     sh, sc = emit_signals.render(emit_signals.signals_file(model, names, top))
     return {f"{name}.h": header, f"{name}.c": source, f"{names.generators}.h": gh, f"{names.generators}.c": gc,
             f"{names.signals}.h": sh, f"{names.signals}.c": sc}

@@ -31,13 +31,15 @@ from fdi_analysis.export.c_expr import c_float, to_c
 from fdi_analysis.export.c_names import VehicleNames
 from fdi_analysis.export.c_order import defined_before_use
 from fdi_analysis.export.c_text import comment_text
-from fdi_analysis.residuals.generator import DOMAIN_SIGNAL, XHAT, Generator
+from fdi_analysis.residuals.estimation import Estimated
+from fdi_analysis.residuals.generator import ACCEL_SIGNALS, DOMAIN_SIGNAL, XHAT, Generator
 from fdi_analysis.residuals.signals import Node, node_of, readable
 
 MAX_BANK = 255  # FDI_GEN_MAX_BANK of fw/include/fdi_gen.h
 MAX_GENERATORS = 32  # FDI_GEN_MAX_SLOTS of fw/include/fdi_gen.h (and FDI_TABLE_MAX_TESTS)
 MAX_SENS = 32  # FDI_DIAG_MAX_TEST_SENS of fw/include/fdi_diag.h
 MAX_FRAME = 32  # FDI_FRAME_MAX_SIGNALS of fw/include/fdi_frame.h
+MAX_ESTIMATED = 3  # FDI_EST_MAX_PARAMS of fw/include/fdi_est.h (its default)
 
 
 class EmitError(FdiError, ValueError):
@@ -88,11 +90,11 @@ ${banner}
 FDI_STATIC_ASSERT(${count_macro} <= FDI_GEN_MAX_SLOTS, fdi_sa_${vehicle}_generator_slots);
 
 ${derived}${bank}
-${domains}${rates}
+${domains}${rates}${estimates}
 static void ${vehicle}_gen_step(fdi_gen_io_t *io);
 
 /* name, step (NULL: the set's), domain, signals read, sensitivities (bit j = fault j, ascending), filters, observer
-   states, set, slot, rate gains (bit j = fault j; the gains ascending by fault) */
+   states, set, slot, rate gains (bit j = fault j; the gains ascending by fault), estimable quantities, range */
 const fdi_gen_desc_t ${base}[${count_macro}] = {
 ${descriptors}
 };
@@ -147,7 +149,29 @@ static bool ${function}_in_domain(const fdi_frame_t *in)
 DESCRIPTOR_FMT = Template("""\
     {"${name}", NULL, ${domain}, ${inputs},
      FDI_GEN_SENS_MASK(0x${sens_mask}U), 0U, ${n_obs}U, &${set}, ${slot}U,
-     FDI_GEN_SENS_MASK(0x${rate_mask}U), ${rate_ref}}, /* ${sens_note} */""")
+     FDI_GEN_SENS_MASK(0x${rate_mask}U), ${rate_ref}, ${n_est}U, ${est_ref}, ${range}}, /* ${sens_note} */""")
+
+RANGE_FMT = Template("""\
+/* ${name}: the tyres near their linear range, |(ax_m, ay_m)| <= ${limit} m/s^2 (fdi_gen_desc_t.in_range) */
+static bool ${function}_in_range(const fdi_frame_t *in)
+{
+    return ${condition};
+}
+""")
+
+ESTIMATES_FMT = Template("""\
+/* The quantities the diagnoser may estimate on line per test (fdi_est.h): deviations from the model's values, their
+   prior mean and variance (uniform over the declared range), the variance they may gain per step (from the declared
+   drift; a vehicle's constant forgets over an hour), their bounds and the most they move in one step; a group of
+   quantities entering with constant
+   sensitivities is one offset (fdi_analysis.residuals.estimation). {mean, var, q, lo, hi, step} */
+${arrays}
+""")
+ESTIMATE_ARRAY_FMT = Template("""\
+static const fdi_est_param_t ${vehicle}_est_${slot}[${n}] = {
+${lines}
+};""")
+ESTIMATE_LINE_FMT = Template("    {${mean}, ${var}, ${q}, ${lo}, ${hi}, ${step}}, /* ${label} */")
 
 RATES_FMT = Template("""\
 /* Rate gains d r / d (d f / dt) of the faults that reach a residual only through a derivative, where the gain is
@@ -209,11 +233,11 @@ RESET_SENSOR_FMT = Template("""\
 RESET_CONST_FMT = Template("            xp = ${x0};")
 
 SPREAD_FMT = Template("""\
-${indent}if (io->spread != NULL) /* worst-case spread: sum |d r / d theta| * dtheta over ${quantities} */
+${indent}if (io->spread != NULL) /* worst-case spread: sum |d r / d theta| * dtheta over ${quantities}${estimated} */
 ${indent}{
 ${lines}
 ${indent}    io->spread[io->at[${slot}]] = spread;
-${indent}    if (!fdi_float_is_finite(spread))
+${indent}    if (!fdi_float_is_finite(${check}))
 ${indent}    {
 ${indent}        io->failed |= 0x${bit}U;
 ${indent}    }
@@ -250,6 +274,8 @@ class SlotCode:
     body: str  # its block inside the set's step, C text
     domain_condition: str  # "" when always in the domain
     domain_note: str
+    range_condition: str  # "" when always in range (fdi_gen_desc_t.in_range: the tyre laws near their linear range)
+    range_limit: float  # its acceleration limit [m/s^2] (Generator.max_accel), 0 without a range
     inputs: str  # C mask expression of the signals read
     sens_faults: tuple[str, ...]
     sens_mask: int
@@ -257,6 +283,7 @@ class SlotCode:
     rate_gains: tuple[tuple[str, float], ...]  # (fault, gain), ascending by fault
     rate_mask: int
     spread: tuple[tuple[str, float], ...] = ()  # (uncertain quantity, its half-width) the spread weighs, model order
+    estimated: tuple[Estimated, ...] = ()  # the quantities the diagnoser may estimate (their regressors, io->reg)
 
 
 @dataclass(frozen=True)
@@ -286,9 +313,9 @@ def kind_name(slot: int, names: VehicleNames) -> str:
 
 
 def inputs(g: Generator) -> list[str]:
-    """Measured signals the C generator reads: the residual's plus the operating-domain signal."""
-    extra = [DOMAIN_SIGNAL] if g.min_speed > 0.0 and DOMAIN_SIGNAL not in g.knowns else []
-    return [*g.knowns, *extra]
+    """Measured signals the C generator reads: the residual's plus the operating-domain signals."""
+    domain = ([DOMAIN_SIGNAL] if g.min_speed > 0.0 else []) + (list(ACCEL_SIGNALS) if g.max_accel > 0.0 else [])
+    return [*g.knowns, *(k for k in domain if k not in g.knowns)]
 
 
 def _xp(k: int) -> sympy.Symbol:
@@ -503,25 +530,37 @@ def _sens_block(k: int, g: Generator, name: _Names, faults: Sequence[str], temps
 
 
 def _spread_block(k: int, g: Generator, name: _Names, widths: Mapping[str, float], temps: Sequence[_Temp],
-                  indent: str) -> str:
-    """The adaptive threshold's term of slot k: sum over `g.uncertainty` of |d r / d theta| * w_theta (`widths`),
-    from the temporaries in scope `temps` and common subexpressions of its own; an observer slot's at the estimate
-    its step predicted from (xp), as its sensitivities. "" for a generator without uncertainty sensitivities."""
+                  indent: str, estimated: Sequence[Estimated] = ()) -> str:
+    """The adaptive threshold's term of slot k: sum over `g.uncertainty` but the `estimated` quantities of
+    |d r / d theta| * w_theta (`widths`), and the estimated quantities' regressors (io->reg), from the temporaries in
+    scope `temps` and common subexpressions of their own; an observer slot's at the estimate its step predicted from
+    (xp), as its sensitivities. "" for a generator without uncertainty sensitivities."""
     if not g.uncertainty:
         return ""
-    terms = _reusing([_renamed(e, XHAT, _xp(k)) for _, e in g.uncertainty], temps)
+    taken = {n for e in estimated for n in e.names}
+    rest = [(q, e) for q, e in g.uncertainty if q not in taken]
+    terms = _reusing([_renamed(e, XHAT, _xp(k)) for _, e in rest]
+                     + [_renamed(e.regressor, XHAT, _xp(k)) for e in estimated], temps)
     subs, red = sympy.cse(terms, symbols=sympy.numbered_symbols("u"), order="canonical")
     uname = replace(name, temps=name.temps | {str(s) for s, _ in subs})
     lines = [f"{indent}    const float {s} = {to_c(e, uname)};" for s, e in subs]
+    spread_red, reg_red = red[:len(rest)], red[len(rest):]
     # the terms of constant sensitivity (an unknown input entering linearly) add up to one constant; one statement
     # a line (c_order.defined_before_use moves each temporary to just before its first use)
-    fixed = [(q, widths[q] * abs(float(e))) for (q, _), e in zip(g.uncertainty, red, strict=True) if e.is_Number]
+    fixed = [(q, widths[q] * abs(float(e))) for (q, _), e in zip(rest, spread_red, strict=True) if e.is_Number]
     lines.append(f"{indent}    float spread = {c_float(sum(v for _, v in fixed))}; /* "
                  + (" ".join(q for q, _ in fixed) or "no constant term") + " */")
     lines += [f"{indent}    spread += ({c_float(widths[q])} * fabsf({to_c(e, uname)})); /* {q} */"
-              for (q, _), e in zip(g.uncertainty, red, strict=True) if not e.is_Number]
-    return SPREAD_FMT.substitute(indent=indent, quantities=" ".join(q for q, _ in g.uncertainty),
-                                 lines="\n".join(lines), slot=k, bit=f"{1 << k:08X}") + "\n"
+              for (q, _), e in zip(rest, spread_red, strict=True) if not e.is_Number]
+    check = ["spread"]
+    for j, (est, e) in enumerate(zip(estimated, reg_red, strict=True)):
+        lines.append(f"{indent}    const float reg{j} = {to_c(e, uname)}; /* d r / d ({est.label}) */")
+        lines.append(f"{indent}    io->reg[(io->at[{k}] * FDI_EST_MAX_PARAMS) + {j}U] = reg{j};")
+        check.append(f"(0.0f * reg{j})")
+    note = (f"; regressors of the estimable {', '.join(e.label for e in estimated)}" if estimated else "")
+    return SPREAD_FMT.substitute(indent=indent, quantities=" ".join(q for q, _ in rest) or "(none left)",
+                                 estimated=note, lines="\n".join(lines), slot=k, bit=f"{1 << k:08X}",
+                                 check=" + ".join(check)) + "\n"
 
 
 def _const_lines(temps: Sequence[_Temp], name: _Names, indent: str) -> str:
@@ -529,7 +568,7 @@ def _const_lines(temps: Sequence[_Temp], name: _Names, indent: str) -> str:
 
 
 def _slot_body(k: int, g: Generator, p: _Pass, name: _Names, faults: Sequence[str],
-               widths: Mapping[str, float]) -> str:
+               widths: Mapping[str, float], estimated: Sequence[Estimated] = ()) -> str:
     """Slot k's block: the temporaries only it uses, its residual (and observer step), its sensitivities."""
     own = [t for t in p.temps if t.symbol not in p.owner and p.mask[t.symbol] == 1 << k]
     pre = [t for t in p.temps if p.owner.get(t.symbol) == (k, "pre")]
@@ -540,7 +579,7 @@ def _slot_body(k: int, g: Generator, p: _Pass, name: _Names, faults: Sequence[st
     bit = f"{1 << k:08X}"
     if g.observer is None:
         return PLAIN_FMT.substitute(own=_const_lines(own, name, "        "), value=to_c(red[0], name), slot=k, bit=bit,
-                                    spread=_spread_block(k, g, name, widths, scope, "        "),
+                                    spread=_spread_block(k, g, name, widths, scope, "        ", estimated),
                                     sens=_sens_block(k, g, name, faults, scope, "        "))
     o = g.observer
     if o.initial.free_symbols:
@@ -557,7 +596,7 @@ def _slot_body(k: int, g: Generator, p: _Pass, name: _Names, faults: Sequence[st
                                                                           strict=True))
     return OBSERVER_FMT.substitute(slot=k, bit=bit, own=_const_lines(own, name, "        "), restart=restart,
                                    predict=predict.rstrip("\n"), at_new=at_new.rstrip("\n"),
-                                   spread=_spread_block(k, g, name, widths, scope, "            "),
+                                   spread=_spread_block(k, g, name, widths, scope, "            ", estimated),
                                    sens=_sens_block(k, g, name, faults, scope, "            "))
 
 
@@ -586,7 +625,7 @@ def _shared_text(p: _Pass, name: _Names, all_slots: int, slots_text: str) -> str
 
 
 def _slot_code(k: int, g: Generator, p: _Pass, name: _Names, names: VehicleNames,
-               faults: Sequence[str], widths: Mapping[str, float]) -> SlotCode:
+               faults: Sequence[str], widths: Mapping[str, float], estimated: Sequence[Estimated] = ()) -> SlotCode:
     unknown = [f for f, _ in g.sensitivities if f not in faults]
     if unknown:
         raise EmitError(f"{g.name}: sensitivities to {unknown}, not faults of the model")
@@ -594,6 +633,10 @@ def _slot_code(k: int, g: Generator, p: _Pass, name: _Names, names: VehicleNames
         raise EmitError(f"{g.name}: {len(g.sensitivities)} sensitivities, the diagnoser holds {MAX_SENS}")
     domain = (f"fabsf({name(Node(DOMAIN_SIGNAL, 0, 0).symbol)}) >= {c_float(g.min_speed)}" if g.min_speed > 0.0
               else "")
+    in_range = ""
+    if g.max_accel > 0.0:
+        ax, ay = (name(Node(k, 0, 0).symbol) for k in ACCEL_SIGNALS)
+        in_range = f"(({ax} * {ax}) + ({ay} * {ay})) <= {c_float(g.max_accel * g.max_accel)}"
     sens_faults = tuple(sorted((f for f, _ in g.sensitivities), key=faults.index))
     unknown = [f for f, _ in g.rate_gains if f not in faults or f in sens_faults]
     if unknown:
@@ -602,23 +645,29 @@ def _slot_code(k: int, g: Generator, p: _Pass, name: _Names, names: VehicleNames
     unknown = [q for q, _ in g.uncertainty if q not in widths]
     if unknown:
         raise EmitError(f"{g.name}: sensitivities to {unknown}, not uncertain quantities of the model")
+    if len(estimated) > MAX_ESTIMATED:
+        raise EmitError(f"{g.name}: {len(estimated)} estimated quantities, the firmware estimates {MAX_ESTIMATED} "
+                        "per test (FDI_EST_MAX_PARAMS)")
     body = SLOT_FMT.substitute(bit=f"{1 << k:08X}", name=g.name, equations=" ".join(g.equations),
-                               lines=_slot_body(k, g, p, name, faults, widths).rstrip("\n"))
+                               lines=_slot_body(k, g, p, name, faults, widths, estimated).rstrip("\n"))
     return SlotCode(slot=k, name=g.name, equations=" ".join(g.equations), causality=g.causality(), body=body,
-                    domain_condition=domain, domain_note=g.domain(), inputs=names.mask_expr(inputs(g)),
+                    domain_condition=domain, domain_note=g.domain(), range_condition=in_range, range_limit=g.max_accel,
+                    inputs=names.mask_expr(inputs(g)),
                     sens_faults=sens_faults, sens_mask=sum(1 << faults.index(f) for f in sens_faults),
                     n_obs=0 if g.observer is None else 1,
                     rate_gains=rates, rate_mask=sum(1 << faults.index(f) for f, _ in rates),
-                    spread=tuple((q, widths[q]) for q, _ in g.uncertainty))
+                    spread=tuple((q, widths[q]) for q, _ in g.uncertainty), estimated=tuple(estimated))
 
 
 def generators_file(generators: Sequence[Generator], names: VehicleNames, faults: Sequence[str],
-                    banner: str, signals: Sequence[str], widths: Mapping[str, float] | None = None) -> GeneratorsFile:
+                    banner: str, signals: Sequence[str], widths: Mapping[str, float] | None = None,
+                    estimation: Mapping[str, Sequence[Estimated]] | None = None) -> GeneratorsFile:
     """What goes into the generator files: the set of `generators` (slot = position), for the model's fault list
     `faults` (bit j of a sensitivity mask = faults[j]); `signals`: the frame's signals in index order (the bank's
     order; the derived signals take the places after them), every signal the generators read among them;
     `widths`: the half-width of every uncertain quantity the generators' `uncertainty` names (the spread of the
-    adaptive threshold, fdi_gen.h)."""
+    adaptive threshold, fdi_gen.h); `estimation`: by generator name, the quantities the diagnoser may estimate on line
+    for it (fdi_est.h; the spread leaves them out, the step writes their regressors)."""
     if not 0 < len(generators) <= MAX_GENERATORS:
         raise EmitError(f"{len(generators)} generators; the firmware holds 1..{MAX_GENERATORS}")
     order = list(signals)
@@ -634,7 +683,9 @@ def generators_file(generators: Sequence[Generator], names: VehicleNames, faults
     p = _global_pass(generators)
     name = _Names(names, {n: k for k, n in enumerate(nodes)}, frozenset(str(t.symbol) for t in p.temps))
     all_slots = (1 << len(generators)) - 1
-    slots = tuple(_slot_code(k, g, p, name, names, faults, widths or {}) for k, g in enumerate(generators))
+    est = estimation or {}
+    slots = tuple(_slot_code(k, g, p, name, names, faults, widths or {}, est.get(g.name, ()))
+                  for k, g in enumerate(generators))
     derived = tuple(DerivedSignal(len(order) + k, c.signal, gname, to_c(c.expr, name), c.sources,
                                   readable(c.expr)) for k, (gname, c) in enumerate(composites))
     return GeneratorsFile(banner, names, bank_of(nodes), derived, _shared_text(p, name, all_slots,
@@ -686,42 +737,74 @@ def render(f: GeneratorsFile) -> tuple[str, str]:
                                    count=len(f.slots), n_bank=len(f.bank), max_sens=max(len(c.sens_faults)
                                                                                         for c in f.slots),
                                    n_sens=sum(len(c.sens_faults) for c in f.slots))
-    # one domain function per distinct condition (the diagnoser evaluates a function shared by consecutive tests
-    # once per step, fdi_diag.c), named after the first slot that has it
+    # one domain (range) function per distinct condition (the diagnoser evaluates a function shared by consecutive
+    # tests once per step, fdi_diag.c), named after the first slot that has it
     first: dict[str, SlotCode] = {}
+    first_range: dict[str, SlotCode] = {}
     for c in f.slots:
         if c.domain_condition:
             first.setdefault(c.domain_condition, c)
-    rate_at: dict[int, int] = {}  # slot -> its first gain in <vehicle>_rate_gain
-    for c in f.slots:
-        if c.rate_gains:
-            rate_at[c.slot] = sum(len(d.rate_gains) for d in f.slots if d.slot < c.slot)
-    descriptors = "\n".join(DESCRIPTOR_FMT.substitute(
-        name=c.name,
-        domain=f"{n.vehicle}_gen_{first[c.domain_condition].slot + 1}_in_domain" if c.domain_condition else "NULL",
-        inputs=c.inputs, sens_mask=f"{c.sens_mask:08X}", n_obs=c.n_obs, set=n.gen_set, slot=c.slot,
-        rate_mask=f"{c.rate_mask:08X}",
-        rate_ref=f"&{n.vehicle}_rate_gain[{rate_at[c.slot]}]" if c.rate_gains else "NULL",
-        sens_note=(("sensitivities " + " ".join(c.sens_faults)) if c.sens_faults else "no sensitivities")
-        + ("; rate gains " + " ".join(f for f, _ in c.rate_gains) if c.rate_gains else "")
-        + ("; adaptive threshold over " + " ".join(q for q, _ in c.spread) if c.spread else ""))
-        for c in f.slots)
+        if c.range_condition:
+            first_range.setdefault(c.range_condition, c)
     all_rates = [(c, fg) for c in f.slots for fg in c.rate_gains]
     rates = RATES_FMT.substitute(
         notes="; ".join(f"{c.name}: {fault}" for c, (fault, _) in all_rates), vehicle=n.vehicle, count=len(all_rates),
         gains=", ".join(c_float(gain) for _, (_, gain) in all_rates)) if all_rates else ""
-    domains = "".join(DOMAIN_FMT.substitute(
-        name=", ".join(d.name for d in f.slots if d.domain_condition == cond), note=comment_text(c.domain_note),
-        function=f"{n.vehicle}_gen_{c.slot + 1}", condition=cond) + "\n" for cond, c in first.items())
     # each constant defined just before its first use: shorter lives, fewer values moved to the stack (c_order.py)
     body = defined_before_use(f.shared + "\n" + "\n".join(c.body for c in f.slots))
     source = SOURCE_FMT.substitute(banner=f.banner, base=n.generators, signals=n.signals, vehicle=n.vehicle,
-                                   derived=_derived_text(f), bank=_bank_text(f), domains=domains, rates=rates,
-                                   count_macro=n.n_generators,
-                                   descriptors=descriptors, set=n.gen_set,
+                                   derived=_derived_text(f), bank=_bank_text(f),
+                                   domains=_domain_functions(f, first, first_range), rates=rates,
+                                   estimates=_estimate_arrays(f), count_macro=n.n_generators,
+                                   descriptors=_descriptors(f, first, first_range), set=n.gen_set,
                                    bank_ref=f"{n.vehicle}_bank" if f.bank else "NULL", n_bank=len(f.bank),
                                    derive_ref=f"{n.vehicle}_gen_derive" if f.derived else "NULL",
                                    derived_ref=f"{n.vehicle}_derived" if f.derived else "NULL",
                                    n_derived=len(f.derived),
                                    prelude=_prelude(body), body=body)
     return header, source
+
+
+def _descriptors(f: GeneratorsFile, first: Mapping[str, SlotCode], first_range: Mapping[str, SlotCode]) -> str:
+    """The generator descriptors (fdi_gen_desc_t), one per slot."""
+    n = f.names
+    rate_at: dict[int, int] = {}  # slot -> its first gain in <vehicle>_rate_gain
+    for c in f.slots:
+        if c.rate_gains:
+            rate_at[c.slot] = sum(len(d.rate_gains) for d in f.slots if d.slot < c.slot)
+    return "\n".join(DESCRIPTOR_FMT.substitute(
+        name=c.name,
+        domain=f"{n.vehicle}_gen_{first[c.domain_condition].slot + 1}_in_domain" if c.domain_condition else "NULL",
+        inputs=c.inputs, sens_mask=f"{c.sens_mask:08X}", n_obs=c.n_obs, set=n.gen_set, slot=c.slot,
+        rate_mask=f"{c.rate_mask:08X}",
+        rate_ref=f"&{n.vehicle}_rate_gain[{rate_at[c.slot]}]" if c.rate_gains else "NULL",
+        n_est=len(c.estimated), est_ref=f"{n.vehicle}_est_{c.slot}" if c.estimated else "NULL",
+        range=f"{n.vehicle}_gen_{first_range[c.range_condition].slot + 1}_in_range" if c.range_condition else "NULL",
+        sens_note=(("sensitivities " + " ".join(c.sens_faults)) if c.sens_faults else "no sensitivities")
+        + ("; rate gains " + " ".join(fault for fault, _ in c.rate_gains) if c.rate_gains else "")
+        + ("; adaptive threshold over " + " ".join(q for q, _ in c.spread) if c.spread else "")
+        + ("; estimable " + ", ".join(e.label for e in c.estimated) if c.estimated else ""))
+        for c in f.slots)
+
+
+def _estimate_arrays(f: GeneratorsFile) -> str:
+    """The estimable quantities' declarations (fdi_est_param_t arrays), one array per slot that has some."""
+    if not any(c.estimated for c in f.slots):
+        return ""
+    return ESTIMATES_FMT.substitute(arrays="\n".join(ESTIMATE_ARRAY_FMT.substitute(
+        vehicle=f.names.vehicle, slot=c.slot, n=len(c.estimated),
+        lines="\n".join(ESTIMATE_LINE_FMT.substitute(mean=c_float(e.mean), var=c_float(e.var), q=c_float(e.q),
+                                                     lo=c_float(e.lo), hi=c_float(e.hi), step=c_float(e.step),
+                                                     label=e.label)
+                        for e in c.estimated)) for c in f.slots if c.estimated))
+
+
+def _domain_functions(f: GeneratorsFile, first: Mapping[str, SlotCode], first_range: Mapping[str, SlotCode]) -> str:
+    """The operating-domain and range functions, one per distinct condition."""
+    vehicle = f.names.vehicle
+    out = "".join(DOMAIN_FMT.substitute(
+        name=", ".join(d.name for d in f.slots if d.domain_condition == cond), note=comment_text(c.domain_note),
+        function=f"{vehicle}_gen_{c.slot + 1}", condition=cond) + "\n" for cond, c in first.items())
+    return out + "".join(RANGE_FMT.substitute(
+        name=", ".join(d.name for d in f.slots if d.range_condition == cond), limit=f"{c.range_limit:g}",
+        function=f"{vehicle}_gen_{c.slot + 1}", condition=cond) + "\n" for cond, c in first_range.items())

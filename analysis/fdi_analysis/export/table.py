@@ -174,12 +174,14 @@ class TableFile:
 # ------------------------------------------------------------------------------------------ computing
 def table_file(model: Model, tests: Sequence[Candidate], thresholds: Thresholds, names: VehicleNames, banner: str,
                generated: Sequence[bool] | None = None, sizes: FaultSizes | None = None,
-               response_s: Sequence[float] | None = None) -> TableFile:
+               response_s: Sequence[float] | None = None,
+               domain_inputs: Sequence[Sequence[str]] | None = None) -> TableFile:
     """What goes into the table files. `generated[k]` true (the default for every test): test k runs the
     generated generator of slot (number of generated tests before it), with the variance of its equation set
     from thresholds.generated; false: no on-board generator (NULL, always "not evaluable"). `response_s[k]`: the
     time test k's residual needs to show a fault (`residuals.evaluate.response_time` of its generator; default
-    REACTION_WINDOW_S, the window of the fault-size sweep), written as whole steps of the design point."""
+    REACTION_WINDOW_S, the window of the fault-size sweep), written as whole steps of the design point.
+    `domain_inputs[k]`: the signals test k's generator reads for its operating domain besides the MSO set's own."""
     st = model.structure()
     if not 0 < len(tests) <= MAX_TESTS:
         raise ExportError(f"{len(tests)} tests selected; the firmware table holds 1..{MAX_TESTS}")
@@ -191,7 +193,9 @@ def table_file(model: Model, tests: Sequence[Candidate], thresholds: Thresholds,
     rows = []
     for k, t in enumerate(tests):
         eqs = [st.equations[e] for e in bits(t.equations)]
-        knowns = sorted({z for e in bits(t.equations) for z in model.equations[e].knowns}, key=known_order.index)
+        extra = set(domain_inputs[k]) if domain_inputs is not None else set()
+        knowns = sorted({z for e in bits(t.equations) for z in model.equations[e].knowns} | extra,
+                        key=known_order.index)
         unknowns = sorted({x for e in bits(t.equations) for x in model.equations[e].unknowns},
                           key=unknown_order.index)
         if gen[k]:

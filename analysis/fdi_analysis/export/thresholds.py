@@ -3,7 +3,8 @@ envelope's definition ([envelope]: signals, votes, margin), and its generated pa
 them kept byte for byte: the [selection] table (the tests on board, by practical isolability, written by
 `fdi-analyze practical`) and, last, the [generated] table (variance per generated residual), the [observer] table
 (the reference sensitivity of each observer generator's gain design) and the [envelope_limits] table (per envelope
-signal, margin times the largest magnitude of the calibration drives), written by `fdi-tune calibrate`."""
+signal, margin times the calibration drives' magnitude) and the [estimation] table (what each test's on-line estimator
+follows), written by `fdi-tune calibrate`."""
 
 from __future__ import annotations
 
@@ -12,8 +13,9 @@ import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
-from fdi_analysis.errors import FdiError, InputError
+from fdi_analysis.errors import FdiError, InputError, fields_of
 from fdi_analysis.residuals.generator import Generator
 from fdi_analysis.residuals.observer import ObserverReference
 
@@ -25,7 +27,8 @@ class MissingSigmaError(FdiError, ValueError):
 @dataclass(frozen=True)
 class Envelope:
     """The operating envelope the gates are calibrated in (fw/include/fdi_table.h): outside it when at least `votes`
-    of `signals` exceed their limits (margin times the largest magnitude of the calibration drives)."""
+    of `signals` exceed their limits (margin times the calibration drives' magnitude: their largest on the model plant,
+    a high percentile on the truth-plant fleet)."""
 
     signals: tuple[str, ...]
     votes: int
@@ -58,10 +61,28 @@ class Thresholds:
     selection: tuple[str, ...] = ()  # equation sets of the practical selection ([selection]); () = structural
     observer: dict[str, float] = field(default_factory=dict)  # c_ref of the observer generators ([observer])
     envelope: Envelope | None = None  # [envelope] with its calibrated [envelope_limits]; None: no envelope
+    # [estimation]: by equation set, the groups of uncertain quantities the diagnoser may estimate on line for the
+    # test (fdi_analysis.residuals.estimation: one name, or several entering as one offset)
+    estimation: dict[str, tuple[tuple[str, ...], ...]] = field(default_factory=dict)
+    # [design] max_tyre_accel [m/s^2]: the tyre-law tests' domain, |(ax_m, ay_m)| <= this (0: no limit;
+    # Generator.max_accel)
+    max_tyre_accel: float = 0.0
 
     @staticmethod
     def load(path: Path) -> Thresholds:
-        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+        """The thresholds file at `path`; an `InputError` naming the file for a file that is not TOML, lacks a
+        required table or key, or holds a value of the wrong type."""
+        try:
+            doc = tomllib.loads(path.read_text(encoding="utf-8"))
+        except tomllib.TOMLDecodeError as exc:
+            raise InputError(f"{path}: not a TOML file: {exc}") from exc
+        except (OSError, UnicodeDecodeError) as exc:
+            raise InputError(f"{path}: cannot read: {exc}") from exc
+        with fields_of(path, InputError):
+            return Thresholds._of(doc, path)
+
+    @staticmethod
+    def _of(doc: dict[str, Any], path: Path) -> Thresholds:
         d = doc["design"]
         return Thresholds(
             design=(float(d["dt"]), float(d["cutoff_hz"]), float(d["zeta"]), float(d["obs_gain"])),
@@ -72,6 +93,8 @@ class Thresholds:
             selection=tuple(str(t) for t in doc.get("selection", {}).get("tests", [])),
             observer={str(k): float(v) for k, v in doc.get("observer", {}).items()},
             envelope=(Envelope.of(doc["envelope"], doc.get("envelope_limits", {})) if "envelope" in doc else None),
+            estimation=_estimation(doc.get("estimation", {}), path),
+            max_tyre_accel=float(d.get("max_tyre_accel", 0.0)),
         )
 
     def sigmas(self, generators: Sequence[Generator]) -> list[float]:
@@ -88,15 +111,29 @@ class Thresholds:
         return ObserverReference(c_ref=self.observer)
 
 
+def _estimation(raw: object, path: Path) -> dict[str, tuple[tuple[str, ...], ...]]:
+    if not isinstance(raw, dict):
+        raise InputError(f"{path}: [estimation] must be a table")
+    out: dict[str, tuple[tuple[str, ...], ...]] = {}
+    for eqs, groups in raw.items():
+        if not (isinstance(groups, list) and all(isinstance(g, str) and g.split() for g in groups)):
+            raise InputError(f"{path}: [estimation] '{eqs}': a list of quantity names (several in one string: one "
+                             "offset)")
+        out[" ".join(str(eqs).split())] = tuple(tuple(g.split()) for g in groups)
+    return out
+
+
 MARKER = "# ---- generated residuals: written by `fdi-tune calibrate`, do not edit below ----"
 SELECTION_MARKER = "# ---- the tests on board, by practical isolability: written by `fdi-analyze practical` ----"
 
 
 def with_generated(text: str, rows: Sequence[tuple[str, float, str]], provenance: str,
                    observer: Sequence[tuple[str, float, str]] = (),
-                   envelope: Sequence[tuple[str, float, str]] = ()) -> str:
+                   envelope: Sequence[tuple[str, float, str]] = (),
+                   estimation: Sequence[tuple[str, Sequence[Sequence[str]], str]] = ()) -> str:
     """The file's text with its [generated] table (rows: equation set, variance, comment), its [observer]
-    table (equation set, c_ref, comment) and its [envelope_limits] table (signal, limit, comment) replaced."""
+    table (equation set, c_ref, comment), its [envelope_limits] table (signal, limit, comment) and its [estimation]
+    table (equation set, groups of quantity names, comment) replaced."""
     head = text.split(MARKER)[0].rstrip("\n") + "\n\n"
     lines = [MARKER, f"# {provenance}"]
 
@@ -111,9 +148,15 @@ def with_generated(text: str, rows: Sequence[tuple[str, float, str]], provenance
                   "of each observer generator: its gain's regularisation eps = (0.1 c_ref)^2"]
         table("observer", observer, lambda eqs: f'"{eqs}"', ".3g")
     if envelope:
-        lines += ["", "# the operating envelope's limits ([envelope]): margin x the largest magnitude of the "
-                  "calibration drives (3 significant digits)"]
+        lines += ["", "# the operating envelope's limits ([envelope]): margin x the calibration drives' magnitude (3 "
+                  "significant digits; how, per signal below)"]
         table("envelope_limits", envelope, str, ".3g")
+    if estimation:
+        lines += ["", "# the quantities each test's on-line estimator follows (fw/include/fdi_est.h; several names "
+                  "in one string: one offset)", "[estimation]"]
+        for eqs, groups, comment in estimation:
+            names = ", ".join('"' + " ".join(g) + '"' for g in groups)
+            lines.extend([f"# {comment}", f'"{eqs}" = [{names}]'])
     return head + "\n".join(lines) + "\n"
 
 

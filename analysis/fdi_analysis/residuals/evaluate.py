@@ -13,7 +13,7 @@ import numpy as np
 import sympy
 from numpy.typing import NDArray
 
-from fdi_analysis.residuals.generator import DOMAIN_SIGNAL, XHAT, Generator
+from fdi_analysis.residuals.generator import ACCEL_SIGNALS, DOMAIN_SIGNAL, XHAT, Generator
 from fdi_analysis.residuals.signals import Node, nodes_in
 from fdi_analysis.residuals.whole_terms import Composite
 
@@ -81,6 +81,18 @@ def node_signals(g: Generator, signals: Mapping[str, FloatArray], design: Filter
     return values
 
 
+@functools.lru_cache(maxsize=256)
+def _numpy_fn(syms: tuple[sympy.Symbol, ...], expr: sympy.Expr) -> Callable[..., object]:
+    fn: Callable[..., object] = sympy.lambdify(list(syms), expr, modules="numpy")
+    return fn
+
+
+@functools.lru_cache(maxsize=256)
+def _scalar_fn(syms: tuple[sympy.Symbol, ...], exprs: tuple[sympy.Expr, ...]) -> Callable[..., list[float]]:
+    fn: Callable[..., list[float]] = sympy.lambdify(list(syms), list(exprs), modules=SCALAR_MODULES, cse=True)
+    return fn
+
+
 def residual(g: Generator, signals: Mapping[str, FloatArray], design: FilterDesign | None = None) -> FloatArray:
     """The residual at every sample of `signals` (measured signal name -> samples at design.dt)."""
     design = design or FilterDesign()
@@ -88,7 +100,7 @@ def residual(g: Generator, signals: Mapping[str, FloatArray], design: FilterDesi
     syms = [n.symbol for n in g.nodes]
     if g.observer is not None:
         return observer_residual(g, signals, values, design)
-    fn = sympy.lambdify(syms, g.expr, modules="numpy")
+    fn = _numpy_fn(tuple(syms), g.expr)
     r = np.asarray(fn(*[values[n] for n in g.nodes]), dtype=float)
     if r.ndim == 0:
         r = np.full(len(next(iter(values.values()))), float(r))
@@ -134,8 +146,8 @@ def observer_run(g: Generator, signals: Mapping[str, FloatArray], values: Mappin
     o = g.observer
     assert o is not None
     syms = [XHAT, *[n.symbol for n in g.nodes]]
-    fn = sympy.lambdify(syms, [o.update, o.gain, o.a, o.c, g.expr], modules=SCALAR_MODULES, cse=True)
-    fn_next = sympy.lambdify(syms, [o.update, g.expr], modules=SCALAR_MODULES, cse=True)
+    fn = _scalar_fn(tuple(syms), (o.update, o.gain, o.a, o.c, g.expr))
+    fn_next = _scalar_fn(tuple(syms), (o.update, g.expr))
     cols = [np.asarray(values[n], dtype=float).tolist() for n in g.nodes]
     rows = list(zip(*cols, strict=True)) if cols else [()] * len(next(iter(signals.values())))
     n = len(rows)
@@ -171,6 +183,14 @@ def sensitivity_estimate(xs: FloatArray) -> FloatArray:
     return np.concatenate((xs[:1], xs[:-1]))
 
 
+@functools.lru_cache(maxsize=256)
+def _vector_fn(syms: tuple[sympy.Symbol, ...], exprs: tuple[sympy.Expr, ...]) -> Callable[..., list[object]]:
+    """The numpy function of `exprs` over `syms` (one lambdify per expression list: a drive's series costs the
+    evaluation only)."""
+    fn: Callable[..., list[object]] = sympy.lambdify(list(syms), list(exprs), modules=VECTOR_MODULES, cse=True)
+    return fn
+
+
 def sensitivity_series(g: Generator, signals: Mapping[str, FloatArray],
                        design: FilterDesign | None = None) -> dict[str, FloatArray]:
     """d r / d f of each fault of `g.sensitivities` at every sample (observer generators at the estimate of
@@ -182,33 +202,58 @@ def sensitivity_series(g: Generator, signals: Mapping[str, FloatArray],
     syms = [XHAT, *[n.symbol for n in g.nodes]]
     n = len(next(iter(signals.values())))
     xs = sensitivity_estimate(observer_run(g, signals, values, design)[1]) if g.observer is not None else np.zeros(n)
-    fn = sympy.lambdify(syms, [e for _, e in g.sensitivities], modules=VECTOR_MODULES, cse=True)
+    fn = _vector_fn(tuple(syms), tuple(e for _, e in g.sensitivities))
     out = fn(xs, *[values[node] for node in g.nodes])
     return {f: np.asarray(v, dtype=float) * np.ones(n) for (f, _), v in zip(g.sensitivities, out, strict=True)}
 
 
 def in_domain(g: Generator, signals: Mapping[str, FloatArray]) -> NDArray[np.bool_]:
-    """Per sample: inside the generator's operating domain (fdi_gen_in_domain of the emitted C)."""
+    """Per sample: inside the generator's operating domain (fdi_gen_in_domain of the emitted C, in float)."""
     n = len(next(iter(signals.values())))
-    if g.min_speed <= 0.0:
+    ok = np.ones(n, dtype=bool)
+    if g.min_speed > 0.0:
+        v = np.asarray(signals[DOMAIN_SIGNAL], dtype=float).astype(np.float32)
+        ok &= np.abs(v) >= np.float32(g.min_speed)
+    return ok
+
+
+def in_range(g: Generator, signals: Mapping[str, FloatArray]) -> NDArray[np.bool_]:
+    """Per sample: inside the generator's range (fdi_gen_in_range of the emitted C, in float)."""
+    n = len(next(iter(signals.values())))
+    if g.max_accel <= 0.0:
         return np.ones(n, dtype=bool)
-    v = np.asarray(signals[DOMAIN_SIGNAL], dtype=float).astype(np.float32)
-    return np.asarray(np.abs(v) >= np.float32(g.min_speed), dtype=bool)
+    ax, ay = (np.asarray(signals[k], dtype=float).astype(np.float32) for k in ACCEL_SIGNALS)
+    return np.asarray((ax * ax + ay * ay) <= np.float32(g.max_accel * g.max_accel), dtype=bool)
+
+
+REENTRY = 50  # samples: fdi_diag_config_t.reentry_steps's default (0.5 s at 10 ms)
 
 
 def evaluable_segments(g: Generator, signals: Mapping[str, FloatArray], warmup: int,
-                       design: FilterDesign | None = None) -> list[tuple[int, FloatArray]]:
+                       design: FilterDesign | None = None, inside: NDArray[np.bool_] | None = None,
+                       reentry: int = REENTRY) -> list[tuple[int, FloatArray]]:
     """The residual where the diagnoser evaluates it: per maximal run of in-domain samples the generator is
-    restarted at the run's first sample (as fdi_diag re-arms it) and the first `warmup` samples are dropped.
-    Returns (index of the first evaluated sample, residual from there to the end of the run)."""
+    restarted at the run's first sample (as fdi_diag re-arms it) and the first `warmup` samples are dropped; within
+    it, the samples outside the generator's range (or, given `inside`, outside the table's operating envelope) are not
+    evaluated, and after each return the first `reentry` are dropped (the filters ran on: fdi_diag's re-entry).
+    Returns (index of the first evaluated sample, residual from there to the end of the evaluated run)."""
     ok = in_domain(g, signals)
+    keep = in_range(g, signals) if inside is None else in_range(g, signals) & inside
     edges = np.flatnonzero(np.diff(np.concatenate(([0], ok.astype(np.int8), [0]))))
     out: list[tuple[int, FloatArray]] = []
     for a, b in zip(edges[0::2].tolist(), edges[1::2].tolist(), strict=True):
         if b - a <= warmup:
             continue
         r = residual(g, {k: np.asarray(v)[a:b] for k, v in signals.items()}, design)
-        out.append((a + warmup, r[warmup:]))
+        use = keep[a:b].copy()
+        use[:warmup] = False
+        returns = np.flatnonzero(use & ~np.concatenate(([False], use[:-1])))  # back into the range
+        for j in returns.tolist():
+            if j > warmup:
+                use[j:j + reentry] = False
+        inner = np.flatnonzero(np.diff(np.concatenate(([0], use.astype(np.int8), [0]))))
+        for c, d in zip(inner[0::2].tolist(), inner[1::2].tolist(), strict=True):
+            out.append((a + c, r[c:d]))
     return out
 
 

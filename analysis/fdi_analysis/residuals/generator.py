@@ -14,6 +14,10 @@ DOMAIN_SIGNAL = "vx_m"  # measured signal of the operating-domain condition (lon
 # DOMAIN_FACTOR * v_eps: there the normaliser is the wheel's own speed with margin, and the relative error of
 # the filtered speeds (all delayed alike, but differentiated and divided) is small.
 DOMAIN_FACTOR = 4.0
+# A tyre law holds near its linear range only: a generator with a tyre law (min_speed > 0) may also carry a limit on
+# the vehicle's acceleration, sqrt(ax_m^2 + ay_m^2) <= max_accel (the tyres' use of the road's friction; beyond it the
+# road's friction, which no test knows, decides the forces).
+ACCEL_SIGNALS = ("ax_m", "ay_m")
 # Observer error pole: OBSERVER_POLE_FACTOR x the derivative filters' bandwidth 2 pi f_c (f_c = 1 Hz of the
 # table design: lambda = 12.6 1/s, the estimate settles to 5 % in 3/lambda = 0.24 s, inside the 300 ms
 # detection goal and faster than the filtered signals it reads).
@@ -85,6 +89,7 @@ class Generator:
     scaled_by: str = ""  # denominator cleared from the residual ("" if none)
     min_speed: float = 0.0  # operating domain: evaluable only while |DOMAIN_SIGNAL| >= min_speed (0: always)
     domain_reason: str = ""  # where min_speed comes from in the model
+    max_accel: float = 0.0  # operating domain: evaluable only while |(ax_m, ay_m)| <= max_accel (0: no limit)
     observer: Observer | None = None  # integral causality for one state (expr then depends on XHAT)
     note: str = ""  # a causality the synthesis considered and did not take, and why ("" for none)
     # d r / d f_j of each fault of the signature with a nonzero steady-state sensitivity, over the same Node
@@ -103,9 +108,13 @@ class Generator:
     composite: Composite | None = None
 
     def domain(self) -> str:
-        if self.min_speed <= 0.0:
+        if self.min_speed <= 0.0 and self.max_accel <= 0.0:
             return "always evaluable"
-        return f"|{DOMAIN_SIGNAL}| >= {self.min_speed:g} m/s ({self.domain_reason})"
+        parts = [f"|{DOMAIN_SIGNAL}| >= {self.min_speed:g} m/s ({self.domain_reason})"] if self.min_speed > 0.0 else []
+        if self.max_accel > 0.0:
+            parts.append(f"|({', '.join(ACCEL_SIGNALS)})| <= {self.max_accel:g} m/s^2 (the tyres near their linear "
+                         "range)")
+        return " and ".join(parts)
 
     def causality(self) -> str:
         der = [s.var for s in self.steps if s.kind == "derivative"]
@@ -122,6 +131,6 @@ class Generator:
         text += f"; {len(self.filters)} filters, level {self.level}"
         if self.scaled_by:
             text += f"; multiplied by {self.scaled_by}"
-        if self.min_speed > 0.0:
+        if self.min_speed > 0.0 or self.max_accel > 0.0:
             text += f"; domain {self.domain()}"
         return text

@@ -7,6 +7,7 @@ sensitivities (`sensitivity`) are computed with them."""
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 
 from fdi_analysis.errors import ComputationError, FdiError
 from fdi_analysis.fault_matrix import Candidate
@@ -31,17 +32,21 @@ class SelectionError(FdiError, ValueError):
 
 def selected_generators(model: Model, reference: ObserverReference | None, workers: int = 2,
                         progress: bool = False, selection: Sequence[str] = (),
-                        sensitivities: bool = False, uncertainty: bool = False
+                        sensitivities: bool = False, uncertainty: bool = False, max_tyre_accel: float = 0.0
                         ) -> tuple[list[Candidate], list[Generator]]:
     """The tests on board and their synthesised generators: the `selection` (equation sets of realizable
     candidates, the thresholds file's [selection] table) in that order, or without one the optimal method-B
     selection among the realizable candidates (one smallest MSO per signature, the non-realizable ones
     dropped); with `sensitivities` each generator also carries its fault sensitivities, with `uncertainty` its
-    sensitivities to the model's uncertain quantities."""
+    sensitivities to the model's uncertain quantities; `max_tyre_accel` > 0 limits the domain of the generators with a
+    tyre law (those with a minimum speed) to |(ax_m, ay_m)| <= it (`Generator.max_accel`)."""
     solver = Solver(model)
     keep = realizable(model, workers, progress, solver)
     tests = chosen_tests(model, keep, selection) if selection else structural_selection(model, keep)
-    return tests, generators(model, tests, reference, solver, sensitivities, uncertainty, progress)
+    gens = generators(model, tests, reference, solver, sensitivities, uncertainty, progress)
+    if max_tyre_accel > 0.0:
+        gens = [replace(g, max_accel=max_tyre_accel) if g.min_speed > 0.0 else g for g in gens]
+    return tests, gens
 
 
 def generators(model: Model, tests: Sequence[Candidate], reference: ObserverReference | None,

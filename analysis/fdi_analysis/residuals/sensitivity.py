@@ -117,18 +117,29 @@ def faulty_residual(model: Model, g: Generator, solver: Solver | None = None,
     return FaultyResidual(faults, lifted, update) if lifted is not None else None
 
 
-def fault_sensitivities(model: Model, g: Generator, solver: Solver | None = None
-                        ) -> tuple[tuple[str, sympy.Expr], ...]:
+def _slope(e: sympy.Expr, f: sympy.Symbol, zero: dict[sympy.Symbol, sympy.Expr], step: float | None) -> sympy.Expr:
+    """d e / d f at f = 0, or with a finite `step` the secant (e(step) - e(0)) / step (the other faults at 0)."""
+    if step is None:
+        return sympy.diff(e, f).xreplace(zero)
+    rest = {k: v for k, v in zero.items() if k != f}
+    return (e.xreplace({**rest, f: sympy.Float(step)}) - e.xreplace(zero)) / sympy.Float(step)
+
+
+def fault_sensitivities(model: Model, g: Generator, solver: Solver | None = None,
+                        secant: dict[str, float] | None = None) -> tuple[tuple[str, sympy.Expr], ...]:
     """(fault, d r / d f) for the faults of the signature of `g` whose steady-state sensitivity is not
-    identically zero, in the signature's order (see the module doc)."""
+    identically zero, in the signature's order (see the module doc); for the faults of `secant` the secant to the
+    size given there instead of the derivative at 0 (the exact change of r over that step, per unit: what a
+    quantity far from linear over its range needs)."""
     h = faulty_residual(model, g, solver)
     if h is None:
         return ()
     zero = _zero(h.faults)
+    steps = secant or {}
     out: list[tuple[str, sympy.Expr]] = []
     if h.update is None:
         for f in h.faults:
-            s = -sympy.diff(h.residual, f).xreplace(zero)
+            s = -_slope(h.residual, f, zero, steps.get(str(f)))
             if s != 0:
                 out.append((str(f), s))
         return tuple(out)
@@ -136,8 +147,8 @@ def fault_sensitivities(model: Model, g: Generator, solver: Solver | None = None
     assert o is not None
     pole = sympy.Min(o.a + o.gain * o.c, sympy.Float(-J_FLOOR))
     for f in h.faults:
-        e_f = sympy.diff(h.residual, f).xreplace(zero)
-        f_f = sympy.diff(h.update, f).xreplace(zero)
+        e_f = _slope(h.residual, f, zero, steps.get(str(f)))
+        f_f = _slope(h.update, f, zero, steps.get(str(f)))
         if e_f == 0 and f_f == 0:
             continue
         out.append((str(f), (o.c * f_f - o.a * e_f) / pole))

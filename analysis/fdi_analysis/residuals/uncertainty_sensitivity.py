@@ -9,7 +9,10 @@ under a vehicle whose theta differs by delta, H(u, delta), and
     r = H(u, 0) ~ -dH/d delta (u, 0) delta                 sensitivity  s_theta = -dH/d delta at delta = 0
 
 for a vehicle that holds theta0 + delta (constant over the operating point): positive s_theta means the
-residual rises on a vehicle with a larger theta. An observer generator absorbs part of it, as of a fault.
+residual rises on a vehicle with a larger theta. An observer generator absorbs part of it, as of a fault. An input
+that no estimator follows (`bounded_whole`: the road's friction, from dry asphalt down to ice) is taken by its
+secant to the far end of its range instead, -(H(u, delta_far) - H(u, 0)) / delta_far: the tyre law is far from
+linear in it, and its first-order term at the dry road would understate what ice does by a factor of several.
 
 Over a box of uncertainty (each theta anywhere in its declared range), the residual's worst-case spread at an
 operating point is, to first order,
@@ -48,6 +51,7 @@ class Uncertainty:
     nominal: float
     range: tuple[float, float]
     unit: str = ""
+    drift: float = 0.0  # units per second: how fast it may change (0: constant for a vehicle; an input: not followed)
 
     @property
     def half_width(self) -> float:
@@ -59,7 +63,7 @@ def uncertainties(model: Model) -> tuple[Uncertainty, ...]:
     """The model's uncertain parameters, then its nuisances (those a decoupling left), in declared order."""
     out = [Uncertainty(p.name, "parameter", p.value, p.range, p.unit)
            for p in model.uncertain_parameters().values() if p.range is not None]
-    out += [Uncertainty(n.name, n.kind, n.value, n.range, n.unit) for n in model.nuisances]
+    out += [Uncertainty(n.name, n.kind, n.value, n.range, n.unit, n.drift) for n in model.nuisances]
     return tuple(out)
 
 
@@ -95,10 +99,23 @@ def uncertainty_sensitivities(model: Model, g: Generator, solver: UncertaintySol
             continue
         pname = perturbation_name(u.name)
         s = us.solver(u.name)
-        sens = dict(fault_sensitivities(s.model, replace(g, faults=(pname,)), s))
+        secant = {pname: far_end(u)} if bounded_whole(u) else None
+        sens = dict(fault_sensitivities(s.model, replace(g, faults=(pname,)), s, secant))
         if pname in sens:
             out.append((u.name, sens[pname]))
     return tuple(out)
+
+
+def bounded_whole(u: Uncertainty) -> bool:
+    """An input no estimator follows (no declared drift: the road's friction): it may sit anywhere in its range at
+    any time, so its term must hold over the whole range, not to first order at the nominal value."""
+    return u.kind == "input" and u.drift <= 0.0
+
+
+def far_end(u: Uncertainty) -> float:
+    """The deviation from the nominal value to the farther end of the range (its sign included)."""
+    lo, hi = u.range[0] - u.nominal, u.range[1] - u.nominal
+    return hi if hi >= -lo else lo
 
 
 def with_uncertainty(model: Model, g: Generator, solver: UncertaintySolver | None = None) -> Generator:

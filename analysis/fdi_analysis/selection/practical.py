@@ -29,10 +29,11 @@ from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from enum import Enum
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from fdi_analysis.errors import ComputationError, FdiError
+from fdi_analysis.errors import ComputationError, FdiError, fields_of
 
 MARGIN = 1.5  # a test practically detects a fault where its FNR clears the gate by this factor, at least, ...
 SHARE = 0.8  # ... at this share of a manoeuvre's operating points
@@ -102,8 +103,21 @@ class Screening:
 
     @staticmethod
     def load(path: Path) -> Screening:
-        raw = path.read_bytes()
-        doc = json.loads(gzip.decompress(raw) if path.suffix == ".gz" else raw)
+        """The screening at `path` (JSON, gzipped when it ends in .gz); a `ScreeningError` naming the file for one
+        that cannot be read or decoded, or lacks a field."""
+        try:
+            raw = path.read_bytes()
+            doc = json.loads(gzip.decompress(raw) if path.suffix == ".gz" else raw)
+        except (OSError, EOFError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise ScreeningError(f"{path}: not a screening (JSON{', gzipped' if path.suffix == '.gz' else ''}): "
+                                 f"{exc}") from exc
+        if not isinstance(doc, dict):
+            raise ScreeningError(f"{path}: not a screening (a JSON object expected)")
+        with fields_of(path, ScreeningError):
+            return Screening._of(doc, path)
+
+    @staticmethod
+    def _of(doc: dict[str, Any], path: Path) -> Screening:
         missing = [k for k in ("detect_s", "seeds") if k not in doc]
         if missing:
             raise ScreeningError(f"{path}: no {' and no '.join(missing)}: made by an older `fdi-tune screen` whose "

@@ -49,6 +49,7 @@ size_t fdi_py_sizeof(int what)
     case 16: n = FDI_ECU_HISTORY; break;
     case 17: n = sizeof(fdi_diag_evidence_t); break;
     case 18: n = FDI_TABLE_MAX_FAULTS; break;
+    case 19: n = FDI_EST_MAX_PARAMS; break;
     default: break;
     }
     return n;
@@ -139,6 +140,7 @@ long long fdi_py_table_int(const fdi_table_t *t, int what, int i)
         case 8: v = (long long)(t->design.dt * 1.0e6f + 0.5f); break;
         case 9: v = (long long)t->n_signals; break;
         case 10: v = test_ok ? ((t->tests[i].gen != NULL) ? (long long)t->tests[i].gen->sens_mask : 0) : -1; break;
+        case 11: v = test_ok ? ((t->tests[i].gen != NULL) ? (long long)t->tests[i].gen->n_est : 0) : -1; break;
         default: break;
         }
     }

@@ -78,6 +78,7 @@ class _Caps:
     max_signals: int
     kept_frames: int  # FDI_ECU_HISTORY: frames the ECU keeps per message for the time alignment
     max_faults: int  # FDI_TABLE_MAX_FAULTS
+    max_est: int  # FDI_EST_MAX_PARAMS: quantities one test's estimator follows
 
 
 def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
@@ -85,11 +86,12 @@ def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
         _fields_ = [
             ("table", ctypes.c_void_p), ("gen_param", ctypes.c_float * c.n_params),
             ("cusum_k", ctypes.c_float), ("cusum_h", ctypes.c_float), ("set_count", ctypes.c_uint16),
-            ("clear_count", ctypes.c_uint16), ("warmup_steps", ctypes.c_uint16), ("mode", ctypes.c_int),
+            ("clear_count", ctypes.c_uint16), ("warmup_steps", ctypes.c_uint16), ("reentry_steps", ctypes.c_uint16),
+            ("mode", ctypes.c_int),
             ("episode_clear_steps", ctypes.c_uint16), ("noise_allowance", ctypes.c_float),
             ("sensitivities", ctypes.c_bool), ("sens_every", ctypes.c_uint16), ("adaptive", ctypes.c_bool),
-            ("estimate", ctypes.c_uint32), ("estimate_tau", ctypes.c_float), ("estimate_limit", ctypes.c_float),
-            ("estimate_startup", ctypes.c_uint16),
+            ("estimate", ctypes.c_uint32), ("estimate_kappa", ctypes.c_float),
+            ("estimate_decorrelation", ctypes.c_float), ("estimate_startup", ctypes.c_uint16),
         ]
 
     class Config(ctypes.Structure):
@@ -123,7 +125,8 @@ def _struct_types(c: _Caps) -> dict[str, type[ctypes.Structure]]:
             ("n_tests", ctypes.c_uint8), ("alarm_mask", ctypes.c_uint32), ("evaluable_mask", ctypes.c_uint32),
             ("status", ctypes.c_int * c.max_tests), ("residual", ctypes.c_float * c.max_tests),
             ("ratio", ctypes.c_float * c.max_tests), ("spread", ctypes.c_float * c.max_tests),
-            ("offset", ctypes.c_float * c.max_tests), ("accused_mask", ctypes.c_uint32), ("iso", IsoResult),
+            ("offset", ctypes.c_float * c.max_tests), ("estimate", (ctypes.c_float * c.max_est) * c.max_tests),
+            ("accused_mask", ctypes.c_uint32), ("iso", IsoResult),
             ("in_envelope", ctypes.c_bool), ("sens_offset", ctypes.c_uint8 * (c.max_tests + 1)),
             ("sens", ctypes.c_float * c.max_sens),
         ]
@@ -178,7 +181,7 @@ def _lib() -> _Lib:
         return int(dll.fdi_py_sizeof(what))
 
     caps = _Caps(max_tests=size(7), max_msgs=size(9), max_sens=size(10), n_params=size(14), max_signals=size(15),
-                 kept_frames=size(16), max_faults=size(18))
+                 kept_frames=size(16), max_faults=size(18), max_est=size(19))
     types = _struct_types(caps)
     for what, name in ((1, "Config"), (2, "Counters"), (3, "Result"), (4, "Tx"), (12, "DiagResult"),
                        (13, "DiagConfig"), (17, "Evidence")):
@@ -241,6 +244,7 @@ class TableInfo:
     sensitivity_margin: float = 1.0  # the on-line rule's margin (fdi_table_t.sensitivity_margin)
     gates: tuple[float, ...] = ()  # per test: its gate in standard deviations
     sigmas: tuple[float, ...] = ()  # per test: its fault-free residual's standard deviation
+    n_est: tuple[int, ...] = ()  # per test: the quantities its generator declares estimable on line (fdi_est.h)
 
     @property
     def n_tests(self) -> int:
@@ -288,6 +292,7 @@ def table_info(name: str) -> TableInfo:
         sensitivity_margin=float(dll.fdi_py_table_real(t, 0, 0)),
         gates=tuple(float(dll.fdi_py_table_real(t, 1, i)) for i in range(nt)),
         sigmas=tuple(math.sqrt(float(dll.fdi_py_table_real(t, 2, i))) for i in range(nt)),
+        n_est=ints(11, nt),
     )
 
 
@@ -342,9 +347,11 @@ def bus_info(name: str = "romo") -> BusInfo:
                    int(dll.fdi_py_bus_int(b, 2, 0)), int(dll.fdi_py_bus_int(b, 7, 0)))
 
 
-def _estimate_mask(value: Any, mso_ids: Sequence[int]) -> int:
+def _estimate_mask(value: Any, mso_ids: Sequence[int], n_est: Sequence[int] = ()) -> int:
     """``estimate``: a bitmask of tests, or tests by MSO id (``1``, ``"MSO1"``), as a sequence or a comma-separated
-    string (``"MSO1,MSO39"``)."""
+    string (``"MSO1,MSO39"``), or ``"all"``: every test whose generator declares estimable quantities."""
+    if isinstance(value, str) and value.strip().lower() == "all":
+        return sum(1 << i for i, n in enumerate(n_est) if n > 0)
     if isinstance(value, bool):
         raise ValueError(f"estimate = {value!r}: give a test mask or the tests' MSO ids, e.g. estimate='MSO1,MSO39'")
     if isinstance(value, int):
@@ -365,7 +372,7 @@ def _estimate_mask(value: Any, mso_ids: Sequence[int]) -> int:
     return mask
 
 
-def _apply_diag(d: Any, ov: dict[str, Any], mso_ids: Sequence[int]) -> None:
+def _apply_diag(d: Any, ov: dict[str, Any], mso_ids: Sequence[int], n_est: Sequence[int] = ()) -> None:
     """Overrides of the diagnoser settings (fdi_diag_config_t), consumed from `ov`."""
     dll = _lib().dll
     for key in ("d_x", "d_y"):
@@ -373,10 +380,11 @@ def _apply_diag(d: Any, ov: dict[str, Any], mso_ids: Sequence[int]) -> None:
             k = int(dll.fdi_py_param_index(key.encode()))
             assert k >= 0, key
             d.gen_param[k] = float(ov.pop(key))
-    for key in ("cusum_k", "cusum_h", "noise_allowance", "estimate_tau", "estimate_limit"):
+    for key in ("cusum_k", "cusum_h", "noise_allowance", "estimate_kappa", "estimate_decorrelation"):
         if key in ov:
             setattr(d, key, float(ov.pop(key)))
-    for key in ("set_count", "clear_count", "warmup_steps", "episode_clear_steps", "sens_every", "estimate_startup"):
+    for key in ("set_count", "clear_count", "warmup_steps", "reentry_steps", "episode_clear_steps", "sens_every",
+                "estimate_startup"):
         if key in ov:
             v = int(ov.pop(key))
             if not 0 <= v <= 0xFFFF:
@@ -391,7 +399,12 @@ def _apply_diag(d: Any, ov: dict[str, Any], mso_ids: Sequence[int]) -> None:
         if key in ov:
             setattr(d, key, bool(ov.pop(key)))
     if "estimate" in ov:
-        d.estimate = _estimate_mask(ov.pop("estimate"), mso_ids)
+        d.estimate = _estimate_mask(ov.pop("estimate"), mso_ids, n_est)
+
+
+def _estimates(d: Any, table: TableInfo) -> tuple[tuple[float, ...], ...]:
+    """Per test: the estimated deviations of its estimable quantities (fdi_diag_result_t.estimate)."""
+    return tuple(tuple(float(d.estimate[i][e]) for e in range(table.n_est[i])) for i in range(table.n_tests))
 
 
 def _sensitivities(d: Any, n_tests: int) -> tuple[tuple[float, ...], ...]:
@@ -448,8 +461,12 @@ class EcuResult:
     # per test: the adaptive threshold's term, the residual's worst-case spread over the model's uncertainty at the
     # step (units of r; the test alarms beyond gate * sigma + spread; 0 with the fixed gate)
     spreads: tuple[float, ...] = ()
-    # per test: the on-line estimate of its residual's slow offset, removed before the evaluation (0: not estimated)
+    # per test: its on-line estimate's share of the residual, h . theta, removed before the evaluation (0: not
+    # estimated; fdi_diag.h "On-line estimation")
     offsets: tuple[float, ...] = ()
+    # per test: the estimated deviations of its estimable quantities, in its generator's order (the thresholds file's
+    # [estimation]); () for a test without estimation
+    estimates: tuple[tuple[float, ...], ...] = ()
 
     @property
     def status_name(self) -> str:
@@ -483,10 +500,10 @@ class Ecu:
     to the table's bus (``TABLE_BUS``: the ROMO bus generated from dbc/romo.dbc).
 
     Overrides: ``d_x``, ``d_y`` (the ROMO kinematic generators' parameters), ``cusum_k``, ``cusum_h``,
-    ``set_count``, ``clear_count``, ``warmup_steps``, ``mode`` ("exoneration" | "no_exoneration"),
+    ``set_count``, ``clear_count``, ``warmup_steps``, ``reentry_steps``, ``mode`` ("exoneration" | "no_exoneration"),
     ``episode_clear_steps``, ``noise_allowance``, ``sensitivities``, ``sens_every``, ``adaptive``, ``estimate`` (a
-    test mask or MSO ids: "MSO1,MSO39"), ``estimate_tau`` [s], ``estimate_limit`` [sigma], ``estimate_startup``
-    [steps] (fdi_diag.h), ``timeout_s``
+    test mask, MSO ids: "MSO1,MSO39", or "all": every test whose generator declares estimable quantities),
+    ``estimate_kappa``, ``estimate_decorrelation``, ``estimate_startup`` (fdi_diag.h), ``timeout_s``
     (one value for all messages or a mapping message name -> seconds), ``max_delta_counter``,
     ``max_catchup_steps``, ``align_s`` (a step's signals are those of the instant ``align_s`` before it, fdi_ecu.h;
     0: sample-and-hold).
@@ -503,7 +520,7 @@ class Ecu:
         cfg = lib.types["Config"]()
         _check(self._dll.fdi_py_ecu_config_default(ctypes.byref(cfg), _table_ptr(table), _bus_ptr(self.bus.name)),
                "fdi_ecu_config_default")
-        self._apply(cfg, dict(overrides), self.bus.names, self.table.mso_ids)
+        self._apply(cfg, dict(overrides), self.bus.names, self.table.mso_ids, self.table.n_est)
         self.config = cfg
         self._buf = ctypes.create_string_buffer(lib.ecu_size)
         self._self = ctypes.cast(self._buf, ctypes.c_void_p)
@@ -511,8 +528,9 @@ class Ecu:
         self._tx = lib.types["Tx"]()
 
     @staticmethod
-    def _apply(cfg: Any, ov: dict[str, Any], names: Sequence[str], mso_ids: Sequence[int]) -> None:
-        _apply_diag(cfg.diag, ov, mso_ids)
+    def _apply(cfg: Any, ov: dict[str, Any], names: Sequence[str], mso_ids: Sequence[int],
+               n_est: Sequence[int] = ()) -> None:
+        _apply_diag(cfg.diag, ov, mso_ids, n_est)
         if "timeout_s" in ov:
             to = ov.pop("timeout_s")
             items: Iterable[tuple[str, float]] = (
@@ -654,6 +672,7 @@ class Ecu:
             ratios=tuple(float(d.ratio[i]) for i in range(n)),
             spreads=tuple(float(d.spread[i]) for i in range(n)),
             offsets=tuple(float(d.offset[i]) for i in range(n)),
+            estimates=_estimates(d, self.table),
             test_names=self.table.test_names,
             sensitivities=_sensitivities(d, n),
             in_envelope=bool(d.in_envelope),
@@ -688,7 +707,7 @@ class Diagnoser:
         cfg = lib.types["DiagConfig"]()
         _check(self._dll.fdi_diag_config_default(ctypes.byref(cfg), _table_ptr(table)), "fdi_diag_config_default")
         ov = dict(overrides)
-        _apply_diag(cfg, ov, self.table.mso_ids)
+        _apply_diag(cfg, ov, self.table.mso_ids, self.table.n_est)
         if ov:
             raise TypeError(f"unknown Diagnoser option(s): {sorted(ov)}")
         self.config = cfg
@@ -719,6 +738,7 @@ class Diagnoser:
             test_status=tuple(TEST_STATUS_NAMES[int(r.status[i])] for i in range(n)),
             residuals=tuple(float(r.residual[i]) for i in range(n)), ratios=tuple(float(r.ratio[i]) for i in range(n)),
             spreads=tuple(float(r.spread[i]) for i in range(n)), offsets=tuple(float(r.offset[i]) for i in range(n)),
+            estimates=_estimates(r, self.table),
             test_names=self.table.test_names, sensitivities=_sensitivities(r, n), in_envelope=bool(r.in_envelope))
 
     def step(self, values: Mapping[str, float], validity: int | None = None) -> EcuResult:

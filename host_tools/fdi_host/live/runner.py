@@ -217,10 +217,10 @@ def run_here(args: argparse.Namespace, bus: list[str], label: str) -> int:
     try:
         schedule = restart_schedule(args.restart_ecu_at, args.restart_sim_at, args.ecu_down, args.sim_down)
     except ValueError as exc:
-        print(f"fdi-live: {exc}", file=sys.stderr)
+        print(f"fdi-live: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
     if not 0 <= args.sim_counter_start <= 14:
-        print("fdi-live: --sim-counter-start must be in 0..14", file=sys.stderr)
+        print("fdi-live: error: --sim-counter-start must be in 0..14", file=sys.stderr)
         return EXIT_USAGE
     for f in ("ecu.ready", "monitor.ready", "ecu.json", "report.json", "origin.txt", "restarts.json"):
         (out / f).unlink(missing_ok=True)

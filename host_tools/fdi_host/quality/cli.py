@@ -12,8 +12,8 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from fdi_analysis.cli.common import add_version, fail
-from fdi_analysis.errors import FdiError
+from fdi_analysis.cli.common import add_version, fail, run
+from fdi_analysis.errors import FdiError, InputError
 from fdi_host.ecu.bindings import TABLES, Ecu, EcuError
 from fdi_host.quality.report import markdown, write_json, write_markdown
 from fdi_host.quality.suite import CASE_SEEDS, DEFAULT_SIZES, SHAPES, SuiteConfig, run_suite
@@ -47,7 +47,7 @@ def parse_ecu_settings(table: str, items: list[str]) -> tuple[tuple[str, float |
     for item in items:
         key, sep, text = item.partition("=")
         if not sep or not key.strip() or not text.strip():
-            raise ValueError(f"--ecu {item!r}: expected KEY=VALUE, e.g. noise_allowance=2")
+            raise InputError(f"--ecu {item!r}: expected KEY=VALUE, e.g. noise_allowance=2")
         word = text.strip()
         value: float | int | str = word
         if word.lower() in ("true", "false"):  # sensitivities=false must not read as a non-empty string
@@ -64,7 +64,7 @@ def parse_ecu_settings(table: str, items: list[str]) -> tuple[tuple[str, float |
         try:
             Ecu(table, **dict(out))
         except (TypeError, ValueError, EcuError) as exc:
-            raise ValueError(f"--ecu: {exc}") from exc
+            raise InputError(f"--ecu: {exc}") from exc
     return tuple(out)
 
 
@@ -112,27 +112,23 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("-o", "--out", type=Path, default=None,
                    help="folder for quality.json and quality.md (with --trace or --linearity: their files)")
     args = p.parse_args(argv)
-    try:
-        args.ecu = parse_ecu_settings(args.table, args.ecu)
-    except ValueError as exc:
-        return fail("fdi-quality", exc)
+    return run("fdi-quality", lambda: _main(args))
+
+
+def _main(args: argparse.Namespace) -> int:
+    """The chosen job; a bad value, file or setting raises (one line and exit 1 through `run`)."""
+    args.ecu = parse_ecu_settings(args.table, args.ecu)
     if args.replot is not None:
         return _replot(args.replot, args.out)
     if args.trace is not None:
         return _trace(args)
     if args.fleet is not None:
         return _fleet(args)
-    try:
-        cfg = _config(args)
-        if args.linearity:
-            return _survey(cfg, args.out)
-        with _progress("quality", "run") as progress:
-            result = run_suite(cfg, progress)
-    except (FdiError, OSError) as exc:
-        return fail("fdi-quality", exc)
-    except KeyboardInterrupt:
-        print("fdi-quality: interrupted", file=sys.stderr)
-        return 130
+    cfg = _config(args)
+    if args.linearity:
+        return _survey(cfg, args.out)
+    with _progress("quality", "run") as progress:
+        result = run_suite(cfg, progress)
     print(markdown(result))
     if args.out is not None:
         args.out.mkdir(parents=True, exist_ok=True)

@@ -7,7 +7,9 @@ vehicles drawn from the envelope (`fdi_host.sim.vehicle_envelope`), the evaluati
 One task is one vehicle x scenario: its fault-free drive (with a snapshot at the fault onset, `onset_fraction` of
 the drive), replayed whole through the ECU (false alarms), then every fault case at the onset: the faulty drive
 shares the fault-free part and is simulated from the onset to `post_onset_s` after it (sensor faults only
-recompute the sensors), and the ECU replays it from `pre_onset_s` before the onset. A case is scored as the model
+recompute the sensors), and the ECU replays it from the drive's start (an ECU runs from the ignition on: its on-line
+estimators learn the vehicle before the fault; `pre_onset_s` replays only that long before the onset instead). A
+case is scored as the model
 plant's suite does (`fdi_host.quality.suite.evaluate_case`), with one more outcome: "masked" when the ECU
 detected something before the onset (a false alarm in the replayed window): the diagnosis was in alarm already,
 so the case is neither detected nor isolated. Goals of the truth-plant suite (issue 44): detected within 500 ms
@@ -62,7 +64,7 @@ class FleetConfig:
     scenarios: tuple[str, ...] = FLEET_SCENARIOS
     faults: tuple[str, ...] = ()  # default: every fault of the table's tests
     onset_fraction: float = 0.55
-    pre_onset_s: float = 5.0
+    pre_onset_s: float | None = None  # the replay's start before the onset; None: the drive's start
     post_onset_s: float = 2.0
     sweep: bool = True  # search the minimum detectable fault
     model_plant_seeds: tuple[int, ...] = CASE_SEEDS[:1]  # () leaves the model plant's figures out
@@ -80,7 +82,8 @@ class FleetConfig:
         bad = [f for f in self.faults if f not in FAULT_IDS]
         if bad:
             raise QualityError(f"unknown fault(s) {bad}; faults are f1..f25")
-        if not 0.0 < self.onset_fraction < 1.0 or self.pre_onset_s <= 0.0 or self.post_onset_s <= FLEET_DELAY_GOAL_S:
+        if not 0.0 < self.onset_fraction < 1.0 or (self.pre_onset_s is not None and self.pre_onset_s <= 0.0) \
+                or self.post_onset_s <= FLEET_DELAY_GOAL_S:
             raise QualityError("onset_fraction in (0, 1), pre_onset_s > 0, post_onset_s > the 500 ms goal")
         try:
             check_evaluation_fleet(self.vehicle_seeds)
@@ -203,7 +206,7 @@ def run_task(task: Task) -> TaskResult:
     base = _base_drive(task, onset)
     db = RomoDatabase()
     ecu: dict[str, Any] = dict(cfg.ecu)
-    t_start = max(0.0, onset - cfg.pre_onset_s)
+    t_start = 0.0 if cfg.pre_onset_s is None else max(0.0, onset - cfg.pre_onset_s)
     base_frames = build_frames(base, db, t_from=0.0 if task.fault_free else t_start)
     ff = None
     if task.fault_free:

@@ -14,12 +14,17 @@ from collections.abc import Iterable
 
 from fdi_host.errors import FdiHostError
 from fdi_host.sim.scenario import FLEET_SCENARIOS, load_scenario
-from fdi_host.tuning.seeds import CALIBRATION_SEEDS, CONFIRM_SEED_OFFSETS, SWEEP_SEEDS
+from fdi_host.tuning.seeds import (
+    CALIBRATION_SEEDS,
+    CALIBRATION_VEHICLES,
+    CONFIRM_SEED_OFFSETS,
+    EVALUATION_VEHICLES,
+    REPETITIONS,
+    SWEEP_SEEDS,
+    fleet_noise_seed,
+)
 
-CALIBRATION_VEHICLES = range(1, 5000)
-EVALUATION_VEHICLES = range(5001, 100_000)
 FIRST_EVALUATION_VEHICLE = EVALUATION_VEHICLES.start
-REPETITIONS = 4  # noise seeds per vehicle and scenario
 
 
 class PlanError(FdiHostError, ValueError):
@@ -37,7 +42,7 @@ def noise_seed(vehicle: int, scenario: str, repetition: int = 0) -> int:
     """The noise seed of a vehicle's drive of `scenario` (repetition 0 .. REPETITIONS - 1)."""
     if not 0 <= repetition < REPETITIONS:
         raise PlanError(f"repetition {repetition} outside 0..{REPETITIONS - 1}")
-    return 100 * vehicle + 4 * FLEET_SCENARIOS.index(scenario) + repetition
+    return fleet_noise_seed(vehicle, FLEET_SCENARIOS.index(scenario), repetition)
 
 
 def fleet_seeds(vehicles: Iterable[int], repetitions: int = 1) -> frozenset[int]:

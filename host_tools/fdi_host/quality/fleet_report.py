@@ -65,6 +65,38 @@ def _per_h(n: int, h: float) -> str:
     return f"{n / h:.0f}" if h > 0 else "-"
 
 
+GOAL_SHARE = 0.95  # of the vehicles (issue 45)
+GOAL_DETECTED = 23  # faults of 25 detected within 500 ms on GOAL_SHARE of the vehicles
+GOAL_ISOLATED = 20  # faults of 25 isolated exactly within 1 s of the detection
+GOAL_HOURS = 5.0  # of fault-free driving without a false alarm
+
+
+def goal_summary(result: FleetResult, hours: float, detections: int, isolations: int) -> str:
+    """One paragraph: the fleet goals (issue 45), each with what this run measured and PASS or MISS."""
+    rows = fault_rows(result)
+    n = len(rows)
+    detected = [r["fault"] for r in rows if r["truth_vehicle_share_detected"] >= GOAL_SHARE]
+    isolated = [r["fault"] for r in rows if r["truth_vehicle_share_isolated"] >= GOAL_SHARE]
+    wrong = sum(r["truth_wrong"] for r in rows)
+    model_det = sum(r["model_cases"] > 0 and r["model_detected_in_time"] == r["model_cases"] for r in rows)
+    model_iso = sum(r["model_cases"] > 0 and r["model_isolated_in_time"] == r["model_cases"] for r in rows)
+
+    def verdict(ok: bool) -> str:
+        return "PASS" if ok else "MISS"
+
+    quiet = detections == 0 and isolations == 0
+    return (f"Goals (issue 45), truth plant: no false alarm over >= {GOAL_HOURS:g} h: {detections} detections and "
+            f"{isolations} isolations in {hours:.2f} h, "
+            f"{verdict(quiet and hours >= GOAL_HOURS) if quiet else 'MISS'}"
+            f"{' (too few hours to show it)' if quiet and hours < GOAL_HOURS else ''}; detected within 500 ms on >= "
+            f"{100 * GOAL_SHARE:.0f} % of the vehicles: {len(detected)} of {n} faults ({' '.join(detected) or 'none'}; "
+            f"goal {GOAL_DETECTED}): {verdict(len(detected) >= GOAL_DETECTED)}; isolated exactly within 1 s: "
+            f"{len(isolated)} of {n} ({' '.join(isolated) or 'none'}; goal {GOAL_ISOLATED}): "
+            f"{verdict(len(isolated) >= GOAL_ISOLATED)}; wrong class: {wrong} cases: {verdict(wrong == 0)}. "
+            f"Model plant, the same cases: detected in time in every case {model_det} of {n} faults, isolated in "
+            f"time in every case {model_iso} of {n}.")
+
+
 def markdown(result: FleetResult) -> str:
     cfg = result.config
     vs = cfg.vehicle_seeds
@@ -84,6 +116,8 @@ def markdown(result: FleetResult) -> str:
         f"Fault-free, truth plant: {th:.2f} h, {tev} false detections ({_per_h(tev, th)}/h), {tiso} false "
         f"isolations ({_per_h(tiso, th)}/h). Model plant: {mh:.2f} h, {mev} false detections, {miso} false "
         "isolations.",
+        "",
+        goal_summary(result, th, tev, tiso),
         "",
         "| fault | size | truth: vehicles detected in time | truth: isolated in time | truth cases masked / wrong "
         "| model: cases detected in time | model: isolated in time | minimum detectable (x required) |",

@@ -4,8 +4,9 @@ fault-free drives.
 
 The fault sizes are the engineering requirement (the [requirement] table of the fault-size file), never what
 the tests happen to see. Per case (fault, scenario, seed, shape, multiple of the required size): the fault
-starts at `onset_fraction` of the drive and stays; the ECU replays the drive's CAN frames from `pre_onset_s`
-before the onset (enough for its warm-up). Measured:
+starts at `onset_fraction` of the drive and stays; the ECU replays the drive's CAN frames from the drive's start (an
+ECU runs from the ignition on: its on-line estimators learn the vehicle before the fault), or from `pre_onset_s`
+before the onset when that is set. Measured:
   detected     a step after the onset with `detected` (any alarm) before the drive ends;
   delay        detection time minus the reference time: the onset for a step, the time the ramp reaches the
                required size for a ramp; goal: within DELAY_GOAL_S (300 ms);
@@ -74,7 +75,7 @@ class SuiteConfig:
     faults: tuple[str, ...] = ()  # default: every fault of the table
     ramp_s: float = 2.0  # a ramp reaches multiplier x size after ramp_s
     onset_fraction: float = 0.55
-    pre_onset_s: float = 5.0
+    pre_onset_s: float | None = None  # the replay's start before the onset; None: the drive's start
     fault_free_minutes: float = 30.0
     sizes_file: Path = DEFAULT_SIZES
     ecu: tuple[tuple[str, float | int | str], ...] = ()  # ECU settings other than the defaults (Ecu's overrides)
@@ -234,8 +235,8 @@ def ecu_settings(cfg: SuiteConfig) -> dict[str, Any]:
 
 
 def replay_start(cfg: SuiteConfig, onset: float) -> float:
-    """Where a case's replay starts: pre_onset_s before the fault onset."""
-    return max(0.0, onset - cfg.pre_onset_s)
+    """Where a case's replay starts: the drive's start, or pre_onset_s before the fault onset."""
+    return 0.0 if cfg.pre_onset_s is None else max(0.0, onset - cfg.pre_onset_s)
 
 
 def replay_case(cfg: SuiteConfig, drive: SimResult, onset: float, db: RomoDatabase) -> list[EcuResult]:

@@ -115,7 +115,7 @@ def reference(plant: GenericPlant, sc: Scenario) -> ObserverReference:
 
 def generators(model: Model, th: Thresholds, ref: ObserverReference, workers: int = 2) -> list[Generator]:
     """The generators of the selection (the thresholds file's [selection], else the optimal structural one)."""
-    return selected_generators(model, ref, workers=workers, selection=th.selection)[1]
+    return selected_generators(model, ref, workers=workers, selection=th.selection, max_tyre_accel=th.max_tyre_accel)[1]
 
 
 @dataclass(frozen=True)

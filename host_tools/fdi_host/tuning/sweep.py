@@ -10,8 +10,9 @@ several noise seeds. The smallest detected grid size is the detection limit of t
 swept size is already detected, smaller sizes are swept until one is not); the stated size is the next grid
 value above it (a margin of 1.3-1.7 against other noise realisations), confirmed in a drive of its own: each
 test must alarm at its stated size, in a window that follows only smaller windows of the confirmation, with
-the sweep's seeds and three times as many more (CONFIRM_SEED_OFFSETS), else the next grid value is tried: a
-detection limit on the edge of the CUSUM drift, where the noise realisation decides, is not stated. A pair
+the sweep's seeds and three times as many more (CONFIRM_SEED_OFFSETS), else the next grid values are tried (a
+chunk at once, in ascending windows): a detection limit on the edge of the CUSUM drift, where the noise realisation
+decides, is not stated. A pair
 without alarm up to the limit, or whose stated size exceeds the limit, is "not detectable by this test in
 practice".
 """
@@ -175,22 +176,38 @@ def _confirmed(tests: Sequence[tuple[Generator, float]], gate: float, fault: str
                limit: float, drive: Drive, seeds: Sequence[int], dt: float, warmup: int,
                log: Callable[[str], None] | None) -> dict[str, float]:
     """The stated sizes confirmed (see the module docstring): raised along the grid until the test alarms at its
-    size with every seed; tests whose size would exceed the limit are left out."""
-    todo = {n: v for n, v in stated.items() if v <= limit}
+    size with every seed; tests whose size would exceed the limit are left out. The first round tries each stated
+    size; a test that fails it tries the next CHUNK grid values at once, in ascending windows of one drive per seed
+    (each window still follows only smaller ones), and keeps the smallest that every seed detects."""
+    todo = {n: [v] for n, v in stated.items() if v <= limit}
     out: dict[str, float] = {}
+    more = [*seeds, *(seed + k for k in CONFIRM_SEED_OFFSETS for seed in seeds)]
     while todo:
-        sizes = sorted(set(todo.values()))
-        more = [*seeds, *(seed + k for k in CONFIRM_SEED_OFFSETS for seed in seeds)]
+        sizes = sorted({v for vs in todo.values() for v in vs})
         hits = _hits([(g, s) for g, s in tests if g.name in todo], gate, fault, sizes, drive, more, dt, warmup)
-        raised = {}
-        for name, size in todo.items():
-            if hits[name][sizes.index(size)]:
-                out[name] = size
-            elif next_grid(size) <= limit:
-                raised[name] = next_grid(size)
+        raised: dict[str, list[float]] = {}
+        for name, candidates in todo.items():
+            ok = [v for v in candidates if hits[name][sizes.index(v)]]
+            if ok:
+                out[name] = ok[0]
+                continue
+            batch = _next_sizes(candidates[-1], limit)
+            if batch:
+                raised[name] = batch
         if raised and log is not None:
-            log(f"{fault}: not confirmed, raised: " + ", ".join(f"{n} {todo[n]:g} -> {v:g}" for n, v in raised.items()))
+            log(f"{fault}: not confirmed, raised: " + ", ".join(
+                f"{n} {todo[n][-1]:g} -> {v[0]:g}" + (f"..{v[-1]:g}" if len(v) > 1 else "") for n, v in raised.items()))
         todo = raised
+    return out
+
+
+def _next_sizes(size: float, limit: float) -> list[float]:
+    """Up to CHUNK grid values above `size`, none beyond `limit`."""
+    out: list[float] = []
+    v = size
+    while len(out) < CHUNK and next_grid(v) <= limit:
+        v = next_grid(v)
+        out.append(v)
     return out
 
 

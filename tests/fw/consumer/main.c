@@ -29,6 +29,7 @@ int main(void)
     c.set_count = 10U;
     c.clear_count = 100U;
     c.warmup_steps = 320U;
+    c.reentry_steps = 50U;
     c.mode = FDI_ISO_EXONERATION;
     c.noise_allowance = 3.0f;
     c.episode_clear_steps = 300U;

@@ -74,8 +74,8 @@ static fdi_diag_config_t config(const fdi_table_t *table, uint16_t warmup)
     c.sensitivities = false;
     c.adaptive = false;
     c.estimate = 0U;
-    c.estimate_tau = 10.0f;
-    c.estimate_limit = 0.0f;
+    c.estimate_kappa = 3.0f;
+    c.estimate_decorrelation = 10.0f;
     c.estimate_startup = 100U;
     c.sens_every = 1U;
     c.cusum_k = 1.5f; /* the values of tests/fw/test_fdi_diag.c */
@@ -83,6 +83,7 @@ static fdi_diag_config_t config(const fdi_table_t *table, uint16_t warmup)
     c.set_count = 10U;
     c.clear_count = 100U;
     c.warmup_steps = warmup;
+    c.reentry_steps = 50U;
     c.mode = FDI_ISO_EXONERATION;
     c.noise_allowance = 3.0f;
     c.episode_clear_steps = 300U;

@@ -37,40 +37,40 @@ static const char *const romo_fault_names[25] = {
 static const fdi_test_desc_t romo_tests[12] = {
     {.gen = &fdi_romo_generators[0], .interpretation = "kinematics; measured ax_m, psidot_m, vx_m, vy_m",
      .mso_id = 1U, .fault_mask = 0x0000001DU, .input_mask = ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
-     .gate = 5.0f, .variance = 0.00117f, .response_steps = 43U},
+     .gate = 5.0f, .variance = 0.0006656f, .response_steps = 43U},
     {.gen = &fdi_romo_generators[1], .interpretation = "kinematics; measured ay_m, psidot_m, vx_m, vy_m",
      .mso_id = 2U, .fault_mask = 0x0000001EU, .input_mask = ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
-     .gate = 5.0f, .variance = 0.0005712f, .response_steps = 43U},
+     .gate = 5.0f, .variance = 0.0002657f, .response_steps = 43U},
     {.gen = &fdi_romo_generators[2], .interpretation = "kinematics; wheel 1 (tyre, spin); measured ax_m, ay_m, vx_m, vy_m, delta1_m, iTM1_m, P_f_m, omega1_m",
      .mso_id = 12U, .fault_mask = 0x0022223BU, .input_mask = ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M,
-     .gate = 5.0f, .variance = 4264.0f, .response_steps = 62U},
+     .gate = 5.0f, .variance = 318100.0f, .response_steps = 62U},
     {.gen = &fdi_romo_generators[3], .interpretation = "kinematics; wheel 1 (tyre, spin); measured psidot_m, vx_m, vy_m, delta1_m, iTM1_m, P_f_m, omega1_m",
-     .mso_id = 39U, .fault_mask = 0x0022223CU, .input_mask = ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M,
-     .gate = 5.0f, .variance = 3600.0f, .response_steps = 43U},
+     .mso_id = 39U, .fault_mask = 0x0022223CU, .input_mask = ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA1_M,
+     .gate = 5.0f, .variance = 13920.0f, .response_steps = 43U},
     {.gen = &fdi_romo_generators[4], .interpretation = "kinematics; wheel 2 (tyre, spin); measured psidot_m, vx_m, vy_m, delta2_m, iTM2_m, P_f_m, omega2_m",
-     .mso_id = 49U, .fault_mask = 0x0044445CU, .input_mask = ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M,
-     .gate = 5.0f, .variance = 5027.0f, .response_steps = 43U},
+     .mso_id = 49U, .fault_mask = 0x0044445CU, .input_mask = ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M,
+     .gate = 5.0f, .variance = 9683.0f, .response_steps = 43U},
     {.gen = &fdi_romo_generators[5], .interpretation = "body dynamics; kinematics; wheel 3 (tyre, spin); wheel 4 (tyre); wheel 1 (tyre, spin); wheel 2 (tyre, spin); measured ay_m, psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta3_m, delta4_m, iTM1_m, iTM2_m, iTM3_m, P_f_m, P_r_m, omega1_m, omega2_m, omega4_m",
-     .mso_id = 1379U, .fault_mask = 0x017EEFFEU, .input_mask = ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA4_M,
-     .gate = 5.0f, .variance = 3733.0f, .response_steps = 62U},
+     .mso_id = 1379U, .fault_mask = 0x017EEFFEU, .input_mask = ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA4_M,
+     .gate = 5.0f, .variance = 17420.0f, .response_steps = 62U},
     {.gen = &fdi_romo_generators[6], .interpretation = "body dynamics; kinematics; wheel 2 (tyre); wheel 3 (tyre); wheel 4 (tyre, spin); measured psidot_m, vx_m, vy_m, delta2_m, delta3_m, delta4_m, iTM4_m, P_r_m, omega2_m, omega3_m",
-     .mso_id = 2137U, .fault_mask = 0x00DD11DCU, .input_mask = ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M,
-     .gate = 5.0f, .variance = 28220.0f, .response_steps = 62U},
+     .mso_id = 2137U, .fault_mask = 0x00DD11DCU, .input_mask = ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M,
+     .gate = 5.0f, .variance = 102400.0f, .response_steps = 62U},
     {.gen = &fdi_romo_generators[7], .interpretation = "body dynamics; kinematics; wheel 1 (tyre, spin); wheel 2 (tyre); wheel 3 (tyre); measured ay_m, psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta3_m, iTM1_m, P_f_m, omega2_m, omega3_m",
-     .mso_id = 2142U, .fault_mask = 0x00CE22FEU, .input_mask = ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M,
-     .gate = 5.0f, .variance = 16900.0f, .response_steps = 62U},
+     .mso_id = 2142U, .fault_mask = 0x00CE22FEU, .input_mask = ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_P_F_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M,
+     .gate = 5.0f, .variance = 88210.0f, .response_steps = 62U},
     {.gen = &fdi_romo_generators[8], .interpretation = "body dynamics; kinematics; wheel 1 (tyre); wheel 3 (tyre, spin); wheel 4 (tyre); measured ax_m, ay_m, psidot_m, vx_m, vy_m, delta1_m, delta3_m, delta4_m, iTM3_m, P_r_m, omega1_m, omega4_m",
      .mso_id = 2374U, .fault_mask = 0x013A89BFU, .input_mask = ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA4_M,
-     .gate = 5.0f, .variance = 26900.0f, .response_steps = 62U},
+     .gate = 5.0f, .variance = 309100.0f, .response_steps = 62U},
     {.gen = &fdi_romo_generators[9], .interpretation = "body dynamics; kinematics; wheel 1 (tyre); wheel 4 (tyre, spin); wheel 2 (tyre, spin); measured psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta4_m, iTM2_m, iTM4_m, P_f_m, P_r_m, omega1_m, omega2_m",
-     .mso_id = 3146U, .fault_mask = 0x0077557CU, .input_mask = ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M,
-     .gate = 5.0f, .variance = 14160.0f, .response_steps = 62U},
+     .mso_id = 3146U, .fault_mask = 0x0077557CU, .input_mask = ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA4_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM4_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M,
+     .gate = 5.0f, .variance = 57600.0f, .response_steps = 62U},
     {.gen = &fdi_romo_generators[10], .interpretation = "body dynamics; kinematics; wheel 2 (tyre); wheel 1 (tyre, spin); wheel 3 (tyre, spin); measured ay_m, psidot_m, vx_m, delta1_m, delta2_m, delta3_m, iTM1_m, iTM3_m, P_f_m, P_r_m, omega1_m, omega2_m, omega3_m",
-     .mso_id = 3480U, .fault_mask = 0x00EEAAEEU, .input_mask = ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M,
-     .gate = 5.0f, .variance = 479.6f, .response_steps = 62U},
+     .mso_id = 3480U, .fault_mask = 0x00EEAAEEU, .input_mask = ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA2_M | ROMO_SIGM_OMEGA3_M,
+     .gate = 5.0f, .variance = 2372000.0f, .response_steps = 62U},
     {.gen = &fdi_romo_generators[11], .interpretation = "body dynamics; kinematics; wheel 2 (tyre, spin); wheel 1 (tyre, spin); wheel 3 (tyre, spin); measured ax_m, ay_m, psidot_m, vx_m, vy_m, delta1_m, delta2_m, delta3_m, iTM1_m, iTM2_m, iTM3_m, P_f_m, P_r_m, omega1_m, omega3_m",
      .mso_id = 4785U, .fault_mask = 0x00AEEEFFU, .input_mask = ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M | ROMO_SIGM_DELTA1_M | ROMO_SIGM_DELTA2_M | ROMO_SIGM_DELTA3_M | ROMO_SIGM_ITM1_M | ROMO_SIGM_ITM2_M | ROMO_SIGM_ITM3_M | ROMO_SIGM_P_F_M | ROMO_SIGM_P_R_M | ROMO_SIGM_OMEGA1_M | ROMO_SIGM_OMEGA3_M,
-     .gate = 5.0f, .variance = 15380.0f, .response_steps = 62U},
+     .gate = 5.0f, .variance = 753400.0f, .response_steps = 62U},
 };
 
 /* Row j: bit i set when test i is sensitive to fault j. */
@@ -133,38 +133,38 @@ static const uint32_t romo_iso_class[25] = {
 
 /* Row j, column i: size of fault j at which test i reacts (reaction sizes from host_tools/scenarios/fault_sizes.toml, 0 = no reaction within the fault's limits). */
 static const float romo_test_size[25 * 12] = {
-    0.15f, 0.0f, 0.7f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.7f, 0.0f, 0.0f, 0.7f, /* f1 */
-    0.0f, 0.1f, 0.0f, 0.0f, 0.0f, 20.0f, 0.0f, 0.3f, 0.5f, 0.0f, 0.05f, 0.3f, /* f2 */
-    0.15f, 0.007f, 0.0f, 0.2f, 0.05f, 0.05f, 0.02f, 0.07f, 0.01f, 0.015f, 0.005f, 0.07f, /* f3 */
-    0.1f, 0.3f, 0.3f, 0.07f, 0.07f, 0.05f, 0.07f, 0.07f, 0.1f, 0.2f, 0.15f, 0.7f, /* f4 */
-    0.5f, 0.07f, 5.0f, 0.0f, 20.0f, 0.5f, 0.02f, 0.02f, 0.02f, 0.02f, 0.0f, 0.02f, /* f5 */
-    0.0f, 0.0f, 0.5f, 0.2f, 0.0f, 0.1f, 0.0f, 0.005f, 0.5f, 0.005f, 0.01f, 0.005f, /* f6 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.15f, 0.07f, 0.3f, 0.002f, 0.0f, 0.002f, 0.007f, 0.002f, /* f7 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.2f, 0.007f, 0.3f, 0.007f, 0.0f, 0.3f, 0.2f, /* f8 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.2f, 0.005f, 0.0f, 0.005f, 0.2f, 0.0f, 0.0f, /* f9 */
-    0.0f, 0.0f, 500.0f, 70.0f, 0.0f, 70.0f, 0.0f, 70.0f, 0.0f, 0.0f, 150.0f, 70.0f, /* f10 */
-    0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 70.0f, 0.0f, 0.0f, 0.0f, 50.0f, 0.0f, 0.0f, /* f11 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, 100.0f, 0.0f, 150.0f, 70.0f, /* f12 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, 50.0f, 0.0f, 0.0f, /* f13 */
-    0.0f, 0.0f, 500.0f, 70.0f, 0.0f, 70.0f, 0.0f, 70.0f, 0.0f, 0.0f, 150.0f, 70.0f, /* f14 */
-    0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 70.0f, 0.0f, 0.0f, 0.0f, 50.0f, 0.0f, 0.0f, /* f15 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, 100.0f, 0.0f, 150.0f, 70.0f, /* f16 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 70.0f, 0.0f, 0.0f, 50.0f, 0.0f, 0.0f, /* f17 */
-    0.0f, 0.0f, 700.0f, 200.0f, 0.0f, 0.0f, 0.0f, 150.0f, 300.0f, 150.0f, 300.0f, 150.0f, /* f18 */
-    0.0f, 0.0f, 0.0f, 0.0f, 300.0f, 0.0f, 300.0f, 150.0f, 0.0f, 150.0f, 300.0f, 150.0f, /* f19 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 200.0f, 200.0f, 200.0f, 0.0f, 0.0f, 0.0f, /* f20 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 200.0f, 200.0f, 0.0f, 200.0f, 0.0f, 0.0f, 0.0f, /* f21 */
-    0.0f, 0.0f, 3.0f, 0.3f, 0.0f, 70.0f, 0.0f, 0.0f, 0.5f, 2.0f, 3.0f, 2.0f, /* f22 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.2f, 70.0f, 0.2f, 2.0f, 0.0f, 1.5f, 2.0f, 0.0f, /* f23 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 2.0f, 0.3f, 0.0f, 0.0f, 20.0f, 70.0f, /* f24 */
-    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.2f, 0.0f, 0.0f, 1.5f, 0.0f, 0.0f, 0.0f, /* f25 */
+    0.1f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 2.0f, 0.0f, 0.0f, 0.0f, /* f1 */
+    0.0f, 0.07f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.7f, 0.0f, 0.0f, 0.0f, 0.0f, /* f2 */
+    0.15f, 0.005f, 0.0f, 1.5f, 0.07f, 0.1f, 0.03f, 0.15f, 0.05f, 0.03f, 0.5f, 0.7f, /* f3 */
+    0.07f, 0.2f, 1.5f, 0.15f, 0.07f, 0.1f, 0.15f, 0.2f, 0.3f, 0.5f, 10.0f, 0.0f, /* f4 */
+    0.3f, 0.05f, 0.0f, 0.0f, 0.0f, 1.0f, 0.05f, 0.05f, 0.1f, 0.05f, 0.0f, 0.15f, /* f5 */
+    0.0f, 0.0f, 2.0f, 2.0f, 0.0f, 2.0f, 0.0f, 0.01f, 0.0f, 0.01f, 0.0f, 0.05f, /* f6 */
+    0.0f, 0.0f, 0.0f, 0.0f, 1.0f, 1.0f, 1.0f, 0.007f, 0.0f, 0.007f, 0.0f, 0.02f, /* f7 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.3f, 0.01f, 0.5f, 0.02f, 0.0f, 0.0f, 0.7f, /* f8 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.007f, 0.0f, 0.01f, 0.5f, 0.0f, 0.0f, /* f9 */
+    0.0f, 0.0f, 0.0f, 100.0f, 0.0f, 150.0f, 0.0f, 150.0f, 0.0f, 0.0f, 0.0f, 500.0f, /* f10 */
+    0.0f, 0.0f, 0.0f, 0.0f, 100.0f, 150.0f, 0.0f, 0.0f, 0.0f, 100.0f, 0.0f, 0.0f, /* f11 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 150.0f, 0.0f, 0.0f, 300.0f, 0.0f, 0.0f, 500.0f, /* f12 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 150.0f, 0.0f, 0.0f, 100.0f, 0.0f, 0.0f, /* f13 */
+    0.0f, 0.0f, 0.0f, 100.0f, 0.0f, 150.0f, 0.0f, 150.0f, 0.0f, 0.0f, 0.0f, 500.0f, /* f14 */
+    0.0f, 0.0f, 0.0f, 0.0f, 100.0f, 150.0f, 0.0f, 0.0f, 0.0f, 100.0f, 0.0f, 0.0f, /* f15 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 150.0f, 0.0f, 0.0f, 300.0f, 0.0f, 0.0f, 500.0f, /* f16 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 150.0f, 0.0f, 0.0f, 100.0f, 0.0f, 0.0f, /* f17 */
+    0.0f, 0.0f, 0.0f, 500.0f, 0.0f, 0.0f, 0.0f, 300.0f, 1000.0f, 200.0f, 0.0f, 1000.0f, /* f18 */
+    0.0f, 0.0f, 0.0f, 0.0f, 500.0f, 0.0f, 700.0f, 300.0f, 0.0f, 200.0f, 0.0f, 1000.0f, /* f19 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 500.0f, 700.0f, 700.0f, 0.0f, 0.0f, 0.0f, /* f20 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 500.0f, 500.0f, 0.0f, 700.0f, 0.0f, 0.0f, 0.0f, /* f21 */
+    0.0f, 0.0f, 15.0f, 0.7f, 0.0f, 150.0f, 0.0f, 0.0f, 1.5f, 5.0f, 0.0f, 15.0f, /* f22 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.3f, 150.0f, 0.5f, 3.0f, 0.0f, 2.0f, 0.0f, 0.0f, /* f23 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 3.0f, 0.7f, 0.0f, 0.0f, 0.0f, 0.0f, /* f24 */
+    0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.5f, 0.0f, 0.0f, 5.0f, 0.0f, 0.0f, 0.0f, /* f25 */
 };
 
 /* The operating envelope the gates were calibrated in (fdi_table.h; [envelope] of
    analysis/models/romo_thresholds.toml): outside it when at least 2 of these signals exceed their limits,
    1.25 x their largest magnitude in the calibration drives. */
 static const uint8_t romo_envelope_signals[3] = {ROMO_SIG_VY_M, ROMO_SIG_PSIDOT_M, ROMO_SIG_AY_M};
-static const float romo_envelope_limits[3] = {0.993f, 0.642f, 6.76f};
+static const float romo_envelope_limits[3] = {1.01f, 0.596f, 7.25f};
 static const fdi_table_envelope_t romo_envelope = {
     3U, 2U, romo_envelope_signals, romo_envelope_limits};
 

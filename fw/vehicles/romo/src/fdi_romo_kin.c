@@ -140,22 +140,22 @@ static fdi_status_t y_obs(fdi_gen_t *g, const fdi_gen_param_t *par, const fdi_fr
 }
 
 /* Descriptors: name, step, domain (always), signals read, sensitivities (none), filters, observer states, no set,
-   no rate gains. */
+   no rate gains, no estimable quantities, no range. */
 const fdi_gen_desc_t fdi_romo_kin_x_deriv = {
     "MSO1", x_deriv, NULL, ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
-    0U, 4U, 0U, NULL, 0U, 0U, NULL};
+    0U, 4U, 0U, NULL, 0U, 0U, NULL, 0U, NULL, NULL};
 const fdi_gen_desc_t fdi_romo_kin_y_deriv = {
     "MSO2", y_deriv, NULL, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
-    0U, 4U, 0U, NULL, 0U, 0U, NULL};
+    0U, 4U, 0U, NULL, 0U, 0U, NULL, 0U, NULL, NULL};
 const fdi_gen_desc_t fdi_romo_kin_arr3 = {
     "MSO3", arr3, NULL, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M,
-    0U, 8U, 0U, NULL, 0U, 0U, NULL};
+    0U, 8U, 0U, NULL, 0U, 0U, NULL, 0U, NULL, NULL};
 const fdi_gen_desc_t fdi_romo_kin_arr4 = {
     "MSO4", arr4, NULL, ROMO_SIGM_AX_M | ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VY_M,
-    0U, 8U, 0U, NULL, 0U, 0U, NULL};
+    0U, 8U, 0U, NULL, 0U, 0U, NULL, 0U, NULL, NULL};
 const fdi_gen_desc_t fdi_romo_kin_x_obs = {
     "MSO1", x_obs, NULL, ROMO_SIGM_AX_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
-    0U, 0U, 1U, NULL, 0U, 0U, NULL};
+    0U, 0U, 1U, NULL, 0U, 0U, NULL, 0U, NULL, NULL};
 const fdi_gen_desc_t fdi_romo_kin_y_obs = {
     "MSO2", y_obs, NULL, ROMO_SIGM_AY_M | ROMO_SIGM_PSIDOT_M | ROMO_SIGM_VX_M | ROMO_SIGM_VY_M,
-    0U, 0U, 1U, NULL, 0U, 0U, NULL};
+    0U, 0U, 1U, NULL, 0U, 0U, NULL, 0U, NULL, NULL};

@@ -30,23 +30,23 @@ static const float three_tank_rate_gain[1] = {0.0154f};
 static void three_tank_gen_step(fdi_gen_io_t *io);
 
 /* name, step (NULL: the set's), domain, signals read, sensitivities (bit j = fault j, ascending), filters, observer
-   states, set, slot, rate gains (bit j = fault j; the gains ascending by fault) */
+   states, set, slot, rate gains (bit j = fault j; the gains ascending by fault), estimable quantities, range */
 const fdi_gen_desc_t fdi_three_tank_generators[FDI_THREE_TANK_N_GENERATORS] = {
     {"MSO1", NULL, NULL, THREE_TANK_SIGM_U | THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2,
      FDI_GEN_SENS_MASK(0x00000193U), 0U, 0U, &fdi_three_tank_gen_set, 0U,
-     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities fP fL1 fC12 fS1 fS2 */
+     FDI_GEN_SENS_MASK(0x00000000U), NULL, 0U, NULL, NULL}, /* sensitivities fP fL1 fC12 fS1 fS2 */
     {"MSO2", NULL, NULL, THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
      FDI_GEN_SENS_MASK(0x00000368U), 0U, 0U, &fdi_three_tank_gen_set, 1U,
-     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities fL3 fC23 fC3 fS2 fS3 */
+     FDI_GEN_SENS_MASK(0x00000000U), NULL, 0U, NULL, NULL}, /* sensitivities fL3 fC23 fC3 fS2 fS3 */
     {"MSO3", NULL, NULL, THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
      FDI_GEN_SENS_MASK(0x000003B4U), 0U, 0U, &fdi_three_tank_gen_set, 2U,
-     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities fL2 fC12 fC23 fS1 fS2 fS3 */
+     FDI_GEN_SENS_MASK(0x00000000U), NULL, 0U, NULL, NULL}, /* sensitivities fL2 fC12 fC23 fS1 fS2 fS3 */
     {"MSO6", NULL, NULL, THREE_TANK_SIGM_U | THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
      FDI_GEN_SENS_MASK(0x00000327U), 0U, 0U, &fdi_three_tank_gen_set, 3U,
-     FDI_GEN_SENS_MASK(0x00000080U), &three_tank_rate_gain[0]}, /* sensitivities fP fL1 fL2 fC23 fS2 fS3; rate gains fS1 */
+     FDI_GEN_SENS_MASK(0x00000080U), &three_tank_rate_gain[0], 0U, NULL, NULL}, /* sensitivities fP fL1 fL2 fC23 fS2 fS3; rate gains fS1 */
     {"MSO9", NULL, NULL, THREE_TANK_SIGM_Y1 | THREE_TANK_SIGM_Y2 | THREE_TANK_SIGM_Y3,
      FDI_GEN_SENS_MASK(0x000003DCU), 0U, 0U, &fdi_three_tank_gen_set, 4U,
-     FDI_GEN_SENS_MASK(0x00000000U), NULL}, /* sensitivities fL2 fL3 fC12 fC3 fS1 fS2 fS3 */
+     FDI_GEN_SENS_MASK(0x00000000U), NULL, 0U, NULL, NULL}, /* sensitivities fL2 fL3 fC12 fC3 fS1 fS2 fS3 */
 };
 
 const fdi_gen_set_t fdi_three_tank_gen_set = {"three_tank", three_tank_gen_step, three_tank_bank, 4U, FDI_THREE_TANK_N_GENERATORS,

@@ -5,15 +5,24 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from fdi_analysis.cli.common import EXIT_ERROR
+from fdi_analysis.errors import InputError
 from fdi_analysis.names import natural_sorted
 from fdi_host.tuning.seeds import CALIBRATION_SEEDS, CONFIRM_SEED_OFFSETS, SWEEP_SEEDS
 
-EXAMPLE = ("example: fdi-tune calibrate analysis/models/romo_grouped.toml "
-           "--thresholds analysis/models/romo_thresholds.toml --scenarios cornering slalom straight")
+if TYPE_CHECKING:
+    from fdi_analysis.export.thresholds import Thresholds
+    from fdi_analysis.model import Model
+    from fdi_analysis.residuals.evaluate import FilterDesign
+    from fdi_analysis.residuals.generator import Generator
+
+EXAMPLE = ("example: fdi-tune calibrate analysis/models/romo_grouped.toml --thresholds "
+           "analysis/models/romo_thresholds.toml --fleet 12   (the shipped calibration: 12 truth-plant vehicles, "
+           "with estimators and adaptive thresholds; ~7 min)")
 
 # All five scenarios of host_tools/scenarios; near standstill (low_speed) the tyre-law residuals are outside
 # their operating domain (Generator.min_speed) and not evaluated, as on the vehicle.
@@ -35,7 +44,8 @@ def register(sub: Any) -> None:
         "and write each residual's sigma (no raw alarm of the gate or the CUSUM in any drive inside each test's "
         "operating domain after the warm-up, times a 25 %% margin) into the [generated] table of the "
         "thresholds file, and, where the file defines an operating envelope ([envelope]: signals, votes, margin), "
-        "each envelope signal's limit, the margin times its largest magnitude in the drives after the warm-up, into "
+        "each envelope signal's limit, the margin times its largest magnitude in the drives after the warm-up (with "
+        "--fleet: its 99.5th percentile over the fleet), into "
         "its [envelope_limits] table (the rest of the file is kept).",
         epilog=EXAMPLE,
     )
@@ -48,6 +58,12 @@ def register(sub: Any) -> None:
                    help="noise seeds of further drives per scenario besides the scenario's own (default 1001 ... 1012)")
     p.add_argument("--warmup", type=float, default=CALIBRATION_WARMUP, help="seconds ignored at the start (default 3)")
     p.add_argument("--workers", type=int, default=2, help="worker processes of the MSO search (default 2)")
+    p.add_argument("--fleet", type=int, default=0, metavar="N",
+                   help="calibrate on the truth plant instead: the fault-free drives of calibration vehicles 1 .. N "
+                   "(never an evaluation vehicle) in every fleet scenario, each test with its on-line estimator and "
+                   "adaptive threshold as the diagnoser runs them: writes what each test estimates ([estimation]) "
+                   "and its sigma (fdi_host.tuning.fleet_calibration); --scenarios, --seeds and --duration do not "
+                   "apply")
     p.add_argument("--check", action="store_true",
                    help="do not write: exit 1 when the file's [generated] table differs from the calibration now")
     p.set_defaults(func=run)
@@ -90,38 +106,37 @@ def round_up(x: float, digits: int = 3) -> float:
     return math.ceil(x / scale - 1e-9) * scale
 
 
-def run(args: argparse.Namespace) -> int:
-    import numpy as np
+Row = tuple[str, float, str]  # a [generated] or [envelope_limits] entry: key, value, comment
+EstimationRow = tuple[str, tuple[tuple[str, ...], ...], str]  # an [estimation] entry: equations, groups, comment
 
+
+@dataclass(frozen=True)
+class Tables:
+    """What a calibration writes into the thresholds file (besides the [observer] table)."""
+
+    generated: list[Row]
+    provenance: str
+    envelope: list[Row]
+    estimation: list[EstimationRow]
+
+
+def run(args: argparse.Namespace) -> int:
     from fdi_analysis.export.thresholds import Thresholds, with_generated
     from fdi_analysis.model_loader import load_model
     from fdi_analysis.residuals.evaluate import FilterDesign
     from fdi_analysis.residuals.selected import selected_generators
-    from fdi_host.tuning.calibrate import MARGIN, calibrate
-    from fdi_host.tuning.drives import fault_free_drives, observer_reference, residual_segments
+    from fdi_host.tuning.drives import observer_reference
 
     th = Thresholds.load(args.thresholds)
     design = FilterDesign(th.design[0], th.design[1], th.design[2])
     model = load_model(args.model)
     print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
     reference = observer_reference()  # c_ref measured now on the reference drive (written to [observer])
-    _, gens = selected_generators(model, reference, workers=args.workers, selection=th.selection)
-    signals = fault_free_drives(args.scenarios, [None, *args.seeds], args.duration, design.dt,
-                                log=lambda s: print(s, file=sys.stderr))
+    _, gens = selected_generators(model, reference, workers=args.workers, selection=th.selection,
+                                  max_tyre_accel=th.max_tyre_accel, uncertainty=args.fleet > 0)
     skip = round(args.warmup / design.dt)
-    drives = [residual_segments(g, signals, skip, design) for g in gens]
-    rows = []
-    for g, d in zip(gens, drives, strict=True):
-        c = calibrate(d, th.gate)
-        rows.append((" ".join(g.equations), c.variance, f"{g.name}: sigma {c.sigma:.3g} (fault-free RMS {c.rms:.3g}, "
-                                                         f"peak {c.peak:.3g})"))
-        print(f"{g.name}: sigma {c.sigma:.3g}  fault-free RMS {c.rms:.3g}  peak {c.peak:.3g}")
-    provenance = (f"fdi-tune calibrate {args.model.as_posix()} --scenarios {' '.join(args.scenarios)} "
-                  f"--seeds {' '.join(map(str, args.seeds))} (and each scenario's own seed) "
-                  + ("(each scenario's own duration)" if args.duration is None else f"--duration {args.duration:g}")
-                  + f" --warmup {args.warmup:g}, the drives' CAN frames as the ECU's steps see "
-                  f"them: in each test's operating domain, no raw alarm (|r| > gate sigma or CUSUM k = 1.5, "
-                  f"h = 150) in any fault-free drive, sigma times {MARGIN}")
+    tables = (_fleet_tables(args, th, model, gens, design, skip) if args.fleet > 0
+              else _model_plant_tables(args, th, gens, design, skip))
     observer_rows = []
     for g in gens:
         if g.observer is not None and g.observer.c.free_symbols:
@@ -129,19 +144,8 @@ def run(args: argparse.Namespace) -> int:
             assert c_ref is not None
             observer_rows.append((" ".join(g.equations), c_ref, f"{g.name}: observer for {g.observer.state}, "
                                   f"residual {g.residual_equation}"))
-    envelope_rows = []
-    if th.envelope is not None:
-        for sig in th.envelope.signals:
-            if any(sig not in d for d in signals):
-                print(f"error: [envelope] signal {sig!r} is not a measured signal of the drives", file=sys.stderr)
-                return EXIT_ERROR
-            peak = max(float(np.max(np.abs(np.asarray(d[sig], dtype=float)[skip:]))) for d in signals)
-            limit = round_up(th.envelope.margin * peak)
-            envelope_rows.append((sig, limit, f"{sig}: largest |value| {peak:.3g} in the calibration drives, times "
-                                              f"{th.envelope.margin:g}"))
-            print(f"envelope {sig}: largest |value| {peak:.3g}, limit {limit:.3g}")
     old = args.thresholds.read_text(encoding="utf-8")
-    new = with_generated(old, rows, provenance, observer_rows, envelope_rows)
+    new = with_generated(old, tables.generated, tables.provenance, observer_rows, tables.envelope, tables.estimation)
     if args.check:
         if new != old:
             print(f"{args.thresholds} is stale: run scripts/generate.sh (fdi-tune calibrate)", file=sys.stderr)
@@ -151,6 +155,88 @@ def run(args: argparse.Namespace) -> int:
     args.thresholds.write_text(new, encoding="utf-8")
     print(f"wrote {args.thresholds}")
     return 0
+
+
+def _fleet_tables(args: argparse.Namespace, th: Thresholds, model: Model, gens: list[Generator],
+                  design: FilterDesign, skip: int) -> Tables:
+    """The calibration on truth-plant calibration vehicles 1 .. args.fleet (fdi_host.tuning.fleet_calibration)."""
+    from fdi_analysis.residuals.uncertainty_sensitivity import uncertainties
+    from fdi_host.sim.scenario import FLEET_SCENARIOS
+    from fdi_host.tuning.calibrate import MARGIN
+    from fdi_host.tuning.fleet_calibration import (
+        ENVELOPE_PERCENTILE,
+        KAPPA,
+        calibrate_fleet,
+        envelope_limits,
+        fleet_drives,
+        inside_envelope,
+    )
+
+    signals = fleet_drives(range(1, args.fleet + 1), FLEET_SCENARIOS, design.dt,
+                           progress=lambda s: print(s, file=sys.stderr))
+    inside = None
+    envelope: list[Row] = []
+    if th.envelope is not None:
+        limits = {k: round_up(v) for k, v in
+                  envelope_limits(signals, th.envelope.signals, th.envelope.margin, skip).items()}
+        inside = [inside_envelope(d, limits, th.envelope.votes) for d in signals]
+        for sig in th.envelope.signals:
+            envelope.append((sig, limits[sig], f"{sig}: {th.envelope.margin:g} x the {ENVELOPE_PERCENTILE:g}th "
+                             "percentile of its magnitude over the calibration fleet"))
+            print(f"envelope {sig}: limit {limits[sig]:.3g}")
+    cals = calibrate_fleet(gens, signals, {u.name: u for u in uncertainties(model)}, th.gate, design, skip,
+                           progress=lambda s: print(s, file=sys.stderr), inside=inside)
+    generated: list[Row] = []
+    estimation: list[EstimationRow] = []
+    for tc in cals:
+        generated.append((tc.equations, tc.sigma.sigma**2, f"{tc.generator}: sigma {tc.sigma.sigma:.3g} (innovation "
+                          f"RMS {tc.sigma.rms:.3g}, peak {tc.sigma.peak:.3g}; adaptive part {tc.sigma.share:.2f} gates "
+                          "at the median)"))
+        if tc.groups:
+            estimation.append((tc.equations, tc.groups, tc.generator))
+    provenance = (f"fdi-tune calibrate {args.model.as_posix()} --fleet {args.fleet}: truth-plant calibration "
+                  f"vehicles 1 .. {args.fleet} (fdi_host.tuning.seeds), every scenario of the fleet "
+                  f"({' '.join(FLEET_SCENARIOS)}), fault-free, the drives' CAN frames as the ECU's steps see them, "
+                  f"--warmup {args.warmup:g}: each test with its on-line estimator (what it estimates: the "
+                  "quantities of largest median spread share, constants lumped) and adaptive threshold (kappa "
+                  f"{KAPPA:g}), in its operating domain, no raw alarm (|innovation| beyond gate sigma plus the "
+                  f"adaptive part, or CUSUM k = 1.5, h = 150) in any drive, sigma times {MARGIN}")
+    return Tables(generated, provenance, envelope, estimation)
+
+
+def _model_plant_tables(args: argparse.Namespace, th: Thresholds, gens: list[Generator], design: FilterDesign,
+                        skip: int) -> Tables:
+    """The calibration on the model plant's fault-free drives of args.scenarios and args.seeds (fixed gates)."""
+    import numpy as np
+
+    from fdi_host.tuning.calibrate import MARGIN, calibrate
+    from fdi_host.tuning.drives import fault_free_drives, residual_segments
+
+    signals = fault_free_drives(args.scenarios, [None, *args.seeds], args.duration, design.dt,
+                                log=lambda s: print(s, file=sys.stderr))
+    generated: list[Row] = []
+    for g in gens:
+        c = calibrate(residual_segments(g, signals, skip, design), th.gate)
+        generated.append((" ".join(g.equations), c.variance, f"{g.name}: sigma {c.sigma:.3g} (fault-free RMS "
+                          f"{c.rms:.3g}, peak {c.peak:.3g})"))
+        print(f"{g.name}: sigma {c.sigma:.3g}  fault-free RMS {c.rms:.3g}  peak {c.peak:.3g}")
+    provenance = (f"fdi-tune calibrate {args.model.as_posix()} --scenarios {' '.join(args.scenarios)} "
+                  f"--seeds {' '.join(map(str, args.seeds))} (and each scenario's own seed) "
+                  + ("(each scenario's own duration)" if args.duration is None else f"--duration {args.duration:g}")
+                  + f" --warmup {args.warmup:g}, the drives' CAN frames as the ECU's steps see "
+                  f"them: in each test's operating domain, no raw alarm (|r| > gate sigma or CUSUM k = 1.5, "
+                  f"h = 150) in any fault-free drive, sigma times {MARGIN}")
+    envelope: list[Row] = []
+    if th.envelope is not None:
+        for sig in th.envelope.signals:
+            if any(sig not in d for d in signals):
+                raise InputError(f"{th.source}: [envelope] signal {sig!r} is not a measured signal of the drives")
+            peak = max(float(np.max(np.abs(np.asarray(d[sig], dtype=float)[skip:]))) for d in signals)
+            limit = round_up(th.envelope.margin * peak)
+            envelope.append((sig, limit, f"{sig}: largest |value| {peak:.3g} in the calibration drives, times "
+                                         f"{th.envelope.margin:g}"))
+            print(f"envelope {sig}: largest |value| {peak:.3g}, limit {limit:.3g}")
+    return Tables(generated, provenance, envelope, [])
 
 
 def run_sizes(args: argparse.Namespace) -> int:
@@ -167,7 +253,8 @@ def run_sizes(args: argparse.Namespace) -> int:
     size_file = sweep.SizeFile.load(args.sizes)
     model = load_model(args.model)
     print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
-    _, gens = selected_generators(model, observer_reference(th), workers=args.workers, selection=th.selection)
+    _, gens = selected_generators(model, observer_reference(th), workers=args.workers, selection=th.selection,
+                                  max_tyre_accel=th.max_tyre_accel)
     sigmas = th.sigmas(gens)
     faults = natural_sorted({f for g in gens for f in g.faults})
     if args.faults:

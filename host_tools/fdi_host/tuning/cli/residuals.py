@@ -85,7 +85,8 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_ERROR
     model = load_model(args.model)
     print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
-    _, gens = selected_generators(model, th.observer_reference(), workers=args.workers, selection=th.selection)
+    _, gens = selected_generators(model, th.observer_reference(), workers=args.workers, selection=th.selection,
+                                  max_tyre_accel=th.max_tyre_accel)
     try:
         sigmas = th.sigmas(gens)
     except MissingSigmaError as exc:
@@ -132,7 +133,9 @@ def _compare(res: LogResiduals, frames: Sequence[Frame], warmup: int, align: flo
         print("fdi-tune: error: the ECU skipped steps (a gap in the log); compare on a gap-free log",
               file=sys.stderr)
         return EXIT_ERROR
-    r_ecu = np.asarray([r.residuals for r in ecu], dtype=float).reshape(len(ecu), len(labels))
+    # the generators' residuals: what a test evaluates (its estimator's innovation) plus what its estimate removed
+    r_ecu = (np.asarray([r.residuals for r in ecu], dtype=float).reshape(len(ecu), len(labels))
+             + np.asarray([r.offsets for r in ecu], dtype=float).reshape(len(ecu), len(labels)))
     ev = np.asarray([[s != "not_evaluable" for s in r.test_status] for r in ecu], dtype=bool).reshape(r_ecu.shape)
     worst = 0.0
     print(f"C ECU core ({len(ecu)} steps) against the offline residuals, on the steps both evaluate:")

@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
     size_file.check_faults([f.name for f in model.faults])
     print(f"synthesising the generators of {model.name} ...", file=sys.stderr)
     _, gens = selected_generators(model, th.observer_reference(), workers=args.workers, selection=th.selection,
-                                  sensitivities=True)
+                                  max_tyre_accel=th.max_tyre_accel, sensitivities=True)
     if args.only:
         unknown = sorted(set(args.only) - {g.name for g in gens})
         if unknown:
