@@ -33,7 +33,8 @@ def _help(prog: str, argv: list[str], capsys: pytest.CaptureFixture[str]) -> str
     return capsys.readouterr().out
 
 
-def _subcommands(prog: str) -> list[list[str]]:
+def subcommands(prog: str) -> list[list[str]]:
+    """Each program's argv prefixes that have their own --help: none, and every subcommand."""
     if prog == "fdi-sim":
         return [[], ["fig6"], ["live"]]
     module = __import__(ENTRY_POINTS[prog].split(":")[0], fromlist=["build_parser"])
@@ -47,7 +48,7 @@ def _subcommands(prog: str) -> list[list[str]]:
 @pytest.mark.parametrize("prog", sorted(ENTRY_POINTS))
 def test_every_path_a_help_text_names_exists(prog: str, capsys: pytest.CaptureFixture[str]) -> None:
     missing = []
-    for sub in _subcommands(prog):
+    for sub in subcommands(prog):
         text = _help(prog, sub, capsys)
         missing += [f"{prog} {' '.join(sub)}: {p}" for p in REPO_PATH.findall(text) if not (REPO / p).exists()]
     assert not missing, missing

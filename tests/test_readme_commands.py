@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from test_help_texts import subcommands
 
 REPO = Path(__file__).resolve().parents[1]
 VENV_BIN = Path(sys.executable).parent
@@ -210,16 +211,6 @@ def _help_text(prog: str, sub: list[str]) -> str:
     return buf.getvalue()
 
 
-def _subcommands(prog: str) -> list[list[str]]:
-    if prog == "fdi-sim":
-        return [[], ["fig6"], ["live"]]
-    module = __import__(ENTRY_POINTS[prog].split(":")[0], fromlist=["build_parser"])
-    if not hasattr(module, "build_parser"):
-        return [[]]
-    subs = [a for a in module.build_parser()._actions if isinstance(a, argparse._SubParsersAction)]
-    return [[]] + [[name] for s in subs for name in s.choices]
-
-
 COMMENT = re.compile(r"\s{2,}[(#].*$")
 PARENS = re.compile(r"\s\([^)]*\)")
 
@@ -281,7 +272,7 @@ def all_commands() -> list[Command]:
     seen: dict[str, Command] = {}
     found = readme_commands()
     for prog in ENTRY_POINTS:
-        for sub in _subcommands(prog):
+        for sub in subcommands(prog):
             found += help_examples(_help_text(prog, sub), " ".join([prog, *sub, "--help"]))
     for cmd in found:
         seen.setdefault(cmd.key, cmd)
