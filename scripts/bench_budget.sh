@@ -21,6 +21,9 @@ for b in "$@"; do
 done
 [ -x .venv/bin/python ] || bash scripts/bootstrap.sh
 py="$top/.venv/bin/python"
+# this run's output becomes section bench_budget of docs/results.md: scripts/results_doc.py runs the script under it
+[ -n "${FDI_RESULTS_SECTION:-}" ] || exec "$py" scripts/results_doc.py bench_budget --run \
+  --display "bash scripts/bench_budget.sh $*" -- bash scripts/bench_budget.sh "$@"
 model=analysis/models/romo_grouped.toml
 thresholds=analysis/models/romo_thresholds.toml
 

@@ -11,6 +11,11 @@
 set -euo pipefail
 top="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$top"
+# this run's output becomes section fuzz of docs/results.md (FDI_RESULTS_DOC= for a trial run, as CI does):
+# scripts/results_doc.py (standard library only) runs the script under it
+[ -n "${FDI_RESULTS_SECTION:-}" ] || exec python3 scripts/results_doc.py fuzz --run \
+  --display "$(printf '%s' "${FUZZ_RUNS:+FUZZ_RUNS=$FUZZ_RUNS }${FUZZ_ONLY:+FUZZ_ONLY=\"$FUZZ_ONLY\" }")bash scripts/fuzz.sh $*" \
+  -- bash scripts/fuzz.sh "$@"
 seconds="${1:-30}"
 out=build/fuzz
 mkdir -p "$out"

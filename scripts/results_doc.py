@@ -225,6 +225,20 @@ def run_command(name: str, argv: Sequence[str], ok_codes: Sequence[int] = (0,), 
     return rc
 
 
+def run_script(name: str, script: str, argv: Sequence[str], ok_codes: Sequence[int] = (0,),
+               markdown: bool = False) -> int | None:
+    """What a Python benchmark calls first under ``__main__``: unless it already runs under a section (or is asked
+    for its help), run `script` again with `argv` under `run_command`, so that its whole output, a child
+    process's included, becomes section `name`; returns that run's exit code, or None when the caller is that run
+    and does its work."""
+    if os.environ.get(ENV_SECTION) or "-h" in argv or "--help" in argv:
+        return None
+    path = Path(script).resolve()
+    shown = path.relative_to(REPO) if path.is_relative_to(REPO) else path
+    return run_command(name, [sys.executable, str(path), *argv], ok_codes, markdown,
+                       display=shlex.join(["python", str(shown), *argv]))
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("name", help="the section's name (lower case letters, digits, _)")

@@ -400,4 +400,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    # the run's output becomes section bench_can of docs/results.md (the run in its private network namespace included)
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
+    import results_doc
+
+    rerun = results_doc.run_script("bench_can", __file__, sys.argv[1:], ok_codes=(0,))
+    raise SystemExit(main() if rerun is None else rerun)

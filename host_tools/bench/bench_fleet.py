@@ -111,4 +111,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    # the run's output becomes section bench_fleet of docs/results.md (a run with failed logs (exit 1) is not written)
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
+    import results_doc
+
+    rerun = results_doc.run_script("bench_fleet", __file__, sys.argv[1:], ok_codes=(0,))
+    raise SystemExit(main() if rerun is None else rerun)

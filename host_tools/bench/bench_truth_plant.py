@@ -17,6 +17,7 @@ import os
 import sys
 import time
 from collections.abc import Callable
+from pathlib import Path
 
 from fdi_host.sim.scenario import FLEET_SCENARIOS, Scenario, load_scenario
 from fdi_host.sim.truth_sim import simulate_truth
@@ -84,4 +85,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # the run's output becomes section bench_truth_plant of docs/results.md (a goal missed (exit 1) is a result too)
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
+    import results_doc
+
+    rerun = results_doc.run_script("bench_truth_plant", __file__, sys.argv[1:], ok_codes=(0, 1))
+    raise SystemExit(main() if rerun is None else rerun)
