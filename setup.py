@@ -63,7 +63,8 @@ setup(
                 + [str(p) for d in _ECU_DIRS for p in Path(d).glob("*.c")]
             ),
             include_dirs=list(_ECU_INCLUDES),
-            depends=sorted(str(p) for d in (*_ECU_DIRS, *_ECU_INCLUDES) for p in Path(d).glob("*.h")),
+            depends=sorted(str(p) for d in (*_ECU_DIRS, *_ECU_INCLUDES, "fw/include/generated",
+                                            "host_tools/fdi_host/ecu") for p in Path(d).glob("*.h")),
             extra_compile_args=["-O2", "-std=c99", "-Wall", "-Wextra"],
             libraries=["m"],
         ),

@@ -1,8 +1,12 @@
 # The warning set every C target of the project is built with (host and cross): the library, the tests
 # and the benchmarks. -std=c99 comes from C_STANDARD 99 + C_EXTENSIONS OFF on each target.
+# -Werror only with FDI_WERROR (on by default when the project is top level, off as a subproject).
 set(FDI_WARNING_FLAGS
     -Wall -Wextra -Wpedantic -Wconversion -Wsign-conversion -Wdouble-promotion -Wshadow -Wcast-qual
-    -Wstrict-prototypes -Wfloat-equal -Werror)
+    -Wstrict-prototypes -Wfloat-equal)
+if(FDI_WERROR)
+  list(APPEND FDI_WARNING_FLAGS -Werror)
+endif()
 
 # -fno-math-errno: the library never reads errno, so sqrtf() and friends need not set it. Without it GCC follows every
 # inlined square root (vsqrt.f32 on the Cortex-M4F, sqrtss on x86-64) with a compare and a branch to the library

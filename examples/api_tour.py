@@ -39,7 +39,7 @@ print("not isolable from each other:", ", ".join(f"{a}/{b}" for a, b in iso.non_
 sel = m.select(method="B", time_limit_s=30)
 print(f"optimal selection (method B): {len(sel.tests)} tests, {sel.cost} unknowns, proven {sel.proven}")
 for t in sel.tests:
-    print(f"  {t.label:8s} {t.cost:3d} unknowns  faults {' '.join(f.lstrip('f') for f in t.faults)}")
+    print(f"  {t.label:8s} {t.cost:3d} unknowns  faults {' '.join(t.faults)}")
 
 fig, (left, right) = plt.subplots(1, 2, figsize=(14, 6))
 iso.plot(ax=left)  # every plot draws into the axes it is given and returns the figure

@@ -5,6 +5,8 @@
 #   fw/vehicles/romo/generated/fdi_romo_{table,generators,signals}.{h,c}  <- analysis/models/romo_grouped.toml +
 #     romo_thresholds.toml + fault sizes;  fdi_kin_calibration.h <- simulated drives;
 #   fw/vehicles/romo/generated/can/  <- dbc/romo.dbc (cantools code + the ECU core's bus description);
+#   fw/include/generated/fdi_capacity.h  <- fdi_analysis.export.capacity (the library's capacities, one source);
+#   host_tools/fdi_host/ecu/fdi_py_seam.h  <- fdi_analysis.export.seam (the host ECU's Python/C questions, named);
 #   fw/vehicles/three_tank/generated/  <- analysis/models/three_tank.toml + three_tank_thresholds.toml + fault sizes,
 #     whose generated tables come from drives of the generic simulator (host_tools/scenarios/three_tank.toml)
 set -euo pipefail
@@ -13,6 +15,10 @@ cd "$top"
 [ -x .venv/bin/fdi-analyze ] || bash scripts/bootstrap.sh
 romo=fw/vehicles/romo/generated
 tank=fw/vehicles/three_tank/generated
+# fw/include/generated/fdi_capacity.h  <- the capacities' defaults and ranges (CMake's cache options read them too)
+.venv/bin/python -m fdi_analysis.export.capacity --out fw/include/generated/fdi_capacity.h
+# host_tools/fdi_host/ecu/fdi_py_seam.h  <- the questions the ctypes bindings ask the host ECU library, by name
+.venv/bin/python -m fdi_analysis.export.seam --out host_tools/fdi_host/ecu/fdi_py_seam.h
 # analysis/models/romo_screening.json.gz  <- every realizable candidate's fault-to-noise ratio at the required fault
 #   sizes along the fault-free drives, sigmas over the calibration's noise seeds (~22 min on 2 workers; only with
 #   FDI_SCREEN=1; tests/analysis/test_screening_current.py checks that its criterion is this code's)
@@ -49,7 +55,7 @@ fi
 .venv/bin/fdi-tune kin-calibration --out "$romo/fdi_kin_calibration.h"
 # fw/vehicles/romo/generated/can/romo_can.{h,c}, fdi_romo_bus.{h,c}  <- dbc/romo.dbc (cantools generate_c_source;
 #   the bus of the ECU core: messages, their frame signals and decoding, the diagnosis frame)
-.venv/bin/python fw/ecu/tools/gen_romo_can.py --dbc dbc/romo.dbc --out "$romo/can"
+.venv/bin/fdi-analyze export-can analysis/models/romo_grouped.toml --dbc dbc/romo.dbc --out "$romo/can"
 # analysis/models/three_tank_thresholds.toml [generated], [observer]  <- fault-free drives of the generic simulator
 #   (~1 min); host_tools/scenarios/three_tank_fault_sizes.toml [per_test.*]  <- the step-fault sweep (~1 min)
 generic=(analysis/models/three_tank.toml --thresholds analysis/models/three_tank_thresholds.toml

@@ -479,11 +479,12 @@ class DiagnosisModel:
 
     # ------------------------------------------------------------------------------------------ export
     def export_c(self, out: str | Path, thresholds: str | Path, *, fault_sizes: str | Path | None = None,
-                 name: str = "fdi_romo_table", workers: int = 2) -> ExportResult:
+                 name: str = "fdi_romo_table", workers: int = 2, uncalibrated: bool = False) -> ExportResult:
         """Write the firmware's diagnosis table (NAME.h/.c) and residual generators to `out`, as ``fdi-analyze
         export-c`` does: the tests of the thresholds file's selection, or the optimal realizable selection.
         `thresholds` is a file or the name of a shipped one (``romo_thresholds``); `fault_sizes` a file
-        (host_tools/scenarios/fault_sizes.toml: the stated size per test, see ``fdi-tune fault-sizes``)."""
+        (host_tools/scenarios/fault_sizes.toml: the stated size per test, see ``fdi-tune fault-sizes``). A test
+        without a calibrated variance is refused unless `uncalibrated` (``--uncalibrated``: placeholders, marked)."""
         from fdi_analysis.cli.export import generate_all
 
         if self.model.source is None or not self.model.symbolic:
@@ -491,7 +492,7 @@ class DiagnosisModel:
                            "a structure only")
         out = Path(out)
         files = generate_all(self.model.source, thresholds_file(thresholds), out, name, workers, False,
-                             Path(fault_sizes) if fault_sizes is not None else None)
+                             Path(fault_sizes) if fault_sizes is not None else None, uncalibrated=uncalibrated)
         out.mkdir(parents=True, exist_ok=True)
         written = []
         for fname, text in files.items():

@@ -145,31 +145,9 @@
 #include "fdi_static_assert.h"
 #include "fdi_status.h"
 #include "fdi_table.h"
-
-#ifndef FDI_DIAG_MAX_TESTS
-#define FDI_DIAG_MAX_TESTS 16U /* capacity; override with -DFDI_DIAG_MAX_TESTS=n (1..32) */
-#endif
-
-#if (FDI_DIAG_MAX_TESTS < 1) || (FDI_DIAG_MAX_TESTS > 32)
-#error "FDI_DIAG_MAX_TESTS must be in 1..32 (test bitmasks are uint32_t)"
-#endif
-
-#ifndef FDI_DIAG_MAX_SENS
-#define FDI_DIAG_MAX_SENS 192U /* sensitivities of all tests together; override with -DFDI_DIAG_MAX_SENS=n (1..255) */
-#endif
-
-#if (FDI_DIAG_MAX_SENS < 1) || (FDI_DIAG_MAX_SENS > 255)
-#error "FDI_DIAG_MAX_SENS must be in 1..255 (offsets are uint8_t)"
-#endif
-
-#ifndef FDI_DIAG_MAX_FILTERS
-#define FDI_DIAG_MAX_FILTERS 48U /* filter states: the set's bank + the hand-written generators' instance filters;
-                                    override with -DFDI_DIAG_MAX_FILTERS=n (1..255) */
-#endif
-
-#if (FDI_DIAG_MAX_FILTERS < 1) || (FDI_DIAG_MAX_FILTERS > 255)
-#error "FDI_DIAG_MAX_FILTERS must be in 1..255"
-#endif
+/* FDI_DIAG_MAX_TESTS (tests), FDI_DIAG_MAX_SENS (sensitivities of all tests together), FDI_DIAG_MAX_FILTERS (the
+   set's bank + the hand-written generators' instance filters): overridable capacities, generated/fdi_capacity.h */
+#include "generated/fdi_capacity.h"
 
 #define FDI_DIAG_SETTLE_TAUS 6.0f
 #define FDI_DIAG_MAX_SENS_EVERY 16U /* fdi_diag_config_t.sens_every */
@@ -335,12 +313,6 @@ typedef struct
    the design point has no finite settling time (the table itself is checked by fdi_diag_init). */
 fdi_status_t fdi_diag_config_default(fdi_diag_config_t *cfg, const fdi_table_t *table);
 
-/* BAD_ARG: NULL or bad config (also: the table's generators output more sensitivities than FDI_DIAG_MAX_SENS
-   while they are needed: reported, or exoneration; the set's bank and the hand-written generators' filters need
-   more than FDI_DIAG_MAX_FILTERS states); BAD_TABLE: table fails fdi_table_check(); NOT_FINITE:
-   NaN/Inf in cfg. */
-fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg);
-
 /* One fixed step with the current frame; validity uses the frame's bit layout. BAD_ARG on NULL only. */
 fdi_status_t fdi_diag_step(fdi_diag_t *self, const fdi_frame_t *frame, uint32_t validity);
 
@@ -372,5 +344,64 @@ typedef struct
 /* Copy the exoneration's evidence after the last step into *out (read only; no cost to the step). BAD_ARG on
    NULL. */
 fdi_status_t fdi_diag_explain(const fdi_diag_t *self, fdi_diag_evidence_t *out);
+
+/* Layout signature: the capacities and struct sizes a translation unit sees. A caller compiled with other
+   capacities than the library (e.g. -DFDI_DIAG_MAX_TESTS=24 against a library built with 16, or with another
+   FDI_EST_MAX_PARAMS) would hand it structures of another size and layout; fdi_diag_init() (inline, so compiled in
+   the caller) passes the caller's signature to fdi_diag_init_layout(), which refuses any difference from the
+   library's own with FDI_BAD_LAYOUT before it reads the configuration. The instance is only marked failed, as after
+   any failed init (its first member, `table`, at the same place in every layout), so fdi_diag_step() refuses it. */
+typedef struct
+{
+    uint32_t max_tests;       /* FDI_DIAG_MAX_TESTS */
+    uint32_t max_sens;        /* FDI_DIAG_MAX_SENS */
+    uint32_t max_filters;     /* FDI_DIAG_MAX_FILTERS */
+    uint32_t est_max_params;  /* FDI_EST_MAX_PARAMS */
+    uint32_t gen_max_filters; /* FDI_GEN_MAX_FILTERS */
+    uint32_t size_diag;       /* sizeof(fdi_diag_t) */
+    uint32_t size_config;     /* sizeof(fdi_diag_config_t) */
+    uint32_t size_result;     /* sizeof(fdi_diag_result_t) */
+    uint32_t size_evidence;   /* sizeof(fdi_diag_evidence_t) */
+    uint32_t size_table;      /* sizeof(fdi_table_t) */
+    uint32_t size_gen_desc;   /* sizeof(fdi_gen_desc_t) */
+} fdi_diag_layout_t;
+/* cppcheck-suppress misra-c2012-2.3 ; compile-time assertion (fw/MISRA_DEVIATIONS.md) */
+FDI_STATIC_ASSERT(sizeof(fdi_diag_layout_t) == (11U * sizeof(uint32_t)), fdi_sa_diag_layout_size);
+
+/* The layout signature of the translation unit that calls it (the caller's view of the library's structures). */
+static inline fdi_diag_layout_t fdi_diag_layout_here(void)
+{
+    const fdi_diag_layout_t here = {FDI_DIAG_MAX_TESTS,
+                                    FDI_DIAG_MAX_SENS,
+                                    FDI_DIAG_MAX_FILTERS,
+                                    FDI_EST_MAX_PARAMS,
+                                    FDI_GEN_MAX_FILTERS,
+                                    (uint32_t)sizeof(fdi_diag_t),
+                                    (uint32_t)sizeof(fdi_diag_config_t),
+                                    (uint32_t)sizeof(fdi_diag_result_t),
+                                    (uint32_t)sizeof(fdi_diag_evidence_t),
+                                    (uint32_t)sizeof(fdi_table_t),
+                                    (uint32_t)sizeof(fdi_gen_desc_t)};
+    return here;
+}
+
+/* The library's layout signature, as the library was compiled, into *out (for a message naming both sides of a
+   FDI_BAD_LAYOUT). BAD_ARG on NULL. */
+fdi_status_t fdi_diag_layout(fdi_diag_layout_t *out);
+
+/* fdi_diag_init with the caller's layout signature `caller` (fdi_diag_layout_here() of the caller). BAD_ARG: NULL
+   (any argument); BAD_LAYOUT: *caller differs from the library's signature (cfg not read); then as fdi_diag_init. */
+fdi_status_t fdi_diag_init_layout(fdi_diag_t *self, const fdi_diag_config_t *cfg, const fdi_diag_layout_t *caller);
+
+/* Initialise the diagnoser (inline: the layout signature is the caller's, fdi_diag_init_layout). BAD_ARG: NULL or
+   bad config (also: the table's generators output more sensitivities than FDI_DIAG_MAX_SENS while they are needed:
+   reported, or exoneration; the set's bank and the hand-written generators' filters need more than
+   FDI_DIAG_MAX_FILTERS states); BAD_LAYOUT: the caller was compiled with other capacities or struct layouts than the
+   library; BAD_TABLE: table fails fdi_table_check(); NOT_FINITE: NaN/Inf in cfg. */
+static inline fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
+{
+    const fdi_diag_layout_t caller = fdi_diag_layout_here();
+    return fdi_diag_init_layout(self, cfg, &caller);
+}
 
 #endif /* FDI_DIAG_H */

@@ -56,12 +56,8 @@
 #include "fdi_static_assert.h"
 #include "fdi_status.h"
 
-#ifndef FDI_EST_MAX_PARAMS
-#define FDI_EST_MAX_PARAMS 3U /* quantities one test estimates; override with -DFDI_EST_MAX_PARAMS=n (1..4) */
-#endif
-#if (FDI_EST_MAX_PARAMS < 1) || (FDI_EST_MAX_PARAMS > 4)
-#error "FDI_EST_MAX_PARAMS must be in 1..4"
-#endif
+/* FDI_EST_MAX_PARAMS: quantities one test estimates, an overridable capacity (generated/fdi_capacity.h) */
+#include "generated/fdi_capacity.h"
 #define FDI_EST_P_SIZE ((FDI_EST_MAX_PARAMS * (FDI_EST_MAX_PARAMS + 1U)) / 2U) /* packed upper triangle of P */
 
 /* One estimated quantity: its deviation from the model's value, in the quantity's units (const data). */

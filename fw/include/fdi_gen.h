@@ -69,12 +69,9 @@
 #include "fdi_status.h"
 #include "fdi_svf.h"
 
-#ifndef FDI_GEN_MAX_FILTERS
-#define FDI_GEN_MAX_FILTERS 16U /* instance filters of one hand-written generator; -DFDI_GEN_MAX_FILTERS=n (1..255) */
-#endif
-#if (FDI_GEN_MAX_FILTERS < 1) || (FDI_GEN_MAX_FILTERS > 255)
-#error "FDI_GEN_MAX_FILTERS must be in 1..255"
-#endif
+/* FDI_GEN_MAX_FILTERS: instance filters of one hand-written generator, an overridable capacity
+   (generated/fdi_capacity.h) */
+#include "generated/fdi_capacity.h"
 
 #define FDI_GEN_MAX_SLOTS 32U   /* generators of one set (slot bitmasks are uint32_t) */
 #define FDI_GEN_MAX_BANK 255U   /* filters of one bank (indices are uint8_t) */

@@ -447,12 +447,35 @@ static fdi_status_t check_config(const fdi_diag_config_t *cfg)
     return st;
 }
 
-fdi_status_t fdi_diag_init(fdi_diag_t *self, const fdi_diag_config_t *cfg)
+fdi_status_t fdi_diag_layout(fdi_diag_layout_t *out)
 {
     fdi_status_t st = FDI_BAD_ARG;
-    if ((self != NULL) && (cfg != NULL))
+    if (out != NULL)
     {
-        st = check_config(cfg);
+        *out = fdi_diag_layout_here();
+        st = FDI_OK;
+    }
+    return st;
+}
+
+/* Whether the caller's layout signature is the library's (field by field: the struct has no padding). */
+static bool same_layout(const fdi_diag_layout_t *caller)
+{
+    const fdi_diag_layout_t own = fdi_diag_layout_here();
+    return (caller->max_tests == own.max_tests) && (caller->max_sens == own.max_sens) &&
+           (caller->max_filters == own.max_filters) && (caller->est_max_params == own.est_max_params) &&
+           (caller->gen_max_filters == own.gen_max_filters) && (caller->size_diag == own.size_diag) &&
+           (caller->size_config == own.size_config) && (caller->size_result == own.size_result) &&
+           (caller->size_evidence == own.size_evidence) && (caller->size_table == own.size_table) &&
+           (caller->size_gen_desc == own.size_gen_desc);
+}
+
+fdi_status_t fdi_diag_init_layout(fdi_diag_t *self, const fdi_diag_config_t *cfg, const fdi_diag_layout_t *caller)
+{
+    fdi_status_t st = FDI_BAD_ARG;
+    if ((self != NULL) && (cfg != NULL) && (caller != NULL))
+    {
+        st = same_layout(caller) ? check_config(cfg) : FDI_BAD_LAYOUT;
     }
     if (st == FDI_OK)
     {

@@ -36,6 +36,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from fdi_analysis.names import in_order
 from fdi_host.can.logs import LogError, formats_text, is_log, looks_like_log
 from fdi_host.errors import FdiHostError
 from fdi_host.executors import ExecutorError, run_tasks
@@ -224,7 +225,7 @@ def aggregate(results: Sequence[LogResult], wall: float, executor: str, table: s
         for f in r.faults:
             by_fault.setdefault(f.fault, []).append(f)
     rows = []
-    for fault in sorted(by_fault, key=lambda f: FAULT_IDS.index(f) if f in FAULT_IDS else len(FAULT_IDS)):
+    for fault in in_order(by_fault, FAULT_IDS):
         cases = by_fault[fault]
         delays = [c.detection_delay for c in cases if c.detected and c.detection_delay is not None]
         classes = {c.expected_class for c in cases}

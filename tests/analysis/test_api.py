@@ -155,13 +155,14 @@ def test_export_c_writes_what_the_export_generates(tmp_path: Path, models_dir: P
 
     calls = []
 
-    def fake(model: Path, thresholds: Path, out: Path, name: str, *rest: object) -> dict[str, str]:
-        calls.append((model, thresholds, out, name, rest))
+    def fake(model: Path, thresholds: Path, out: Path, name: str, *rest: object, **options: object) -> dict[str, str]:
+        calls.append((model, thresholds, out, name, rest, options))
         return {f"{name}.h": "/* h */\n", f"{name}.c": "/* c */\n"}
 
     monkeypatch.setattr(cli_export, "generate_all", fake)
     res = fa.DiagnosisModel.load("romo_grouped").export_c(tmp_path / "gen", "romo_thresholds", name="t")
     assert calls[0][:4] == ((models_dir / "romo_grouped.toml").resolve(), models_dir / "romo_thresholds.toml",
                             tmp_path / "gen", "t")
+    assert calls[0][5] == {"uncalibrated": False}  # refused unless asked: export_c(..., uncalibrated=True)
     assert res.files == (tmp_path / "gen" / "t.h", tmp_path / "gen" / "t.c")
     assert (tmp_path / "gen" / "t.c").read_text(encoding="utf-8") == "/* c */\n"

@@ -9,7 +9,7 @@ matplotlib.use("Agg")
 
 import numpy as np
 
-from fdi_analysis.names import axis_labels, natural_key, natural_sorted
+from fdi_analysis.names import axis_labels, in_order, natural_key, natural_sorted
 from fdi_analysis.plots import plot_fault_matrix
 
 
@@ -19,6 +19,14 @@ def test_natural_order_reads_numbers_as_numbers_and_any_name_as_text() -> None:
         "f3", "fuel_flow", "tank2_leak", "tank10_leak"]
     assert natural_sorted(["b", "a", "7", "a1"]) == ["7", "a", "a1", "b"]
     assert natural_key("x") < natural_key("y")
+
+
+def test_declared_order_first_then_natural_order() -> None:
+    """The order the model's author wrote (three_tank: fP, fL1, ..., fS3), names it does not declare after them."""
+    order = ["fP", "fL1", "fL2", "fL3", "fC12", "fC23", "fC3", "fS1"]
+    assert in_order({"fS1", "fC3", "fP", "fC12"}, order) == ["fP", "fC12", "fC3", "fS1"]
+    assert in_order(["x10", "fL1", "x2"], order) == ["fL1", "x2", "x10"]
+    assert in_order(["b", "a"], []) == natural_sorted(["b", "a"])
 
 
 def test_axis_labels_shorten_only_the_paper_names() -> None:

@@ -79,6 +79,40 @@ static void noisy(veh_meas_cfg_t *mc)
     }
 }
 
+/* The layout signature: the library's is the one this test was compiled with; a caller compiled with another
+   capacity or struct size is refused with FDI_BAD_LAYOUT and its instance is then refused by the step. */
+static void test_layout_signature(fdi_diag_t *d, const fdi_diag_config_t *c)
+{
+    const fdi_diag_layout_t here = fdi_diag_layout_here();
+    fdi_diag_layout_t own;
+    fdi_diag_layout_t other;
+    fdi_frame_t in;
+    memset(&in, 0, sizeof in);
+    assert_int_equal(fdi_diag_layout(NULL), FDI_BAD_ARG);
+    assert_int_equal(fdi_diag_layout(&own), FDI_OK);
+    assert_memory_equal(&own, &here, sizeof own);
+    assert_int_equal(own.max_tests, FDI_DIAG_MAX_TESTS);
+    assert_int_equal(own.size_diag, sizeof(fdi_diag_t));
+    assert_int_equal(fdi_diag_init_layout(d, c, NULL), FDI_BAD_ARG);
+    assert_int_equal(fdi_diag_init_layout(NULL, c, &here), FDI_BAD_ARG);
+    assert_int_equal(fdi_diag_init_layout(d, NULL, &here), FDI_BAD_ARG);
+    assert_int_equal(fdi_diag_init_layout(d, c, &here), FDI_OK);
+    other = here;
+    other.max_tests = FDI_DIAG_MAX_TESTS + 8U; /* a caller built with -DFDI_DIAG_MAX_TESTS=24 */
+    assert_int_equal(fdi_diag_init_layout(d, c, &other), FDI_BAD_LAYOUT);
+    assert_int_equal(fdi_diag_step(d, &in, ROMO_SIGM_ALL), FDI_BAD_ARG); /* refused after the failed init */
+    other = here;
+    other.est_max_params = here.est_max_params + 1U;
+    assert_int_equal(fdi_diag_init_layout(d, c, &other), FDI_BAD_LAYOUT);
+    other = here;
+    other.size_diag = here.size_diag + 4U; /* same capacities, another struct layout */
+    assert_int_equal(fdi_diag_init_layout(d, c, &other), FDI_BAD_LAYOUT);
+    other = here;
+    other.size_gen_desc = 0U;
+    assert_int_equal(fdi_diag_init_layout(d, c, &other), FDI_BAD_LAYOUT);
+    assert_int_equal(fdi_diag_init(d, c), FDI_OK);
+}
+
 static void test_bad_args(void **state)
 {
     fdi_diag_t d;
@@ -117,6 +151,7 @@ static void test_bad_args(void **state)
     c = config(FDI_ISO_EXONERATION);
     assert_int_equal(fdi_diag_init(&d, &c), FDI_OK);
     assert_int_equal(fdi_diag_step(NULL, &in, 0U), FDI_BAD_ARG);
+    test_layout_signature(&d, &c);
     assert_int_equal(fdi_diag_step(&d, NULL, 0U), FDI_BAD_ARG);
     assert_int_equal(fdi_diag_result(NULL, &res), FDI_BAD_ARG);
     assert_int_equal(fdi_diag_result(&d, NULL), FDI_BAD_ARG);

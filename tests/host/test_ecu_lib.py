@@ -84,7 +84,7 @@ def test_vx_drift_is_isolated_as_f4(f4_frames: list[Frame], db: RomoDatabase) ->
     assert detected, "f4 was not detected"
     assert detected[0][0] > ONSET, "detection before the fault"
     assert detected[0][0] - ONSET < 1.0
-    isolated = collections.Counter(tuple(r.candidate_labels()) for _, r in detected if r.isolated)
+    isolated = collections.Counter(tuple(r.candidate_labels(ecu.table)) for _, r in detected if r.isolated)
     assert isolated[("f4",)] >= 100  # isolated as f4 for at least 1 s
     assert set(isolated) == {("f4",)}, f"isolated as something else: {isolated}"
     # every frame says what the C result says (decoded with cantools from the DBC)

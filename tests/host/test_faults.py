@@ -7,6 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from fdi_analysis.names import natural_sorted
 from fdi_host.can.traffic import build_frames, decode_frames
 from fdi_host.sim.faults import FAULT_IDS, FaultSpec, FaultSpecError, fault_matrix, parse_fault
 from fdi_host.sim.scenario import Scenario, load_scenario
@@ -58,7 +59,7 @@ def _run(short: Scenario, fid: str) -> SimResult:
     return simulate(short, faults=[FaultSpec(fid, ONSET, MAGNITUDE[fid])])
 
 
-@pytest.mark.parametrize("fid", sorted(SENSOR_FAULTS, key=lambda f: int(f[1:])))
+@pytest.mark.parametrize("fid", natural_sorted(SENSOR_FAULTS))
 def test_sensor_fault_moves_exactly_its_can_signal(short: Scenario, reference: SimResult, fid: str) -> None:
     faulty = _run(short, fid)
     ref_dec = decode_frames(build_frames(reference))

@@ -74,7 +74,7 @@ def test_the_arrays_are_the_ecus_results_step_by_step(drive: api.Drive, diagnosi
     assert d.tests == tuple(n.split(":")[0] for n in ref[0].test_names)
     assert np.array_equal(d.alarm_matrix(), d.status == STATUS.index("alarm"))
     for k in (0, len(d) // 2, -1):
-        assert d.candidate_names(k) == tuple(ref[k].candidate_labels())
+        assert d.candidate_names(k) == tuple(ref[k].candidate_labels(table_info("romo")))
     # the fault is found: detected after the onset and never before, f4 among the candidates
     first = d.first_detection
     assert first is not None and ONSET < first < ONSET + 0.5

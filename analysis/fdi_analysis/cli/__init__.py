@@ -1,6 +1,6 @@
 """`fdi-analyze`: the command line of the offline analysis. One module per subcommand (report, mso, robustness,
-select, practical, export, convert); `common` is what every command line of the project shares (the `fdi_host`
-programs import it too).
+select, practical, export, export_can, convert); `common` is what every command line of the project shares (the
+`fdi_host` programs import it too).
 
 The subcommands are imported when `main` builds the parser, not with this package: importing
 `fdi_analysis.cli.common` runs this file first, and a host program's start must not load the analysis (sympy,
@@ -22,6 +22,7 @@ EPILOG = """examples:
   fdi-analyze select analysis/models/romo_grouped.toml -o out/grouped
   fdi-analyze export-c analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml \\
       --fault-sizes host_tools/scenarios/fault_sizes.toml --out fw/vehicles/romo/generated
+  fdi-analyze export-can analysis/models/romo_grouped.toml --dbc dbc/romo.dbc --out fw/vehicles/romo/generated/can
   fdi-analyze report romo_grouped -o out/grouped          (a model shipped with the package, by name)
   fdi-analyze convert analysis/models/romo_grouped.toml --to-fdt out/romo_grouped_fdt.json
 (the closed-loop steps on simulated drives, screen, calibrate, fault-sizes and residuals, are fdi-tune's)
@@ -38,10 +39,10 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     add_version(parser)
-    from fdi_analysis.cli import convert, export, mso, practical, report, robustness, select
+    from fdi_analysis.cli import convert, export, export_can, mso, practical, report, robustness, select
 
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for mod in (report, mso, robustness, select, practical, export, convert):
+    for mod in (report, mso, robustness, select, practical, export, export_can, convert):
         mod.register(sub)
     return parser
 

@@ -12,7 +12,7 @@ from typing import Any
 from fdi_analysis.cli.common import fail
 from fdi_analysis.export.thresholds import with_selection
 from fdi_analysis.model_loader import load_model
-from fdi_analysis.names import natural_sorted
+from fdi_analysis.names import in_order
 from fdi_analysis.plots import plot_budget_sweep, plot_practical_isolability, save
 from fdi_analysis.selection.budget import BudgetSelection, budget_sweep, select_within_budget
 from fdi_analysis.selection.practical import (
@@ -103,12 +103,12 @@ def run(args: argparse.Namespace) -> int:
     by_label = {c.label: c for c in scr.candidates}
     for t in sel.tests:
         c = by_label[t.label]
-        print(f"  {t.label:<9} cost {t.cost:>5}  sigma {c.sigma:<8.3g} faults {' '.join(natural_sorted(t.faults))}")
+        print(f"  {t.label:<9} cost {t.cost:>5}  sigma {c.sigma:<8.3g} faults {' '.join(in_order(t.faults, faults))}")
     for line in unmet_lines(sel):
         print(line)
     if args.thresholds is not None:
         rows = [(by_label[t.label].equations, f"{t.label}: sigma {by_label[t.label].sigma:.3g}, cost {t.cost}, "
-                 f"faults {' '.join(natural_sorted(t.faults))}") for t in sel.tests]
+                 f"faults {' '.join(in_order(t.faults, faults))}") for t in sel.tests]
         provenance = (f"fdi-analyze practical {args.model.as_posix()} --screening {args.screening.as_posix()}: "
                       f"optimal ({sel.solver}), cost {sel.cost}")
         text = args.thresholds.read_text(encoding="utf-8")
@@ -211,7 +211,7 @@ def write_report(out: Path, name: str, faults: Sequence[str], sel: PracticalSele
         "cost": sel.cost,
         "criterion": {"gate": scr.gate, "margin": scr.margin, "share": scr.share, "sizes": scr.sizes},
         "scenarios": list(sel.scenarios),
-        "tests": [{"label": t.label, "cost": t.cost, "faults": natural_sorted(t.faults),
+        "tests": [{"label": t.label, "cost": t.cost, "faults": in_order(t.faults, faults),
                    "detects": sorted(f"{f}@{s}" for f, s in t.detects)} for t in sel.tests],
         "unmet": [{"scenario": u.scenario, "faults": [u.fault_a, *([u.fault_b] if u.fault_b else [])],
                    "kind": u.kind.name, "tests": u.tests, "closest_test": u.best_test, "closest_share": u.best_share,
@@ -229,7 +229,7 @@ def write_report(out: Path, name: str, faults: Sequence[str], sel: PracticalSele
              f"{len(sel.tests)} tests, cost {sel.cost}, optimal ({sel.solver}); criterion: fault-to-noise ratio at "
              f"the required size >= {scr.gate:g} x {scr.margin:g} at {scr.share:.0%} of a manoeuvre's operating "
              "points.", "", "| test | cost | faults |", "|---|---|---|"]
-    lines += [f"| {t.label} | {t.cost} | {', '.join(natural_sorted(t.faults))} |" for t in sel.tests]
+    lines += [f"| {t.label} | {t.cost} | {', '.join(in_order(t.faults, faults))} |" for t in sel.tests]
     lines += ["", "## Requirements no realizable test meets", "", *unmet_lines(sel), "",
               "![structural and practical isolability](practical_isolability.png)", ""]
     (out / "practical.md").write_text("\n".join(lines), encoding="utf-8")

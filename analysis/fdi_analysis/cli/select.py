@@ -177,7 +177,7 @@ def write_outputs(out: Path, model: Model, n_sets: int, kind: str, cands: list[A
     lines += [f"| {k} | {len(s.tests)} | {s.total_cost} | {optimality(s)} |" for k, s in selections.items()]
     for key, sel in selections.items():
         lines += ["", f"## {key}", "", "| # | MSO | unknowns | faults | interpretation |", "|---|---|---|---|---|"]
-        lines += [f"| {i + 1} | {r['mso']} | {r['unknowns']} | {', '.join(f.lstrip('f') for f in r['faults'])} | "
+        lines += [f"| {i + 1} | {r['mso']} | {r['unknowns']} | {', '.join(r['faults'])} | "
                   f"{r['interpretation']} |" for i, r in enumerate(selection_rows(model, sel))]
     lines += ["", "![fault matrix, method A (x) and B (squares)](fault_matrix.png)", "",
               "![faults per selected MSO](selected_faults.png)", ""]

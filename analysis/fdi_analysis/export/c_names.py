@@ -2,7 +2,7 @@
 
 A vehicle target (fw/vehicles/<vehicle>/) holds its generated files under the names below; the table
 ``fdi_<vehicle>_table`` gives the vehicle (``romo`` for ``fdi_romo_table``, ``three_tank`` for
-``fdi_three_tank_table``), and every other name follows from it. The CAN generator of fw/ecu/tools uses the same
+``fdi_three_tank_table``), and every other name follows from it. The CAN codec (`can_codec`) uses the same
 names for the signals it decodes into the frame.
 """
 

@@ -31,15 +31,18 @@ from fdi_analysis.export.c_expr import c_float, to_c
 from fdi_analysis.export.c_names import VehicleNames
 from fdi_analysis.export.c_order import defined_before_use
 from fdi_analysis.export.c_text import comment_text
+from fdi_analysis.export.capacity import DEFAULT as DEFAULT_CAPACITY
+from fdi_analysis.export.capacity import Capacity
 from fdi_analysis.residuals.estimation import Estimated
 from fdi_analysis.residuals.generator import ACCEL_SIGNALS, DOMAIN_SIGNAL, XHAT, Generator
 from fdi_analysis.residuals.signals import Node, node_of, readable
 
+# Fixed limits of the formats (the overridable capacities, checked with a `Capacity`, are export.capacity's)
 MAX_BANK = 255  # FDI_GEN_MAX_BANK of fw/include/fdi_gen.h
 MAX_GENERATORS = 32  # FDI_GEN_MAX_SLOTS of fw/include/fdi_gen.h (and FDI_TABLE_MAX_TESTS)
-MAX_SENS = 32  # FDI_DIAG_MAX_TEST_SENS of fw/include/fdi_diag.h
+MAX_SENS = 32  # sensitivities of one generator: its sens_mask is a uint32_t of faults (FDI_TABLE_MAX_FAULTS)
 MAX_FRAME = 32  # FDI_FRAME_MAX_SIGNALS of fw/include/fdi_frame.h
-MAX_ESTIMATED = 3  # FDI_EST_MAX_PARAMS of fw/include/fdi_est.h (its default)
+MAX_ESTIMATED = DEFAULT_CAPACITY.est_max_params  # FDI_EST_MAX_PARAMS's default (export.capacity)
 
 
 class EmitError(FdiError, ValueError):
@@ -645,9 +648,6 @@ def _slot_code(k: int, g: Generator, p: _Pass, name: _Names, names: VehicleNames
     unknown = [q for q, _ in g.uncertainty if q not in widths]
     if unknown:
         raise EmitError(f"{g.name}: sensitivities to {unknown}, not uncertain quantities of the model")
-    if len(estimated) > MAX_ESTIMATED:
-        raise EmitError(f"{g.name}: {len(estimated)} estimated quantities, the firmware estimates {MAX_ESTIMATED} "
-                        "per test (FDI_EST_MAX_PARAMS)")
     body = SLOT_FMT.substitute(bit=f"{1 << k:08X}", name=g.name, equations=" ".join(g.equations),
                                lines=_slot_body(k, g, p, name, faults, widths, estimated).rstrip("\n"))
     return SlotCode(slot=k, name=g.name, equations=" ".join(g.equations), causality=g.causality(), body=body,
@@ -661,15 +661,26 @@ def _slot_code(k: int, g: Generator, p: _Pass, name: _Names, names: VehicleNames
 
 def generators_file(generators: Sequence[Generator], names: VehicleNames, faults: Sequence[str],
                     banner: str, signals: Sequence[str], widths: Mapping[str, float] | None = None,
-                    estimation: Mapping[str, Sequence[Estimated]] | None = None) -> GeneratorsFile:
+                    estimation: Mapping[str, Sequence[Estimated]] | None = None,
+                    capacity: Capacity = DEFAULT_CAPACITY) -> GeneratorsFile:
     """What goes into the generator files: the set of `generators` (slot = position), for the model's fault list
     `faults` (bit j of a sensitivity mask = faults[j]); `signals`: the frame's signals in index order (the bank's
     order; the derived signals take the places after them), every signal the generators read among them;
     `widths`: the half-width of every uncertain quantity the generators' `uncertainty` names (the spread of the
     adaptive threshold, fdi_gen.h); `estimation`: by generator name, the quantities the diagnoser may estimate on line
-    for it (fdi_est.h; the spread leaves them out, the step writes their regressors)."""
+    for it (fdi_est.h; the spread leaves them out, the step writes their regressors); `capacity`: the capacities the
+    firmware is built with (export.capacity; default: the C defaults): more generators (tests), sensitivities in
+    all, bank filters or estimated quantities of a test than it holds are refused, naming both numbers."""
     if not 0 < len(generators) <= MAX_GENERATORS:
         raise EmitError(f"{len(generators)} generators; the firmware holds 1..{MAX_GENERATORS}")
+    est = estimation or {}
+    over = [capacity.exceeded("max_tests", len(generators), "generators (one test each)"),
+            capacity.exceeded("max_sens", sum(len(g.sensitivities) for g in generators), "sensitivities in all")]
+    over += [capacity.exceeded("est_max_params", len(est.get(g.name, ())), f"{g.name}: estimated quantities")
+             for g in generators]
+    reasons = [r for r in over if r]
+    if reasons:
+        raise EmitError("; ".join(reasons))
     order = list(signals)
     missing = sorted({k for g in generators for k in g.knowns} - set(order))
     if missing:
@@ -680,10 +691,12 @@ def generators_file(generators: Sequence[Generator], names: VehicleNames, faults
     nodes = bank_nodes(generators, order + [c.signal for _, c in composites])
     if len(nodes) > MAX_BANK:
         raise EmitError(f"{len(nodes)} filters in the bank, the firmware holds {MAX_BANK}")
+    too_many = capacity.exceeded("max_filters", len(nodes), "filters in the bank")
+    if too_many:
+        raise EmitError(too_many)
     p = _global_pass(generators)
     name = _Names(names, {n: k for k, n in enumerate(nodes)}, frozenset(str(t.symbol) for t in p.temps))
     all_slots = (1 << len(generators)) - 1
-    est = estimation or {}
     slots = tuple(_slot_code(k, g, p, name, names, faults, widths or {}, est.get(g.name, ()))
                   for k, g in enumerate(generators))
     derived = tuple(DerivedSignal(len(order) + k, c.signal, gname, to_c(c.expr, name), c.sources,

@@ -91,6 +91,11 @@ def signals_file(model: Model, names: VehicleNames, banner: str) -> SignalsFile:
     """What goes into the signals files of `model` for the vehicle `names`."""
     if not 0 < len(model.knowns) <= MAX_SIGNALS:
         raise SignalsError(f"{model.name}: {len(model.knowns)} measured signals; the frame holds 1..{MAX_SIGNALS}")
+    macros = [names.sig_index(v.name) for v in model.knowns]
+    bad = [v.name for v, m in zip(model.knowns, macros, strict=True) if not m.isascii() or macros.count(m) > 1]
+    if bad:
+        raise SignalsError(f"{model.name}: signals {', '.join(bad)} have no C macro of their own ({names.prefix}_SIG_ "
+                           "and the name in capitals, ASCII): rename them")
     sigs = []
     for k, v in enumerate(model.knowns):
         note = " ".join(x for x in (f"[{v.unit}]" if v.unit else "", v.desc, "(input)" if v.input else "") if x)

@@ -21,6 +21,8 @@ from fdi_analysis.errors import FdiError
 from fdi_analysis.export.c_expr import c_float
 from fdi_analysis.export.c_names import VehicleNames
 from fdi_analysis.export.c_text import banner, c_string, comment_text
+from fdi_analysis.export.capacity import DEFAULT as DEFAULT_CAPACITY
+from fdi_analysis.export.capacity import Capacity
 from fdi_analysis.export.fault_sizes import REACTION_WINDOW_S, SENSITIVITY_MARGIN, FaultSizes, test_size_rows
 from fdi_analysis.export.generators import kind_name
 from fdi_analysis.export.thresholds import Thresholds
@@ -29,8 +31,8 @@ from fdi_analysis.interpretation import interpret
 from fdi_analysis.model import Model
 from fdi_analysis.mso.results import bits
 
-MAX_TESTS = 32
-MAX_FAULTS = 32
+MAX_TESTS = 32  # FDI_TABLE_MAX_TESTS of fw/include/fdi_table.h (the table format; the diagnoser's is Capacity)
+MAX_FAULTS = 32  # FDI_TABLE_MAX_FAULTS of fw/include/fdi_table.h
 NO_GENERATOR = "NULL"
 
 
@@ -45,7 +47,7 @@ ${banner}
  * ${table}: diagnosis table of model ${model} (${n_tests} tests, ${n_faults} faults), vehicle ${vehicle}.
  * Thresholds: ${thresholds}.
  */
-#ifndef ${guard}
+${uncalibrated}#ifndef ${guard}
 #define ${guard}
 
 #include "fdi_table.h"
@@ -60,7 +62,7 @@ extern const char *const ${table}_unknowns[${n_tests}];
 
 SOURCE_FMT = Template("""\
 ${banner}
-#include "${table}.h"
+${uncalibrated}#include "${table}.h"
 
 #include <stddef.h>
 
@@ -127,6 +129,12 @@ static const fdi_table_envelope_t ${vehicle}_envelope = {
 
 """)
 
+UNCALIBRATED_FMT = Template("""\
+/* UNCALIBRATED: variances are placeholders (1.0); do not use on a vehicle.
+   No calibrated variance ([generated]) in ${thresholds} for ${tests}.
+   Exported with --uncalibrated: calibrate them (fdi-tune calibrate) and export again. */
+""")
+
 TEST_FMT = Template("""\
     {.gen = ${generator}, .interpretation = ${interpretation},
      .mso_id = ${mso_id}U, .fault_mask = 0x${fault_mask}U, .input_mask = ${inputs},
@@ -169,25 +177,38 @@ class TableFile:
     envelope: tuple[tuple[str, float], ...] = ()  # (signal, limit) of the calibrated envelope; () = none
     envelope_votes: int = 0
     envelope_margin: float = 0.0
+    placeholders: tuple[str, ...] = ()  # tests whose variance is a placeholder (1.0; exported `uncalibrated`)
 
 
 # ------------------------------------------------------------------------------------------ computing
+def _check_counts(n_tests: int, n_faults: int, capacity: Capacity) -> None:
+    """Refuse a table the firmware cannot hold: the table format's limits, then the diagnoser's capacity."""
+    if not 0 < n_tests <= MAX_TESTS:
+        raise ExportError(f"{n_tests} tests selected; the firmware table holds 1..{MAX_TESTS}")
+    too_many = capacity.exceeded("max_tests", n_tests, "tests selected")
+    if too_many:
+        raise ExportError(too_many)
+    if n_faults > MAX_FAULTS:
+        raise ExportError(f"{n_faults} faults; the firmware table holds at most {MAX_FAULTS}")
+
+
 def table_file(model: Model, tests: Sequence[Candidate], thresholds: Thresholds, names: VehicleNames, banner: str,
                generated: Sequence[bool] | None = None, sizes: FaultSizes | None = None,
                response_s: Sequence[float] | None = None,
-               domain_inputs: Sequence[Sequence[str]] | None = None) -> TableFile:
+               domain_inputs: Sequence[Sequence[str]] | None = None, uncalibrated: bool = False,
+               capacity: Capacity = DEFAULT_CAPACITY) -> TableFile:
     """What goes into the table files. `generated[k]` true (the default for every test): test k runs the
     generated generator of slot (number of generated tests before it), with the variance of its equation set
-    from thresholds.generated; false: no on-board generator (NULL, always "not evaluable"). `response_s[k]`: the
-    time test k's residual needs to show a fault (`residuals.evaluate.response_time` of its generator; default
-    REACTION_WINDOW_S, the window of the fault-size sweep), written as whole steps of the design point.
-    `domain_inputs[k]`: the signals test k's generator reads for its operating domain besides the MSO set's own."""
+    from thresholds.generated (without one: refused unless `uncalibrated`, then 1.0, a placeholder the files
+    mark); false: no on-board generator (NULL, always "not evaluable"). `response_s[k]`: the time test k's residual
+    needs to show a fault (`residuals.evaluate.response_time` of its generator; default REACTION_WINDOW_S, the window
+    of the fault-size sweep), written as whole steps of the design point. `domain_inputs[k]`: the signals test k's
+    generator reads for its operating domain besides the MSO set's own. `capacity`: the capacities the firmware is
+    built with (export.capacity; default: the C defaults): more tests than its FDI_DIAG_MAX_TESTS are refused."""
     st = model.structure()
-    if not 0 < len(tests) <= MAX_TESTS:
-        raise ExportError(f"{len(tests)} tests selected; the firmware table holds 1..{MAX_TESTS}")
-    if st.nf > MAX_FAULTS:
-        raise ExportError(f"{st.nf} faults; the firmware table holds at most {MAX_FAULTS}")
+    _check_counts(len(tests), st.nf, capacity)
     gen = list(generated) if generated is not None else [True] * len(tests)
+    placeholders = _placeholders(st.equations, tests, gen, thresholds, uncalibrated)
     known_order = [v.name for v in model.knowns]
     unknown_order = [v.name for v in model.unknowns]
     rows = []
@@ -198,11 +219,8 @@ def table_file(model: Model, tests: Sequence[Candidate], thresholds: Thresholds,
                         key=known_order.index)
         unknowns = sorted({x for e in bits(t.equations) for x in model.equations[e].unknowns},
                           key=unknown_order.index)
-        if gen[k]:
-            generator = kind_name(sum(gen[:k]), names)
-            variance = thresholds.generated.get(" ".join(eqs), 1.0)
-        else:
-            generator, variance = NO_GENERATOR, 1.0
+        generator = kind_name(sum(gen[:k]), names) if gen[k] else NO_GENERATOR
+        variance = thresholds.generated.get(" ".join(eqs), 1.0) if gen[k] else 1.0
         number = re.fullmatch(r"MSO(\d+)", t.label)
         seconds = response_s[k] if response_s is not None else REACTION_WINDOW_S
         steps = max(1, math.ceil(seconds / thresholds.design[0] - 1e-9))
@@ -229,9 +247,21 @@ def table_file(model: Model, tests: Sequence[Candidate], thresholds: Thresholds,
     return TableFile(
         banner=banner, names=names, model=model.name, thresholds=thresholds.source, design=thresholds.design,
         faults=tuple(st.faults), fault_names=tuple(f"{f.name} {f.desc}".strip() for f in model.faults),
-        tests=tuple(rows), signatures=tuple(signatures), classes=tuple(classes),
+        tests=tuple(rows), signatures=tuple(signatures), classes=tuple(classes), placeholders=placeholders,
         sizes=tuple(tuple(r) for r in size_rows), size_note=size_note, margin=margin, envelope=envelope,
         envelope_votes=env.votes if env is not None else 0, envelope_margin=env.margin if env is not None else 0.0)
+
+
+def _placeholders(equations: Sequence[str], tests: Sequence[Candidate], generated: Sequence[bool],
+                  thresholds: Thresholds, uncalibrated: bool) -> tuple[str, ...]:
+    """The tests with a generator but no calibrated variance in thresholds.generated; `ExportError` if there are any
+    and the export was not asked for an uncalibrated table."""
+    missing = tuple(t.label for t, g in zip(tests, generated, strict=True)
+                    if g and " ".join(equations[e] for e in bits(t.equations)) not in thresholds.generated)
+    if missing and not uncalibrated:
+        raise ExportError(f"{thresholds.source} has no calibrated variance ([generated]) for {', '.join(missing)}: "
+                          "run fdi-tune calibrate, or export placeholders (1.0) with --uncalibrated")
+    return missing
 
 
 # ------------------------------------------------------------------------------------------ rendering
@@ -243,16 +273,19 @@ def render_file(f: TableFile) -> tuple[str, str]:
     """Header and source text of the table files."""
     n = f.names
     table = n.table
+    marking = UNCALIBRATED_FMT.substitute(thresholds=comment_text(f.thresholds),
+                                          tests=comment_text(", ".join(f.placeholders))) if f.placeholders else ""
     header = HEADER_FMT.substitute(banner=f.banner, table=table, model=f.model, n_tests=len(f.tests),
                                    n_faults=len(f.faults), vehicle=n.vehicle, thresholds=comment_text(f.thresholds),
-                                   guard=table.upper() + "_H")
+                                   guard=table.upper() + "_H", uncalibrated=marking)
     tests = "\n".join(TEST_FMT.substitute(
         mso_id=t.mso_id, generator=t.generator, fault_mask=f"{t.fault_mask:08X}", inputs=t.inputs,
         gate=c_float(t.gate), variance=c_float(t.variance), response_steps=t.response_steps,
         interpretation=c_string(t.interpretation))
         for t in f.tests)
     source = SOURCE_FMT.substitute(
-        banner=f.banner, table=table, vehicle=n.vehicle, generators=n.generators, signals=n.signals,
+        banner=f.banner, uncalibrated=marking, table=table, vehicle=n.vehicle, generators=n.generators,
+        signals=n.signals,
         n_faults=len(f.faults),
         n_tests=len(f.tests), fault_names=_strings(f.fault_names), tests=tests,
         signatures="\n".join(MASK_ROW_FMT.substitute(mask=f"{s:08X}", fault=x)
@@ -274,10 +307,11 @@ def render_file(f: TableFile) -> tuple[str, str]:
 
 
 def render(model: Model, tests: Sequence[Candidate], thresholds: Thresholds, name: str, command: str,
-           generated: Sequence[bool] | None = None, sizes: FaultSizes | None = None) -> tuple[str, str]:
+           generated: Sequence[bool] | None = None, sizes: FaultSizes | None = None,
+           uncalibrated: bool = False) -> tuple[str, str]:
     """The header and source text of the table `name` (e.g. "fdi_romo_table"); see `table_file`."""
     return render_file(table_file(model, tests, thresholds, VehicleNames.of_table(name), banner(command),
-                                  generated, sizes))
+                                  generated, sizes, uncalibrated=uncalibrated))
 
 
 def write(out_dir: Path, name: str, header: str, source: str) -> list[Path]:

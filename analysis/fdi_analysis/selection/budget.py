@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fdi_analysis.errors import ComputationError
+from fdi_analysis.names import natural_key
 from fdi_analysis.selection.practical import PracticalCandidate, Requirement, requirements
 
 
@@ -83,7 +84,7 @@ def _scored(budget: int, tests: list[PracticalCandidate], costs: list[int], reqs
     met = [r for r in reqs if chosen.intersection(r.cover)]
     n_det = sum(1 for r in reqs if not r.fault_b)
     det = sum(1 for r in met if not r.fault_b)
-    order = sorted(range(len(tests)), key=lambda i: tests[i].label)
+    order = sorted(range(len(tests)), key=lambda i: natural_key(tests[i].label))
     return BudgetSelection(budget, tuple(tests[i] for i in order), sum(costs), det, len(met) - det, n_det,
                            len(reqs) - n_det, tuple(r for r in reqs if not chosen.intersection(r.cover)))
 

@@ -2,7 +2,7 @@
  * fdi_ecu.h - the ECU process core: CAN frames in, fixed-step diagnosis, diagnosis frames out.
  *
  * Portable (no OS call, no heap, no clock) and vehicle-independent: the bus it listens to is a const
- * description (fdi_ecu_bus_t) that a vehicle target generates from its DBC (fw/ecu/tools/gen_can.py: message
+ * description (fdi_ecu_bus_t) that a vehicle target generates from its DBC (fdi-analyze export-can: message
  * IDs, lengths, cycle times, E2E data IDs, which frame signals each message carries, and per message a decode
  * function: unpack, range checks, scaling to SI; plus the packing of the diagnosis frame). The front end
  * (fw/ecu/linux/fdi_ecu_socketcan.c, the Python bindings host_tools/fdi_host/ecu/bindings.py, or an ECU's CAN
@@ -80,18 +80,8 @@
 #include "fdi_status.h"
 #include "fdi_table.h"
 
-#ifndef FDI_ECU_MAX_MSGS
-#define FDI_ECU_MAX_MSGS 8U /* input messages of a bus; override with -DFDI_ECU_MAX_MSGS=n (1..255) */
-#endif
-#if (FDI_ECU_MAX_MSGS < 1) || (FDI_ECU_MAX_MSGS > 255)
-#error "FDI_ECU_MAX_MSGS must be in 1..255"
-#endif
-#ifndef FDI_ECU_HISTORY
-#define FDI_ECU_HISTORY 6U /* accepted frames kept per message for the time alignment; override with -D (2..255) */
-#endif
-#if (FDI_ECU_HISTORY < 2) || (FDI_ECU_HISTORY > 255)
-#error "FDI_ECU_HISTORY must be in 2..255"
-#endif
+/* FDI_ECU_MAX_MSGS (input messages of a bus), FDI_ECU_HISTORY (accepted frames kept per message for the time
+   alignment): overridable capacities of fdi_capacity.h (the fdi library's, included by fdi_diag.h) */
 #define FDI_ECU_FRAME_LEN 8U      /* classic CAN: at most 8 data bytes */
 #define FDI_ECU_MAX_MSG_VALUES 8U /* frame signals one message can carry */
 

@@ -15,6 +15,7 @@ from typing import Any
 
 import cantools
 
+from fdi_analysis.export.dbc_signals import model_signals
 from fdi_host.can import e2e
 from fdi_host.errors import FdiHostError
 from fdi_host.resources import DBC
@@ -33,20 +34,10 @@ class SignalMap:
 
 
 def signal_map(path: Path) -> tuple[SignalMap, ...]:
-    """The DBC signals that carry a simulator (model) signal: the signal attributes "ModelSignal" (the model's
-    name) and "ModelFactor" (DBC value = model value * factor, default 1), in DBC order. The same attributes
-    give the firmware's frame signals (fw/ecu/tools/gen_romo_can.py): the DBC is the one source of the mapping."""
-    db = cantools.database.load_file(str(path))
-    if not isinstance(db, cantools.database.can.Database):
-        raise ValueError(f"{path} is not a DBC CAN database")
-    out = []
-    for msg in db.messages:
-        for sig in msg.signals:
-            attrs = sig.dbc.attributes if sig.dbc is not None else {}
-            if "ModelSignal" in attrs and attrs["ModelSignal"].value:
-                factor = float(attrs["ModelFactor"].value) if "ModelFactor" in attrs else 1.0
-                out.append(SignalMap(str(attrs["ModelSignal"].value), msg.name, sig.name, factor))
-    return tuple(out)
+    """The DBC signals that carry a simulator (model) signal, in DBC order: the signal attributes "ModelSignal"
+    and "ModelFactor" as `fdi_analysis.export.dbc_signals` reads them, for the firmware's codec too (`fdi-analyze
+    export-can`): the DBC is the one source of the mapping, read in one place."""
+    return tuple(SignalMap(s.model, s.message, s.signal, s.factor) for s in model_signals(path))
 
 
 SIGNAL_MAP: tuple[SignalMap, ...] = signal_map(DEFAULT_DBC)

@@ -19,40 +19,44 @@
 #include "fdi_romo_kin.h"
 #include "fdi_romo_table.h"
 #include "fdi_three_tank_table.h"
+#include "fdi_py_seam.h"
 
-/* sizeof / offsetof / capacities the bindings check: 0 fdi_ecu_t, 1 config, 2 counters, 3 result, 4 tx,
-   5 offsetof(result, diag), 6 offsetof(diag result, iso), 7 FDI_DIAG_MAX_TESTS, 8 fdi_diag_t, 9 FDI_ECU_MAX_MSGS,
-   10 FDI_DIAG_MAX_SENS, 11 offsetof(diag result, sens_offset), 12 fdi_diag_result_t, 13 fdi_diag_config_t,
-   14 FDI_GEN_N_PARAMS, 15 FDI_FRAME_MAX_SIGNALS, 16 FDI_ECU_HISTORY, 17 fdi_diag_evidence_t,
-   18 FDI_TABLE_MAX_FAULTS; else 0. */
+/* sizeof / offsetof / capacities the bindings check (fdi_py_sizeof_t, fdi_py_seam.h); 0 for an unknown one. */
 size_t fdi_py_sizeof(int what)
 {
     size_t n = 0U;
     switch (what)
     {
-    case 0: n = sizeof(fdi_ecu_t); break;
-    case 1: n = sizeof(fdi_ecu_config_t); break;
-    case 2: n = sizeof(fdi_ecu_counters_t); break;
-    case 3: n = sizeof(fdi_ecu_result_t); break;
-    case 4: n = sizeof(fdi_ecu_tx_t); break;
-    case 5: n = offsetof(fdi_ecu_result_t, diag); break;
-    case 6: n = offsetof(fdi_diag_result_t, iso); break;
-    case 7: n = FDI_DIAG_MAX_TESTS; break;
-    case 8: n = sizeof(fdi_diag_t); break;
-    case 9: n = FDI_ECU_MAX_MSGS; break;
-    case 10: n = FDI_DIAG_MAX_SENS; break;
-    case 11: n = offsetof(fdi_diag_result_t, sens_offset); break;
-    case 12: n = sizeof(fdi_diag_result_t); break;
-    case 13: n = sizeof(fdi_diag_config_t); break;
-    case 14: n = FDI_GEN_N_PARAMS; break;
-    case 15: n = FDI_FRAME_MAX_SIGNALS; break;
-    case 16: n = FDI_ECU_HISTORY; break;
-    case 17: n = sizeof(fdi_diag_evidence_t); break;
-    case 18: n = FDI_TABLE_MAX_FAULTS; break;
-    case 19: n = FDI_EST_MAX_PARAMS; break;
+    case FDI_PY_SIZEOF_ECU: n = sizeof(fdi_ecu_t); break;
+    case FDI_PY_SIZEOF_ECU_CONFIG: n = sizeof(fdi_ecu_config_t); break;
+    case FDI_PY_SIZEOF_ECU_COUNTERS: n = sizeof(fdi_ecu_counters_t); break;
+    case FDI_PY_SIZEOF_ECU_RESULT: n = sizeof(fdi_ecu_result_t); break;
+    case FDI_PY_SIZEOF_ECU_TX: n = sizeof(fdi_ecu_tx_t); break;
+    case FDI_PY_SIZEOF_ECU_RESULT_DIAG: n = offsetof(fdi_ecu_result_t, diag); break;
+    case FDI_PY_SIZEOF_DIAG_RESULT_ISO: n = offsetof(fdi_diag_result_t, iso); break;
+    case FDI_PY_SIZEOF_MAX_TESTS: n = FDI_DIAG_MAX_TESTS; break;
+    case FDI_PY_SIZEOF_DIAG: n = sizeof(fdi_diag_t); break;
+    case FDI_PY_SIZEOF_MAX_MSGS: n = FDI_ECU_MAX_MSGS; break;
+    case FDI_PY_SIZEOF_MAX_SENS: n = FDI_DIAG_MAX_SENS; break;
+    case FDI_PY_SIZEOF_DIAG_RESULT_SENS_OFFSET: n = offsetof(fdi_diag_result_t, sens_offset); break;
+    case FDI_PY_SIZEOF_DIAG_RESULT: n = sizeof(fdi_diag_result_t); break;
+    case FDI_PY_SIZEOF_DIAG_CONFIG: n = sizeof(fdi_diag_config_t); break;
+    case FDI_PY_SIZEOF_GEN_N_PARAMS: n = FDI_GEN_N_PARAMS; break;
+    case FDI_PY_SIZEOF_FRAME_MAX_SIGNALS: n = FDI_FRAME_MAX_SIGNALS; break;
+    case FDI_PY_SIZEOF_ECU_HISTORY: n = FDI_ECU_HISTORY; break;
+    case FDI_PY_SIZEOF_DIAG_EVIDENCE: n = sizeof(fdi_diag_evidence_t); break;
+    case FDI_PY_SIZEOF_TABLE_MAX_FAULTS: n = FDI_TABLE_MAX_FAULTS; break;
+    case FDI_PY_SIZEOF_EST_MAX_PARAMS: n = FDI_EST_MAX_PARAMS; break;
     default: break;
     }
     return n;
+}
+
+/* fdi_diag_init for the bindings: it is an inline function of fdi_diag.h (the caller's layout signature), so no
+   symbol of the library. */
+int fdi_py_diag_init(fdi_diag_t *d, const fdi_diag_config_t *cfg)
+{
+    return (int)fdi_diag_init(d, cfg);
 }
 
 /* The built-in tables by name ("kin", "romo", "three_tank"); NULL for others. */
@@ -115,9 +119,7 @@ int fdi_py_param_index(const char *name)
     return k;
 }
 
-/* Integers of a table: 0 n_faults, 1 n_tests, 2 mso_id of test i, 3 1 if test i has a generator, 4 fault_mask
-   of test i, 5 input_mask of test i, 6 iso_class of fault i, 7 fault_signature of fault i, 8 design dt in
-   microseconds, 9 n_signals, 10 sens_mask of test i's generator (0 without); -1 on bad arguments. */
+/* Integers of a table (fdi_py_table_int_t, fdi_py_seam.h); -1 on bad arguments. */
 long long fdi_py_table_int(const fdi_table_t *t, int what, int i)
 {
     long long v = -1;
@@ -129,25 +131,25 @@ long long fdi_py_table_int(const fdi_table_t *t, int what, int i)
         const int fault_ok = (i >= 0) && (i < nf);
         switch (what)
         {
-        case 0: v = nf; break;
-        case 1: v = nt; break;
-        case 2: v = test_ok ? (long long)t->tests[i].mso_id : -1; break;
-        case 3: v = test_ok ? (long long)(t->tests[i].gen != NULL) : -1; break;
-        case 4: v = test_ok ? (long long)t->tests[i].fault_mask : -1; break;
-        case 5: v = test_ok ? (long long)t->tests[i].input_mask : -1; break;
-        case 6: v = fault_ok ? (long long)t->iso_class[i] : -1; break;
-        case 7: v = fault_ok ? (long long)t->fault_signature[i] : -1; break;
-        case 8: v = (long long)(t->design.dt * 1.0e6f + 0.5f); break;
-        case 9: v = (long long)t->n_signals; break;
-        case 10: v = test_ok ? ((t->tests[i].gen != NULL) ? (long long)t->tests[i].gen->sens_mask : 0) : -1; break;
-        case 11: v = test_ok ? ((t->tests[i].gen != NULL) ? (long long)t->tests[i].gen->n_est : 0) : -1; break;
+        case FDI_PY_TABLE_INT_N_FAULTS: v = nf; break;
+        case FDI_PY_TABLE_INT_N_TESTS: v = nt; break;
+        case FDI_PY_TABLE_INT_MSO_ID: v = test_ok ? (long long)t->tests[i].mso_id : -1; break;
+        case FDI_PY_TABLE_INT_HAS_GENERATOR: v = test_ok ? (long long)(t->tests[i].gen != NULL) : -1; break;
+        case FDI_PY_TABLE_INT_FAULT_MASK: v = test_ok ? (long long)t->tests[i].fault_mask : -1; break;
+        case FDI_PY_TABLE_INT_INPUT_MASK: v = test_ok ? (long long)t->tests[i].input_mask : -1; break;
+        case FDI_PY_TABLE_INT_ISO_CLASS: v = fault_ok ? (long long)t->iso_class[i] : -1; break;
+        case FDI_PY_TABLE_INT_FAULT_SIGNATURE: v = fault_ok ? (long long)t->fault_signature[i] : -1; break;
+        case FDI_PY_TABLE_INT_DT_US: v = (long long)(t->design.dt * 1.0e6f + 0.5f); break;
+        case FDI_PY_TABLE_INT_N_SIGNALS: v = (long long)t->n_signals; break;
+        case FDI_PY_TABLE_INT_SENS_MASK: v = test_ok ? ((t->tests[i].gen != NULL) ? (long long)t->tests[i].gen->sens_mask : 0) : -1; break;
+        case FDI_PY_TABLE_INT_N_EST: v = test_ok ? ((t->tests[i].gen != NULL) ? (long long)t->tests[i].gen->n_est : 0) : -1; break;
         default: break;
         }
     }
     return v;
 }
 
-/* Reals of a table: 0 sensitivity_margin, 1 gate of test i, 2 variance of test i; -1 on bad arguments. */
+/* Reals of a table (fdi_py_table_real_t, fdi_py_seam.h); -1 on bad arguments. */
 double fdi_py_table_real(const fdi_table_t *t, int what, int i)
 {
     double v = -1.0;
@@ -156,35 +158,34 @@ double fdi_py_table_real(const fdi_table_t *t, int what, int i)
         const int test_ok = (i >= 0) && (i < (int)t->n_tests);
         switch (what)
         {
-        case 0: v = (double)t->sensitivity_margin; break;
-        case 1: v = test_ok ? (double)t->tests[i].gate : -1.0; break;
-        case 2: v = test_ok ? (double)t->tests[i].variance : -1.0; break;
+        case FDI_PY_TABLE_REAL_SENSITIVITY_MARGIN: v = (double)t->sensitivity_margin; break;
+        case FDI_PY_TABLE_REAL_GATE: v = test_ok ? (double)t->tests[i].gate : -1.0; break;
+        case FDI_PY_TABLE_REAL_VARIANCE: v = test_ok ? (double)t->tests[i].variance : -1.0; break;
         default: break;
         }
     }
     return v;
 }
 
-/* Strings of a table: 0 fault name i, 1 interpretation of test i, 2 signal name i, 3 generator name of test i
-   ("" without); NULL on bad arguments. */
+/* Strings of a table (fdi_py_table_str_t, fdi_py_seam.h); NULL on bad arguments. */
 const char *fdi_py_table_str(const fdi_table_t *t, int what, int i)
 {
     const char *s = NULL;
     if ((t != NULL) && (i >= 0))
     {
-        if ((what == 0) && (i < (int)t->n_faults))
+        if ((what == (int)FDI_PY_TABLE_STR_FAULT_NAME) && (i < (int)t->n_faults))
         {
             s = t->fault_names[i];
         }
-        else if ((what == 1) && (i < (int)t->n_tests))
+        else if ((what == (int)FDI_PY_TABLE_STR_INTERPRETATION) && (i < (int)t->n_tests))
         {
             s = t->tests[i].interpretation;
         }
-        else if ((what == 2) && (i < (int)t->n_signals))
+        else if ((what == (int)FDI_PY_TABLE_STR_SIGNAL_NAME) && (i < (int)t->n_signals))
         {
             s = t->signal_names[i];
         }
-        else if ((what == 3) && (i < (int)t->n_tests))
+        else if ((what == (int)FDI_PY_TABLE_STR_GENERATOR_NAME) && (i < (int)t->n_tests))
         {
             s = (t->tests[i].gen != NULL) ? t->tests[i].gen->name : "";
         }
@@ -192,8 +193,7 @@ const char *fdi_py_table_str(const fdi_table_t *t, int what, int i)
     return s;
 }
 
-/* Integers of a bus: 0 n_msgs, 1 can_id of message i, 2 diag_id, 3 cycle_ms of message i, 4 signal mask of
-   message i, 5 dlc of message i, 6 E2E data ID of message i, 7 diag data ID; -1 on bad arguments. */
+/* Integers of a bus (fdi_py_bus_int_t, fdi_py_seam.h); -1 on bad arguments. */
 long long fdi_py_bus_int(const fdi_ecu_bus_t *b, int what, int i)
 {
     long long v = -1;
@@ -202,14 +202,14 @@ long long fdi_py_bus_int(const fdi_ecu_bus_t *b, int what, int i)
         const int ok = (i >= 0) && (i < (int)b->n_msgs);
         switch (what)
         {
-        case 0: v = (long long)b->n_msgs; break;
-        case 1: v = ok ? (long long)b->msgs[i].can_id : -1; break;
-        case 2: v = (long long)b->diag_id; break;
-        case 3: v = ok ? (long long)b->msgs[i].cycle_ms : -1; break;
-        case 4: v = ok ? (long long)b->msgs[i].signals : -1; break;
-        case 5: v = ok ? (long long)b->msgs[i].dlc : -1; break;
-        case 6: v = ok ? (long long)b->msgs[i].data_id : -1; break;
-        case 7: v = (long long)b->diag_data_id; break;
+        case FDI_PY_BUS_INT_N_MSGS: v = (long long)b->n_msgs; break;
+        case FDI_PY_BUS_INT_CAN_ID: v = ok ? (long long)b->msgs[i].can_id : -1; break;
+        case FDI_PY_BUS_INT_DIAG_ID: v = (long long)b->diag_id; break;
+        case FDI_PY_BUS_INT_CYCLE_MS: v = ok ? (long long)b->msgs[i].cycle_ms : -1; break;
+        case FDI_PY_BUS_INT_SIGNALS: v = ok ? (long long)b->msgs[i].signals : -1; break;
+        case FDI_PY_BUS_INT_DLC: v = ok ? (long long)b->msgs[i].dlc : -1; break;
+        case FDI_PY_BUS_INT_DATA_ID: v = ok ? (long long)b->msgs[i].data_id : -1; break;
+        case FDI_PY_BUS_INT_DIAG_DATA_ID: v = (long long)b->diag_data_id; break;
         default: break;
         }
     }

@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from fdi_analysis.export.seam import BusInt, SizeOf, TableInt, TableReal, TableStr
 from fdi_host.can.dbc import DIAG_ID
 from fdi_host.errors import FdiHostError
 
@@ -60,7 +61,7 @@ class EcuError(FdiHostError, RuntimeError):
     """A call of the C core returned an error status."""
 
 
-_STATUS = {0: "OK", 1: "BAD_ARG", 2: "NOT_FINITE", 3: "BAD_TABLE"}
+_STATUS = {0: "OK", 1: "BAD_ARG", 2: "NOT_FINITE", 3: "BAD_TABLE", 4: "BAD_LAYOUT"}
 
 
 def _check(st: int, what: str) -> None:
@@ -177,19 +178,23 @@ def _lib() -> _Lib:
     dll.fdi_py_sizeof.restype = ctypes.c_size_t
     dll.fdi_py_sizeof.argtypes = [ctypes.c_int]
 
-    def size(what: int) -> int:
+    def size(what: SizeOf) -> int:
         return int(dll.fdi_py_sizeof(what))
 
-    caps = _Caps(max_tests=size(7), max_msgs=size(9), max_sens=size(10), n_params=size(14), max_signals=size(15),
-                 kept_frames=size(16), max_faults=size(18), max_est=size(19))
+    caps = _Caps(max_tests=size(SizeOf.MAX_TESTS), max_msgs=size(SizeOf.MAX_MSGS), max_sens=size(SizeOf.MAX_SENS),
+                 n_params=size(SizeOf.GEN_N_PARAMS), max_signals=size(SizeOf.FRAME_MAX_SIGNALS),
+                 kept_frames=size(SizeOf.ECU_HISTORY), max_faults=size(SizeOf.TABLE_MAX_FAULTS),
+                 max_est=size(SizeOf.EST_MAX_PARAMS))
     types = _struct_types(caps)
-    for what, name in ((1, "Config"), (2, "Counters"), (3, "Result"), (4, "Tx"), (12, "DiagResult"),
-                       (13, "DiagConfig"), (17, "Evidence")):
+    for what, name in ((SizeOf.ECU_CONFIG, "Config"), (SizeOf.ECU_COUNTERS, "Counters"),
+                       (SizeOf.ECU_RESULT, "Result"), (SizeOf.ECU_TX, "Tx"), (SizeOf.DIAG_RESULT, "DiagResult"),
+                       (SizeOf.DIAG_CONFIG, "DiagConfig"), (SizeOf.DIAG_EVIDENCE, "Evidence")):
         c_size, py_size = size(what), ctypes.sizeof(types[name])
         if c_size != py_size:
             raise ImportError(f"fdi_host.ecu.bindings: ctypes mirror of {name} has {py_size} bytes, C has {c_size}")
-    for what, (struct, field) in ((5, ("Result", "diag")), (6, ("DiagResult", "iso")),
-                                  (11, ("DiagResult", "sens_offset"))):
+    for what, (struct, field) in ((SizeOf.ECU_RESULT_DIAG, ("Result", "diag")),
+                                  (SizeOf.DIAG_RESULT_ISO, ("DiagResult", "iso")),
+                                  (SizeOf.DIAG_RESULT_SENS_OFFSET, ("DiagResult", "sens_offset"))):
         if size(what) != getattr(types[struct], field).offset:
             raise ImportError(f"fdi_host.ecu.bindings: layout of {struct}.{field} differs from its ctypes mirror")
     vp, st = ctypes.c_void_p, ctypes.c_int
@@ -212,7 +217,7 @@ def _lib() -> _Lib:
         "fdi_py_ecu_explain": (st, [vp, vp]),
         "fdi_py_process": (ctypes.c_long, [vp, ctypes.c_long, vp, vp, vp, vp, vp, vp, ctypes.c_long]),
         "fdi_diag_config_default": (st, [vp, vp]),
-        "fdi_diag_init": (st, [vp, vp]),
+        "fdi_py_diag_init": (st, [vp, vp]),
         "fdi_diag_step": (st, [vp, vp, ctypes.c_uint32]),
         "fdi_diag_result": (st, [vp, vp]),
         "fdi_py_diag_run": (ctypes.c_long, [vp, ctypes.c_long, ctypes.c_int, vp, vp, vp, vp]),
@@ -221,7 +226,7 @@ def _lib() -> _Lib:
         fn = getattr(dll, name)
         fn.restype = res
         fn.argtypes = args
-    return _Lib(dll, types, caps, size(0), size(8))
+    return _Lib(dll, types, caps, size(SizeOf.ECU), size(SizeOf.DIAG))
 
 
 # ------------------------------------------------------------------------------------------ tables
@@ -250,9 +255,14 @@ class TableInfo:
     def n_tests(self) -> int:
         return len(self.mso_ids)
 
+    @property
+    def faults(self) -> tuple[str, ...]:
+        """The faults' names, in the table's order (bit j of a fault mask is faults[j])."""
+        return tuple(n.split()[0] for n in self.fault_names)
+
     def fault_labels(self, mask: int) -> list[str]:
-        """Short labels ("f4", the fault's name) of the faults in a bitmask."""
-        return [self.fault_names[j].split()[0] for j in range(self.n_faults) if mask >> j & 1]
+        """The names of the faults in a bitmask, in the table's order."""
+        return [f for j, f in enumerate(self.faults) if mask >> j & 1]
 
     def sens_faults(self, test: int) -> list[int]:
         """Fault indices of test `test`'s sensitivities, in the order the diagnoser lists them."""
@@ -272,27 +282,29 @@ def _table_ptr(name: str) -> int:
 def table_info(name: str) -> TableInfo:
     dll = _lib().dll
     t = _table_ptr(name)
-    nf, nt = int(dll.fdi_py_table_int(t, 0, 0)), int(dll.fdi_py_table_int(t, 1, 0))
-    ns = int(dll.fdi_py_table_int(t, 9, 0))
+    nf, nt = int(dll.fdi_py_table_int(t, TableInt.N_FAULTS, 0)), int(dll.fdi_py_table_int(t, TableInt.N_TESTS, 0))
+    ns = int(dll.fdi_py_table_int(t, TableInt.N_SIGNALS, 0))
 
-    def ints(what: int, n: int) -> tuple[int, ...]:
+    def ints(what: TableInt, n: int) -> tuple[int, ...]:
         return tuple(int(dll.fdi_py_table_int(t, what, i)) for i in range(n))
 
-    def strs(what: int, n: int) -> tuple[str, ...]:
+    def strs(what: TableStr, n: int) -> tuple[str, ...]:
         return tuple((dll.fdi_py_table_str(t, what, i) or b"").decode() for i in range(n))
 
-    mso = ints(2, nt)
-    interp = strs(1, nt)
+    mso = ints(TableInt.MSO_ID, nt)
+    interp = strs(TableStr.INTERPRETATION, nt)
     return TableInfo(
-        name=name, n_faults=nf, fault_names=strs(0, nf),
+        name=name, n_faults=nf, fault_names=strs(TableStr.FAULT_NAME, nf),
         test_names=tuple(f"MSO{m}: {s}" for m, s in zip(mso, interp, strict=True)), mso_ids=mso,
-        test_fault_masks=ints(4, nt), test_input_masks=ints(5, nt),
-        has_generator=tuple(k != 0 for k in ints(3, nt)), iso_class=ints(6, nf),
-        dt=int(dll.fdi_py_table_int(t, 8, 0)) * 1e-6, signal_names=strs(2, ns), sens_masks=ints(10, nt),
-        sensitivity_margin=float(dll.fdi_py_table_real(t, 0, 0)),
-        gates=tuple(float(dll.fdi_py_table_real(t, 1, i)) for i in range(nt)),
-        sigmas=tuple(math.sqrt(float(dll.fdi_py_table_real(t, 2, i))) for i in range(nt)),
-        n_est=ints(11, nt),
+        test_fault_masks=ints(TableInt.FAULT_MASK, nt), test_input_masks=ints(TableInt.INPUT_MASK, nt),
+        has_generator=tuple(k != 0 for k in ints(TableInt.HAS_GENERATOR, nt)),
+        iso_class=ints(TableInt.ISO_CLASS, nf),
+        dt=int(dll.fdi_py_table_int(t, TableInt.DT_US, 0)) * 1e-6, signal_names=strs(TableStr.SIGNAL_NAME, ns),
+        sens_masks=ints(TableInt.SENS_MASK, nt),
+        sensitivity_margin=float(dll.fdi_py_table_real(t, TableReal.SENSITIVITY_MARGIN, 0)),
+        gates=tuple(float(dll.fdi_py_table_real(t, TableReal.GATE, i)) for i in range(nt)),
+        sigmas=tuple(math.sqrt(float(dll.fdi_py_table_real(t, TableReal.VARIANCE, i))) for i in range(nt)),
+        n_est=ints(TableInt.N_EST, nt),
     )
 
 
@@ -337,14 +349,15 @@ def bus_align(name: str = "romo") -> float:
 def bus_info(name: str = "romo") -> BusInfo:
     dll = _lib().dll
     b = _bus_ptr(name)
-    n = int(dll.fdi_py_bus_int(b, 0, 0))
+    n = int(dll.fdi_py_bus_int(b, BusInt.N_MSGS, 0))
 
-    def ints(what: int) -> tuple[int, ...]:
+    def ints(what: BusInt) -> tuple[int, ...]:
         return tuple(int(dll.fdi_py_bus_int(b, what, i)) for i in range(n))
 
     names = tuple((dll.fdi_py_bus_str(b, i) or b"").decode() for i in range(n))
-    return BusInfo(name, tuple(zip(names, ints(1), strict=True)), ints(3), ints(4), ints(6),
-                   int(dll.fdi_py_bus_int(b, 2, 0)), int(dll.fdi_py_bus_int(b, 7, 0)))
+    return BusInfo(name, tuple(zip(names, ints(BusInt.CAN_ID), strict=True)), ints(BusInt.CYCLE_MS),
+                   ints(BusInt.SIGNALS), ints(BusInt.DATA_ID), int(dll.fdi_py_bus_int(b, BusInt.DIAG_ID, 0)),
+                   int(dll.fdi_py_bus_int(b, BusInt.DIAG_DATA_ID, 0)))
 
 
 def _estimate_mask(value: Any, mso_ids: Sequence[int], n_est: Sequence[int] = ()) -> int:
@@ -446,12 +459,12 @@ class EcuResult:
     alarm_mask: int
     evaluable_mask: int
     accused_mask: int  # tests accused in the current isolation episode (latched alarms)
-    candidates: int  # fault bitmask (bit j = fault f(j+1))
+    candidates: int  # fault bitmask (bit j = the table's fault j, TableInfo.faults)
     class_mask: int
     n_classes: int
     detected: bool
     isolated: bool
-    iso_class: int  # FDI_IsolationClass as sent: 0 none, 1..25 lowest fault of the class, 255 not isolated
+    iso_class: int  # FDI_IsolationClass as sent: 0 none, 1 + the class's lowest fault index, 255 not isolated
     test_status: tuple[str, ...]  # per test: ok / alarm / not_evaluable
     residuals: tuple[float, ...]
     ratios: tuple[float, ...]
@@ -472,8 +485,9 @@ class EcuResult:
     def status_name(self) -> str:
         return STATUS_NAMES.get(self.status, str(self.status))
 
-    def candidate_labels(self) -> list[str]:
-        return [f"f{j + 1}" for j in range(32) if self.candidates >> j & 1]
+    def candidate_labels(self, table: TableInfo) -> list[str]:
+        """The names of the candidate faults (`table`: the table that made this result)."""
+        return table.fault_labels(self.candidates)
 
 
 @dataclass(frozen=True)
@@ -713,7 +727,7 @@ class Diagnoser:
         self.config = cfg
         self._buf = ctypes.create_string_buffer(lib.diag_size)
         self._self = ctypes.cast(self._buf, ctypes.c_void_p)
-        _check(self._dll.fdi_diag_init(self._self, ctypes.byref(cfg)), "fdi_diag_init")
+        _check(self._dll.fdi_py_diag_init(self._self, ctypes.byref(cfg)), "fdi_diag_init")
         self._steps = 0
 
     def _frames(self, signals: Mapping[str, Any]) -> NDArray[np.float32]:

@@ -32,14 +32,16 @@ def isolates_fault(candidates: int, fault_class: int, fault_bit: int) -> bool:
 
 @dataclass(frozen=True)
 class TableClasses:
-    """Structural facts of a diagnosis table, per fault j (bit j = fault f(j+1))."""
+    """Structural facts of a diagnosis table, per fault j (bit j = fault faults[j])."""
 
     signature: tuple[int, ...]  # tests sensitive to fault j (test bitmask); 0 = not detectable
     iso_class: tuple[int, ...]  # faults with the same signature as fault j (fault bitmask)
     test_names: tuple[str, ...] = ()
+    faults: tuple[str, ...] = FAULT_IDS  # the table's fault names by bit (default: the vehicle simulator's)
 
     @staticmethod
-    def from_signatures(signature: Sequence[int], test_names: Sequence[str] = ()) -> TableClasses:
+    def from_signatures(signature: Sequence[int], test_names: Sequence[str] = (),
+                        faults: Sequence[str] = FAULT_IDS) -> TableClasses:
         """Classes from the signatures: faults with equal (non-zero) signatures are not isolable."""
         sig = tuple(int(s) for s in signature)
         classes = []
@@ -50,15 +52,26 @@ class TableClasses:
                     if other == s:
                         mask |= 1 << k
             classes.append(mask)
-        return TableClasses(sig, tuple(classes), tuple(test_names))
+        return TableClasses(sig, tuple(classes), tuple(test_names), tuple(faults))
+
+    def bit(self, fault: str) -> int:
+        """The fault's bit in the table's fault masks (ValueError for a fault the table does not name)."""
+        return 1 << self.faults.index(fault)
 
     def detectable(self, fault: str) -> bool:
-        j = FAULT_IDS.index(fault)
+        """Whether a test of the table is sensitive to `fault` (False for a fault the table does not name: a drive
+        may inject faults of a larger model than the table's)."""
+        j = self.faults.index(fault) if fault in self.faults else len(self.signature)
         return j < len(self.signature) and self.signature[j] != 0
 
     def class_of(self, fault: str) -> int:
-        j = FAULT_IDS.index(fault)
+        """The faults not isolable from `fault` (bitmask); 0 for a fault the table does not name."""
+        j = self.faults.index(fault) if fault in self.faults else len(self.iso_class)
         return self.iso_class[j] if j < len(self.iso_class) else 0
+
+    def fault_names(self, mask: int) -> str:
+        """``0b1010`` -> ``"f2,f4"`` (the table's names); ``"-"`` for an empty set."""
+        return ",".join(f for j, f in enumerate(self.faults) if mask >> j & 1) or "-"
 
     def test_name(self, i: int) -> str:
         return self.test_names[i] if i < len(self.test_names) else f"t{i}"

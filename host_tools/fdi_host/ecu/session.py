@@ -30,7 +30,6 @@ from typing import Any
 
 from fdi_host.can.dbc import DIAG_ID
 from fdi_host.ecu.records import DiagRecord, TableClasses
-from fdi_host.sim.faults import FAULT_IDS
 
 __all__ = ["DIAG_ID", "ORIGIN_LEAD", "EcuSession", "StepRecord", "load_steps", "table_classes"]
 
@@ -75,7 +74,7 @@ def table_classes(ecu: Any) -> TableClasses:
     evaluable, so they cannot detect anything); its class is the table's structural isolability class.
     """
     info = getattr(ecu, "table", ecu)
-    n_faults = min(int(info.n_faults), len(FAULT_IDS))
+    n_faults = int(info.n_faults)
     sig = [0] * n_faults
     for i, mask in enumerate(info.test_fault_masks):
         if info.has_generator[i]:
@@ -83,7 +82,7 @@ def table_classes(ecu: Any) -> TableClasses:
                 if mask >> j & 1:
                     sig[j] |= 1 << i
     names = tuple(str(n).split(":")[0] for n in info.test_names)
-    return TableClasses(tuple(sig), tuple(int(c) for c in info.iso_class[:n_faults]), names)
+    return TableClasses(tuple(sig), tuple(int(c) for c in info.iso_class[:n_faults]), names, tuple(info.faults))
 
 
 @dataclass

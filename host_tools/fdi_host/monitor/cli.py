@@ -35,7 +35,8 @@ from fdi_host.live.bus import BusOptions, StopFlag, add_bus_arguments, open_cli_
 from fdi_host.monitor.frames import FrameStats
 from fdi_host.monitor.gaps import Gap, GapTracker, gap_summary
 from fdi_host.monitor.report import frame_table, plot_diagnosis, plot_residuals, score_table, write_reports
-from fdi_host.monitor.score import Score, fault_names, score_run, windows_from_truth
+from fdi_host.monitor.score import Score, score_run, windows_from_truth
+from fdi_host.sim.faults import FAULT_IDS
 
 EPILOG = """\
 examples:
@@ -107,7 +108,7 @@ class Monitor:
         note = self.silence_note(now_wall) if now_wall is not None else ""
         n_gaps = len(self.gaps.gaps)
         return (f"t={r.t:7.2f} s  frames {n:7d} lost {lost:3d}  diag {len(self.records):6d}  "
-                f"alarm [{alarms}]  candidates [{fault_names(r.candidates)}]"
+                f"alarm [{alarms}]  candidates [{self.classes.fault_names(r.candidates)}]"
                 + (f"  gaps {n_gaps}" if n_gaps else "") + (f"  {note}" if note else ""))
 
     def table(self, now_wall: float | None = None) -> list[str]:
@@ -119,9 +120,9 @@ class Monitor:
             on = r is not None and bool(r.alarm_mask >> i & 1)
             count = sum(1 for x in self.records if x.alarm_mask >> i & 1)
             rows.append(f"{self.classes.test_name(i):8s} {'ALARM' if on else 'ok':6s} {count:13d}")
-        cls = "-" if r is None else ("isolated" if 1 <= r.iso_class <= 25 else "not isolated" if r.iso_class == 255
+        cls = "-" if r is None else ("isolated" if 0 < r.iso_class < 255 else "not isolated" if r.iso_class == 255
                                      else "nothing detected")
-        rows.append(f"candidates: {fault_names(r.candidates) if r else '-'}  ({cls})")
+        rows.append(f"candidates: {self.classes.fault_names(r.candidates) if r else '-'}  ({cls})")
         note = self.silence_note(now_wall) if now_wall is not None else ""
         if self.gaps.gaps or note:  # gaps so far (the last three in full), and a silence going on now
             rows.append(gap_summary(self.gaps.gaps) + (f"; now: {note}" if note else ""))
@@ -142,13 +143,14 @@ class ClassesFileError(FdiHostError, ValueError):
     """A ``--classes`` file that is not fault signatures as JSON; the message names the file."""
 
 
-CLASSES_FORMAT = '{"signature": [13, 14, ...], "test_names": ["r1", ...], "dt": 0.01}'
+CLASSES_FORMAT = '{"signature": [13, 14, ...], "test_names": ["r1", ...], "faults": ["f1", ...], "dt": 0.01}'
 
 
 def read_classes(path: Path) -> tuple[TableClasses, float]:
     """Structural classes and step from a JSON file of fault signatures (``signature``: per fault the bitmask of
-    the tests sensitive to it; optional ``test_names`` and ``dt`` [s], default 0.01). `ClassesFileError` naming
-    the file when it is not one; OSError when it cannot be read."""
+    the tests sensitive to it; optional ``test_names``, ``faults`` (their names, any identifiers; default the
+    vehicle simulator's f1, f2, ...) and ``dt`` [s], default 0.01). `ClassesFileError` naming the file when it is
+    not one; OSError when it cannot be read."""
     try:
         doc = json.loads(path.read_text(encoding="utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
@@ -156,13 +158,17 @@ def read_classes(path: Path) -> tuple[TableClasses, float]:
     if not isinstance(doc, dict) or not isinstance(doc.get("signature"), list):
         raise ClassesFileError(f"{path}: expected an object with a 'signature' list, e.g. {CLASSES_FORMAT}")
     signature, names, dt = doc["signature"], doc.get("test_names", []), doc.get("dt", 0.01)
+    faults = doc.get("faults", list(FAULT_IDS))
     if not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in signature):
         raise ClassesFileError(f"{path}: 'signature' must list one test bitmask (an integer >= 0) per fault")
     if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
         raise ClassesFileError(f"{path}: 'test_names' must be a list of names")
+    if not (isinstance(faults, list) and all(isinstance(f, str) and f for f in faults)
+            and len(set(faults)) == len(faults) >= len(signature)):
+        raise ClassesFileError(f"{path}: 'faults' must name every fault of 'signature' once")
     if isinstance(dt, bool) or not isinstance(dt, int | float) or not dt > 0:
         raise ClassesFileError(f"{path}: 'dt' must be the diagnosis step in seconds (> 0), not {dt!r}")
-    return TableClasses.from_signatures(signature, names), float(dt)
+    return TableClasses.from_signatures(signature, names, faults), float(dt)
 
 
 def classes_for(table: str, classes_file: Path | None) -> tuple[TableClasses, float]:

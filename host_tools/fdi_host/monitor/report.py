@@ -20,7 +20,6 @@ from fdi_host.ecu.session import StepRecord
 from fdi_host.monitor.frames import FrameStats
 from fdi_host.monitor.gaps import WHAT, Gap, gap_summary
 from fdi_host.monitor.score import FaultWindow, Score
-from fdi_host.sim.faults import FAULT_IDS
 
 
 def _ms(x: float | None) -> str:
@@ -136,8 +135,8 @@ def plot_diagnosis(path: Path, records: Sequence[DiagRecord], windows: Sequence[
         return None
     t = np.array([r.t for r in records])
     n_tests = max(len(classes.test_names), max(int(r.alarm_mask).bit_length() for r in records), 1)
-    faults = [j for j in range(len(FAULT_IDS)) if any(r.candidates >> j & 1 for r in records)
-              or any(FAULT_IDS.index(w.fault) == j for w in windows)]
+    windowed = {w.fault for w in windows}
+    faults = [j for j, f in enumerate(classes.faults) if any(r.candidates >> j & 1 for r in records) or f in windowed]
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(10, 5), sharex=True)
     for i in range(n_tests):
         on = np.array([r.alarm_mask >> i & 1 for r in records], dtype=bool)
@@ -147,7 +146,7 @@ def plot_diagnosis(path: Path, records: Sequence[DiagRecord], windows: Sequence[
     for k, j in enumerate(faults):
         on = np.array([r.candidates >> j & 1 for r in records], dtype=bool)
         a2.plot(t[on], np.full(on.sum(), k), "|", color="C0", ms=6)
-    a2.set_yticks(range(len(faults)), [FAULT_IDS[j] for j in faults])
+    a2.set_yticks(range(len(faults)), [classes.faults[j] for j in faults])
     a2.set_title("candidate faults")
     for ax in (a1, a2):
         _shade(ax, windows)

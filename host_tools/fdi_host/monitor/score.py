@@ -44,24 +44,19 @@ from typing import Any
 
 from fdi_host.ecu.records import DiagRecord, TableClasses, isolates_fault
 from fdi_host.monitor.gaps import Gap, overlap
-from fdi_host.sim.faults import FAULT_IDS
 
 
 @dataclass(frozen=True)
 class FaultWindow:
-    fault: str  # "f4"
+    fault: str  # the fault's name ("f4"), as the table names it
     start: float
     end: float  # the drive's duration if the fault stays
 
-    @property
-    def bit(self) -> int:
-        return 1 << FAULT_IDS.index(self.fault)
 
-
-def fault_names(mask: int) -> str:
-    """``0b1010`` -> ``"f2,f4"``; ``"-"`` for an empty set."""
-    names = [f for j, f in enumerate(FAULT_IDS) if mask >> j & 1]
-    return ",".join(names) if names else "-"
+def fault_names(mask: int, classes: TableClasses | None = None) -> str:
+    """``0b1010`` -> ``"f2,f4"``: the names of the table's faults (`classes`; default the vehicle simulator's);
+    ``"-"`` for an empty set."""
+    return (classes or TableClasses((), ())).fault_names(mask)
 
 
 def windows_from_truth(truth: Mapping[str, Any]) -> list[FaultWindow]:
@@ -159,7 +154,7 @@ def score_run(
 
     for w in windows:
         det = classes.detectable(w.fault)
-        fs = FaultScore(w.fault, w.start, w.end, det, fault_names(classes.class_of(w.fault)) if det else "-")
+        fs = FaultScore(w.fault, w.start, w.end, det, classes.fault_names(classes.class_of(w.fault)) if det else "-")
         # The grace period ends where the next fault (starting after this one ended) begins.
         until = min([w.end + grace, *(o.start for o in windows if o.start >= w.end)])
         fs.gap_overlap = overlap(w.start, until, gaps)
@@ -170,14 +165,14 @@ def score_run(
             fs.detection_delay = alarmed[0].t - w.start
             votes = Counter(r.candidates for r in alarmed)
             verdict, _ = max(votes.items(), key=lambda kv: (kv[1], kv[0] != 0))
-            fs.verdict = fault_names(verdict)
+            fs.verdict = classes.fault_names(verdict)
             if det:  # a fault no test can see has no isolation to judge (alarms then come from elsewhere)
-                cls = classes.class_of(w.fault)
-                hits = [r for r in alarmed if isolates_fault(r.candidates, cls, w.bit)]
+                cls, bit = classes.class_of(w.fault), classes.bit(w.fault)
+                hits = [r for r in alarmed if isolates_fault(r.candidates, cls, bit)]
                 fs.isolated_fraction = len(hits) / len(alarmed)
                 fs.isolation_delay = hits[0].t - w.start if hits else None
-                fs.isolation_correct = isolates_fault(verdict, cls, w.bit)
-                fs.wrong_isolation = verdict != 0 and not verdict & w.bit
+                fs.isolation_correct = isolates_fault(verdict, cls, bit)
+                fs.wrong_isolation = verdict != 0 and not verdict & bit
         else:
             fs.not_evaluable = fs.gap_overlap > 0.0
         out.faults.append(fs)

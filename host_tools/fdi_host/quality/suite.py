@@ -157,15 +157,17 @@ def load_fault_sizes(path: Path = DEFAULT_SIZES) -> dict[str, float]:
     return dict(sizes.requirement)
 
 
-def _labels(mask: int) -> tuple[str, ...]:
-    return tuple(f"f{j + 1}" for j in range(32) if mask >> j & 1)
+def _labels(mask: int, faults: Sequence[str]) -> tuple[str, ...]:
+    return tuple(f for j, f in enumerate(faults) if mask >> j & 1)
 
 
 def evaluate_case(
-    results: Sequence[EcuResult], spec: FaultSpec, t_ref: float, expected_class: int
+    results: Sequence[EcuResult], spec: FaultSpec, t_ref: float, expected_class: int,
+    faults: Sequence[str] = FAULT_IDS,
 ) -> tuple[bool, float | None, str, float | None, float, tuple[str, ...], int]:
     """(detected, delay from t_ref, outcome, isolation delay from the detection, exact share, final candidates,
-    detections before onset)."""
+    detections before onset); the final candidates named by `faults` (the table's, bit j = faults[j]; by default the
+    simulator's, FAULT_IDS)."""
     j = FAULT_IDS.index(spec.fault)
     pre = 0
     prev = False
@@ -200,7 +202,7 @@ def evaluate_case(
         outcome = "not isolated"
     delay = None if detect_t is None else max(0.0, detect_t - t_ref)
     iso_delay = None if iso_t is None or detect_t is None else max(0.0, iso_t - detect_t)
-    final = _labels(last.candidates) if last is not None else ()
+    final = _labels(last.candidates, faults) if last is not None else ()
     share = n_exact / n_after if n_after else 0.0
     return detect_t is not None, delay, outcome, iso_delay, share, final, pre
 
@@ -281,12 +283,12 @@ def run_suite(cfg: SuiteConfig, progress: Callable[[str], None] | None = None) -
                         spec, t_ref = case_spec(cfg, fid, onset, sizes[fid], shape, mult)
                         res = replay_case(cfg, faulty_drive(base, spec), onset, db)
                         det, delay, outcome, iso_delay, share, final, pre = evaluate_case(
-                            res, spec, t_ref, table.iso_class[j])
+                            res, spec, t_ref, table.iso_class[j], table.faults)
                         result.cases.append(CaseResult(
                             fault=fid, scenario=scen_name, seed=seed, shape=shape, multiplier=mult, magnitude=mag,
                             onset=onset, t_ref=t_ref, detected=det, delay_s=delay, outcome=outcome,
                             isolation_delay_s=iso_delay, exact_share=share, final_candidates=final,
-                            expected_class=_labels(table.iso_class[j]), pre_onset_detections=pre,
+                            expected_class=_labels(table.iso_class[j], table.faults), pre_onset_detections=pre,
                         ))
                         if progress is not None:
                             progress(f"{fid} {scen_name} seed {seed} {shape} x{mult:g}: {outcome}")

@@ -123,7 +123,7 @@ def events(trace: CaseTrace) -> list[str]:
         alarmed = [i for i in range(trace.table.n_tests) if r.alarm_mask >> i & 1]
         tests = ", ".join(f"{names[i]}{' (blind)' if trace.blind(i) else ''} {gates(r.ratios[i]):.1f}"
                           for i in alarmed)
-        cands = "{" + ", ".join(r.candidate_labels()) + "}"
+        cands = "{" + ", ".join(r.candidate_labels(trace.table)) + "}"
         state = "isolated" if r.isolated else ("detected" if r.detected else "quiet")
         held = "" if r.in_envelope else " (outside the envelope: held)"
         lines.append(f"{t - trace.spec.onset:+6.2f} s  {state:8s} candidates {cands}{held}  alarms: {tests or '-'}")
@@ -140,6 +140,7 @@ def evidence(trace: CaseTrace, every_s: float = 0.1) -> list[str]:
     (fdi_diag.h: a quiet test clears f where |d r / d f| F reaches the margin times its gate)."""
     lines: list[str] = []
     names = [_short(n) for n in trace.table.test_names]
+    faults = trace.table.faults
     next_t = 0.0
     for r, e in zip(trace.results, trace.evidence, strict=True):
         t = r.t_us * 1e-6 - trace.spec.onset
@@ -153,11 +154,11 @@ def evidence(trace: CaseTrace, every_s: float = 0.1) -> list[str]:
                 continue
             by = [names[i] for i, m in enumerate(e.clears) if m >> j & 1]
             if e.implied[j] <= 0.0 and not e.cleared_run[j] and not by:
-                waiting.append(f"f{j + 1}")
+                waiting.append(faults[j])
                 continue
             n = e.cleared_run[j]
             run = f", cleared {n} step{'' if n == 1 else 's'}" if n else ""
-            parts.append(f"f{j + 1} {_size(e.implied[j])}{run}{' by ' + ', '.join(by) if by else ''}")
+            parts.append(f"{faults[j]} {_size(e.implied[j])}{run}{' by ' + ', '.join(by) if by else ''}")
         if waiting:
             parts.append("no bound yet: " + ", ".join(waiting))
         lines.append(f"{t:+6.2f} s  " + "; ".join(parts))

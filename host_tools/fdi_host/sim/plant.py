@@ -39,7 +39,7 @@ from sympy.printing.pycode import PythonCodePrinter
 from fdi_analysis.expressions import der
 from fdi_analysis.model import Equation, Model
 from fdi_analysis.model_loader import load_model
-from fdi_analysis.names import natural_sorted
+from fdi_analysis.names import in_order
 from fdi_analysis.resources import MODELS
 from fdi_host.errors import FdiHostError
 
@@ -158,7 +158,7 @@ class Plant:
         for e in self.input_equations:
             if len(e.unknowns) != 1:
                 raise PlantError(f"input equation {e.id} has unknowns {e.unknowns}")
-        normal_faults = natural_sorted({f for e in normal for f in e.faults})
+        normal_faults = in_order({f for e in normal for f in e.faults}, [f.name for f in model.faults])
         self.faults: tuple[str, ...] = tuple(normal_faults)
 
         # Derivative targets: dvx, dvy (D1, D2), domega_i (W.D) and der(psidot) inline in B3.

@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fdi_analysis.export.fault_sizes import REACTION_WINDOW_S, FaultSizes
-from fdi_analysis.names import natural_sorted
+from fdi_analysis.names import in_order
 from fdi_analysis.residuals.evaluate import FilterDesign, evaluable_segments
 from fdi_analysis.residuals.generator import Generator
 from fdi_host.tuning.calibrate import first_alarm
@@ -263,13 +263,15 @@ def _reason(p: PairLimit) -> str:
 
 
 def render_section(pairs: Sequence[PairLimit], provenance: str, test_order: Sequence[str], scenario: str = "",
-                   elsewhere: Sequence[ScenarioLimit] = (), others: Sequence[str] = ()) -> str:
+                   elsewhere: Sequence[ScenarioLimit] = (), others: Sequence[str] = (),
+                   fault_order: Sequence[str] = ()) -> str:
     """The generated [per_test.<fault>] tables: test = stated size in the primary sweep's `scenario`, or a
     string saying why there is none; the pairs stated in another scenario (`elsewhere`, swept in `others`)
-    are then listed in [per_test_scenario.<fault>] tables as {scenario, size}."""
+    are then listed in [per_test_scenario.<fault>] tables as {scenario, size}. Faults in `fault_order` (the
+    model's), any others after them in natural order (`fdi_analysis.names.in_order`)."""
     lines = [MARKER, *(f"# {p}" for p in provenance.splitlines())]
     found = {(e.fault, e.test): e for e in elsewhere}
-    faults = natural_sorted({p.fault for p in pairs})
+    faults = in_order({p.fault for p in pairs}, fault_order)
     where = f"in {scenario}: " if scenario else ""
     for f in faults:
         lines.append(f"[per_test.{f}]")
@@ -283,7 +285,7 @@ def render_section(pairs: Sequence[PairLimit], provenance: str, test_order: Sequ
                              f'up to the limit confirmed with every seed"')
             else:
                 lines.append(f'{p.test} = "{NOT_DETECTABLE}: {where}{_reason(p)}"')
-    for f in natural_sorted({e.fault for e in elsewhere}):
+    for f in in_order({e.fault for e in elsewhere}, fault_order):
         lines.append(f"[{ELSEWHERE}.{f}]")
         for e in sorted((e for e in elsewhere if e.fault == f), key=lambda e: test_order.index(e.test)):
             lines.append(f'{e.test} = {{ scenario = "{e.scenario}", size = {e.stated:g} }}  '

@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fdi_analysis.model import Model
+from fdi_analysis.names import in_order
 from fdi_analysis.residuals.evaluate import FilterDesign, in_domain, sensitivity_series
 from fdi_analysis.residuals.generator import Generator
 from fdi_analysis.residuals.uncertainty_sensitivity import (
@@ -141,8 +142,7 @@ def markdown(model: Model, rows: Sequence[GeneratorSpread], provenance: str) -> 
         main = max(tops, key=lambda k: tops[k]) if tops else ""
         lines.append(f"| {r.label} | " + " | ".join(cells) + f" | `{main}` ({tops.get(main, 0.0):.3g}) |"
                      if main else f"| {r.label} | " + " | ".join(cells) + " | none |")
-    order = {f.name: i for i, f in enumerate(model.faults)}
-    faults = sorted({f for r in rows for s in r.scenarios.values() for f in s.fnr}, key=lambda f: order.get(f, -1))
+    faults = in_order({f for r in rows for s in r.scenarios.values() for f in s.fnr}, [f.name for f in model.faults])
     lines += ["", "Per fault at its required size, the best test of the table (largest median fault-to-uncertainty "
               "ratio over the scenarios): fault-to-noise ratio |s| size / sigma and fault-to-uncertainty ratio "
               "|s| size / spread. A ratio below 1 means the envelope alone moves that test's residual further "

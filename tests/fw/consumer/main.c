@@ -1,6 +1,7 @@
 /* main.c - installed-package smoke test: the generic core with the vehicle targets (fdi::romo_can: validate the
    shipped kinematic table, init a diagnoser and step it once, init the ECU core on the ROMO bus; fdi::three_tank:
-   validate its table and init a diagnoser with the defaults). */
+   validate its table and init a diagnoser with the defaults). Built with FDI_CONSUMER_MISMATCH (capacities other
+   than the library's, CMakeLists.txt), it succeeds only when fdi_diag_init refuses it with FDI_BAD_LAYOUT. */
 #include <stdio.h>
 #include <string.h>
 
@@ -11,6 +12,30 @@
 #include "fdi_romo_signals.h"
 #include "fdi_three_tank_table.h"
 
+#ifdef FDI_CONSUMER_MISMATCH
+int main(void)
+{
+    static fdi_diag_t d;
+    fdi_diag_config_t c;
+    fdi_diag_layout_t lib;
+    const fdi_diag_layout_t here = fdi_diag_layout_here();
+    int rc = 1;
+    if ((fdi_diag_config_default(&c, &fdi_three_tank_table) == FDI_OK) && (fdi_diag_layout(&lib) == FDI_OK))
+    {
+        const fdi_status_t st = fdi_diag_init(&d, &c);
+        printf("consumer: FDI_DIAG_MAX_TESTS %u (library %u), sizeof(fdi_diag_t) %u (library %u): fdi_diag_init "
+               "returned %d\n",
+               (unsigned)here.max_tests, (unsigned)lib.max_tests, (unsigned)here.size_diag, (unsigned)lib.size_diag,
+               (int)st);
+        if (st == FDI_BAD_LAYOUT)
+        {
+            printf("consumer: mismatching layout refused (FDI_BAD_LAYOUT)\n");
+            rc = 0;
+        }
+    }
+    return rc;
+}
+#else
 int main(void)
 {
     static fdi_ecu_t ecu;
@@ -44,3 +69,4 @@ int main(void)
     }
     return rc;
 }
+#endif

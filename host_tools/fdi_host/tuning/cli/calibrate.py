@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 from fdi_analysis.cli.common import EXIT_ERROR
 from fdi_analysis.errors import InputError
-from fdi_analysis.names import natural_sorted
+from fdi_analysis.names import in_order
 from fdi_host.tuning.seeds import CALIBRATION_SEEDS, CONFIRM_SEED_OFFSETS, SWEEP_SEEDS
 
 if TYPE_CHECKING:
@@ -256,7 +256,8 @@ def run_sizes(args: argparse.Namespace) -> int:
     _, gens = selected_generators(model, observer_reference(th), workers=args.workers, selection=th.selection,
                                   max_tyre_accel=th.max_tyre_accel)
     sigmas = th.sigmas(gens)
-    faults = natural_sorted({f for g in gens for f in g.faults})
+    model_faults = [f.name for f in model.faults]
+    faults = in_order({f for g in gens for f in g.faults}, model_faults)
     if args.faults:
         faults = [f for f in faults if f in set(args.faults)]
     missing = size_file.lacking(faults)
@@ -296,7 +297,8 @@ def run_sizes(args: argparse.Namespace) -> int:
                   "fault-free drive), sizes up to the limit included, the scenario of the first alarm refined and "
                   "confirmed alike -> [per_test_scenario.<fault>];\n"
                   "tests/analysis/test_residual_faults.py checks every pair at it with another noise seed.")
-    section = sweep.render_section(pairs, provenance, [g.name for g in gens], args.scenario, elsewhere, others)
+    section = sweep.render_section(pairs, provenance, [g.name for g in gens], args.scenario, elsewhere, others,
+                                   model_faults)
     if args.faults:
         print(section)
         return 0

@@ -1,0 +1,101 @@
+# CTest driver of the package tests (tests/fw/CMakeLists.txt), run as
+#   cmake -DMODE=<consumer|subproject|cpack> -DBUILD=<this build> -DSRC=<checkout> -DWORK=<scratch dir> -P package_test.cmake
+#   consumer    install BUILD into WORK/prefix; the installed package holds the capacity header, exports the
+#               capacities as interface compile definitions of fdi::fdi and no test stand-in (fdi-can-play,
+#               fdi-can-record); tests/fw/consumer builds and runs against it; built again with
+#               FDI_DIAG_MAX_TESTS=24 (the library: 16), fdi_diag_init refuses it with FDI_BAD_LAYOUT
+#   subproject  tests/fw/consumer with the checkout added by add_subdirectory: configures and builds without the
+#               project's tests, benches, cmocka or -Werror (checked by the consumer's CMakeLists.txt), and runs
+#   cpack       `cpack -G TGZ` of BUILD holds the libraries, the headers and the CMake package files; the source
+#               package config packs the C library's sources and not the Python packages
+cmake_minimum_required(VERSION 3.20)
+foreach(v MODE BUILD SRC WORK)
+  if(NOT DEFINED ${v})
+    message(FATAL_ERROR "package_test.cmake: -D${v}=... missing")
+  endif()
+endforeach()
+
+function(run)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    string(JOIN " " cmd ${ARGN})
+    message(FATAL_ERROR "failed (${rc}): ${cmd}\n${out}\n${err}")
+  endif()
+  set(run_out "${out}" PARENT_SCOPE)
+endfunction()
+
+function(expect_in text what)
+  string(FIND "${text}" "${what}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "expected \"${what}\" in:\n${text}")
+  endif()
+endfunction()
+
+function(expect_not_in text what)
+  string(FIND "${text}" "${what}" at)
+  if(NOT at EQUAL -1)
+    message(FATAL_ERROR "did not expect \"${what}\" in:\n${text}")
+  endif()
+endfunction()
+
+file(REMOVE_RECURSE "${WORK}")
+file(MAKE_DIRECTORY "${WORK}")
+set(consumer "${SRC}/tests/fw/consumer")
+
+if(MODE STREQUAL "consumer")
+  set(prefix "${WORK}/prefix")
+  run(${CMAKE_COMMAND} --install "${BUILD}" --prefix "${prefix}")
+  if(NOT EXISTS "${prefix}/include/fdi/generated/fdi_capacity.h")
+    message(FATAL_ERROR "the installed package lacks include/fdi/generated/fdi_capacity.h")
+  endif()
+  file(GLOB_RECURSE stand_ins "${prefix}/*fdi-can-play*" "${prefix}/*fdi-can-record*")
+  if(stand_ins)
+    message(FATAL_ERROR "test stand-ins installed: ${stand_ins}")
+  endif()
+  file(GLOB_RECURSE targets "${prefix}/*/fdiTargets.cmake")
+  file(READ "${targets}" exported)
+  expect_in("${exported}" "INTERFACE_COMPILE_DEFINITIONS \"FDI_DIAG_MAX_TESTS=")
+  run(${CMAKE_COMMAND} -S "${consumer}" -B "${WORK}/ok" "-DCMAKE_PREFIX_PATH=${prefix}")
+  run(${CMAKE_COMMAND} --build "${WORK}/ok")
+  run("${WORK}/ok/fdi_consumer")
+  expect_in("${run_out}" "consumer: fdi found and linked")
+  run(${CMAKE_COMMAND} -S "${consumer}" -B "${WORK}/mismatch" "-DCMAKE_PREFIX_PATH=${prefix}"
+      "-DFDI_CONSUMER_OVERRIDE=FDI_DIAG_MAX_TESTS=24")
+  run(${CMAKE_COMMAND} --build "${WORK}/mismatch")
+  run("${WORK}/mismatch/fdi_consumer")
+  message(STATUS "${run_out}")
+  expect_in("${run_out}" "FDI_DIAG_MAX_TESTS 24 (library 16)")
+  expect_in("${run_out}" "mismatching layout refused (FDI_BAD_LAYOUT)")
+elseif(MODE STREQUAL "subproject")
+  run(${CMAKE_COMMAND} -S "${consumer}" -B "${WORK}/sub" "-DFDI_SOURCE_DIR=${SRC}")
+  run(${CMAKE_COMMAND} --build "${WORK}/sub" --target fdi_consumer)
+  run("${WORK}/sub/fdi_consumer")
+  expect_in("${run_out}" "consumer: fdi found and linked")
+elseif(MODE STREQUAL "cpack")
+  get_filename_component(cmake_bin "${CMAKE_COMMAND}" DIRECTORY)
+  find_program(CPACK cpack HINTS "${cmake_bin}" REQUIRED)
+  run(${CPACK} -G TGZ --config "${BUILD}/CPackConfig.cmake" -B "${WORK}")
+  file(GLOB tgz "${WORK}/fdi-*.tar.gz")
+  run(${CMAKE_COMMAND} -E tar tf "${tgz}")
+  set(listing "${run_out}")
+  foreach(f lib/libfdi.a lib/libfdi_ecu.a include/fdi/fdi.h include/fdi/fdi_diag.h include/fdi/fdi_ecu.h
+            include/fdi/generated/fdi_capacity.h lib/cmake/fdi/fdiConfig.cmake lib/cmake/fdi/fdiConfigVersion.cmake
+            lib/cmake/fdi/fdiTargets.cmake)
+    expect_in("${listing}" "/${f}\n")
+  endforeach()
+  expect_not_in("${listing}" "fdi-can-play")
+  expect_not_in("${listing}" "fdi-can-record")
+  run(${CPACK} --config "${BUILD}/CPackSourceConfig.cmake" -B "${WORK}/src")
+  file(GLOB src_tgz "${WORK}/src/fdi-*-src.tar.gz")
+  run(${CMAKE_COMMAND} -E tar tf "${src_tgz}")
+  set(listing "${run_out}")
+  foreach(f CMakeLists.txt VERSION LICENSE cmake/FdiWarnings.cmake fw/src/fdi_diag.c
+            fw/include/generated/fdi_capacity.h tests/fw/CMakeLists.txt tests/fw/consumer/main.c)
+    expect_in("${listing}" "-src/${f}\n")
+  endforeach()
+  foreach(f /analysis/ /host_tools/ /.git/ /build/ /.venv/ /tests/analysis/ setup.py)
+    expect_not_in("${listing}" "${f}")
+  endforeach()
+else()
+  message(FATAL_ERROR "package_test.cmake: unknown MODE ${MODE}")
+endif()
