@@ -91,3 +91,11 @@ def test_cmake_options_take_the_defaults(repo: Path, tmp_path: Path) -> None:
     cache = (tmp_path / "CMakeCache.txt").read_text(encoding="utf-8")
     for c in CAPACITIES:
         assert f"\n{c.macro}:STRING={c.default}\n" in cache, c.macro
+
+
+def test_the_command_writes_the_header(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from fdi_analysis.export.capacity import main
+
+    out = tmp_path / "sub" / "fdi_capacity.h"
+    assert main(["--out", str(out)]) == 0
+    assert out.read_text(encoding="utf-8") == render_header() and str(out) in capsys.readouterr().out

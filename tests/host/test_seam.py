@@ -39,3 +39,10 @@ def test_the_library_answers_the_names() -> None:
     t = dll.fdi_py_table(b"romo")
     assert dll.fdi_py_table_int(t, TableInt.N_FAULTS, 0) == bindings.table_info("romo").n_faults
     assert dll.fdi_py_table_int(t, len(TableInt), 0) == -1
+
+
+def test_the_command_writes_the_header(tmp_path: Path) -> None:
+    from fdi_analysis.export.seam import main
+
+    out = tmp_path / "fdi_py_seam.h"
+    assert main(["--out", str(out)]) == 0 and out.read_text(encoding="utf-8") == render_header()

@@ -14,13 +14,12 @@ numbers. A firmware built with larger capacities (``cmake -DFDI_DIAG_MAX_TESTS=2
 
 from __future__ import annotations
 
-import argparse
 from dataclasses import dataclass, fields
 from pathlib import Path
 from string import Template
 
 from fdi_analysis.errors import FdiError
-from fdi_analysis.export.c_text import banner
+from fdi_analysis.export.c_text import banner, write_header_main
 
 COMMAND = "python -m fdi_analysis.export.capacity"
 HEADER = Path("fw/include/generated/fdi_capacity.h")  # relative to the repository's root
@@ -144,14 +143,7 @@ def render_header() -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog=COMMAND, description="Write the C header of the library's capacities.",
-                                 epilog=f"example: {COMMAND} --out {HEADER}")
-    ap.add_argument("--out", type=Path, default=HEADER, help=f"header to write (default: {HEADER})")
-    args = ap.parse_args(argv)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(render_header(), encoding="utf-8")
-    print(args.out)
-    return 0
+    return write_header_main(COMMAND, "the library's capacities", HEADER, render_header, argv)
 
 
 if __name__ == "__main__":

@@ -9,13 +9,12 @@ writes a bare number. A question's number is its place in its class: append, nev
 
 from __future__ import annotations
 
-import argparse
 import enum
 from dataclasses import dataclass
 from pathlib import Path
 from string import Template
 
-from fdi_analysis.export.c_text import banner, comment_text
+from fdi_analysis.export.c_text import banner, comment_text, write_header_main
 
 COMMAND = "python -m fdi_analysis.export.seam"
 HEADER = Path("host_tools/fdi_host/ecu/fdi_py_seam.h")  # relative to the repository's root
@@ -164,14 +163,7 @@ def render_header() -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog=COMMAND, description="Write the C header of the host ECU's Python/C seam.",
-                                 epilog=f"example: {COMMAND} --out {HEADER}")
-    ap.add_argument("--out", type=Path, default=HEADER, help=f"header to write (default: {HEADER})")
-    args = ap.parse_args(argv)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(render_header(), encoding="utf-8")
-    print(args.out)
-    return 0
+    return write_header_main(COMMAND, "the host ECU's Python/C seam", HEADER, render_header, argv)
 
 
 if __name__ == "__main__":
