@@ -13,7 +13,7 @@ from fdi_host.ecu.records import DiagRecord, TableClasses
 from fdi_host.ecu.session import StepRecord
 from fdi_host.monitor.cli import Monitor
 from fdi_host.monitor.report import plot_diagnosis, plot_residuals, score_table, write_reports
-from fdi_host.monitor.score import FaultWindow, fault_names, score_run, windows_from_truth
+from fdi_host.monitor.score import FaultWindow, score_run, windows_from_truth
 
 # Signatures of the kinematic table (fw/src/fdi_kin_table.c): tests 0..3 over f1..f5, all unique.
 KIN = TableClasses.from_signatures([0x0D, 0x0E, 0x0F, 0x07, 0x0B], ["r1", "r2", "r3", "r4"])
@@ -162,7 +162,7 @@ def test_classes_and_coarse_isolation() -> None:
     tc = TableClasses.from_signatures([0b01, 0b10, 0b01, 0])
     assert tc.iso_class[:4] == (0b0101, 0b0010, 0b0101, 0)
     assert not tc.detectable("f4") and tc.detectable("f3")
-    assert fault_names(0b0101) == "f1,f3" and fault_names(0) == "-"
+    assert TableClasses((), ()).fault_names(0b0101) == "f1,f3" and TableClasses((), ()).fault_names(0) == "-"
     recs = [DiagRecord(k * DT, 1 if k >= 20 else 0, 0b0101 if k >= 20 else 0) for k in range(100)]
     s = score_run(recs, [FaultWindow("f3", 0.1, 1.0)], tc)
     assert s.faults[0].isolation_correct is True  # {f1, f3} is f3's structural class

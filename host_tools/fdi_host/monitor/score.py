@@ -53,12 +53,6 @@ class FaultWindow:
     end: float  # the drive's duration if the fault stays
 
 
-def fault_names(mask: int, classes: TableClasses | None = None) -> str:
-    """``0b1010`` -> ``"f2,f4"``: the names of the table's faults (`classes`; default the vehicle simulator's);
-    ``"-"`` for an empty set."""
-    return (classes or TableClasses((), ())).fault_names(mask)
-
-
 def windows_from_truth(truth: Mapping[str, Any]) -> list[FaultWindow]:
     """Fault windows of a ``truth.json`` (times relative to the drive's start, ``start_time`` removed)."""
     t0 = float(truth.get("start_time", 0.0))
