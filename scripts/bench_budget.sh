@@ -7,7 +7,7 @@
 #      gates of those tests, ~5 min), fdi-analyze export-c (its generated C);
 #   3. scripts/bench_fw.sh there: Cortex-M4F instructions per fdi_diag_step on the benchmark drive and the flash of the
 #      diagnosis as the ECU links it;
-#   4. with --quality: the ECU bindings built from that C and fdi-quality --table romo there (25 faults x 5 scenarios
+#   4. with --quality: the ECU bindings built from that C and fdi-quality --vehicle romo there (25 faults x 5 scenarios
 #      x 3 seeds at the required sizes + 30 min fault-free, ~15 min): its scenario table.
 # Usage: scripts/bench_budget.sh [--quality] BUDGET [BUDGET ...]
 set -euo pipefail
@@ -62,7 +62,7 @@ for b in "$@"; do
     (
       cd "$scr"
       "$py" setup.py -q build_ext --inplace >build_ext.log 2>&1
-      PYTHONPATH="$scr/analysis:$scr/host_tools" "$py" -m fdi_host.quality.cli --table romo --out out/quality-romo \
+      PYTHONPATH="$scr/analysis:$scr/host_tools" "$py" -m fdi_host.quality.cli --vehicle romo --out out/quality-romo \
         >quality.log 2>&1
       awk '/^\| scenario/ {on = 1} on && /^\|/ {print "  " $0} on && !/^\|/ {exit}' out/quality-romo/quality.md
     )

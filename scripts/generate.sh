@@ -7,6 +7,7 @@
 #   fw/vehicles/romo/generated/can/  <- dbc/romo.dbc (cantools code + the ECU core's bus description);
 #   fw/include/generated/fdi_capacity.h  <- fdi_analysis.export.capacity (the library's capacities, one source);
 #   host_tools/fdi_host/ecu/fdi_py_seam.h  <- fdi_analysis.export.seam (the host ECU's Python/C questions, named);
+#   the shipped vehicles' plugin glue fdi_<vehicle>_plugin.c  <- host_tools/vehicles/<vehicle>.toml (fdi-vehicle glue);
 #   fw/vehicles/three_tank/generated/  <- analysis/models/three_tank.toml + three_tank_thresholds.toml + fault sizes,
 #     whose generated tables come from drives of the generic simulator (host_tools/scenarios/three_tank.toml)
 set -euo pipefail
@@ -19,6 +20,9 @@ tank=fw/vehicles/three_tank/generated
 .venv/bin/python -m fdi_analysis.export.capacity --out fw/include/generated/fdi_capacity.h
 # host_tools/fdi_host/ecu/fdi_py_seam.h  <- the questions the ctypes bindings ask the host ECU library, by name
 .venv/bin/python -m fdi_analysis.export.seam --out host_tools/fdi_host/ecu/fdi_py_seam.h
+for vehicle in host_tools/vehicles/*.toml; do  # the shipped vehicles' plugin glue (setup.py builds the plugins)
+  .venv/bin/fdi-vehicle glue "$(basename "$vehicle" .toml)" >/dev/null
+done
 # analysis/models/romo_screening.json.gz  <- every realizable candidate's fault-to-noise ratio at the required fault
 #   sizes along the fault-free drives, sigmas over the calibration's noise seeds (~22 min on 2 workers; only with
 #   FDI_SCREEN=1; tests/analysis/test_screening_current.py checks that its criterion is this code's)

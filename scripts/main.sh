@@ -33,7 +33,7 @@ echo "== 6. live drive over the bus: f4 (vx sensor), f22 (wheel-1 speed sensor),
 # Each fault at its required size (host_tools/scenarios/fault_sizes.toml [requirement]) lasts 5 s and the next
 # starts 8 s later: the ECU ends an isolation episode 3 s after the last alarm (fw/include/fdi_diag.h). The drive
 # ends 3 s after the last fault (the monitor's scoring grace).
-.venv/bin/fdi-live --scenario fig6 --no-scenario-faults --duration 65 --table "${FDI_MAIN_TABLE:-romo}" \
+.venv/bin/fdi-live --scenario fig6 --no-scenario-faults --duration 65 --vehicle "${FDI_MAIN_TABLE:-romo}" \
   --fault f4@5s:0.6:end=10s --fault f22@18s:3.0:end=23s --fault f10@31s:150:end=36s --fault f6@44s:0.06:end=49s \
   --fault f11@57s:150:end=62s \
   --out-dir out/live

@@ -35,7 +35,10 @@ from fdi_host import resources as rh
 top = Path(sys.argv[1])
 import importlib.util
 
-for ext in ("fdi_analysis.mso._core", "fdi_host.ecu._fdi_ecu"):  # the MSO engine, the C ECU core
+from fdi_host.vehicle import plugin_module, shipped_vehicles
+
+# the MSO engine, and the shipped vehicles' plugins (the C ECU core with each vehicle's diagnosis)
+for ext in ("fdi_analysis.mso._core", *(plugin_module(v) for v in shipped_vehicles())):
     spec = importlib.util.find_spec(ext)
     assert spec is not None and "site-packages" in str(spec.origin), f"{ext}: not in the wheel"
 for d in (*ra.PACKAGE_DATA, *rh.PACKAGE_DATA):

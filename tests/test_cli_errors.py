@@ -65,7 +65,7 @@ def _cases(f: dict[str, Path], tmp: Path) -> dict[str, Case]:
                           str(f["corrupt"])], "corrupt.blf", ["residuals", "--nosuch"],
                          "fdi_analysis.export.thresholds:Thresholds.load", ZeroDivisionError,
                          ["residuals", "romo_grouped", "--thresholds", "romo_thresholds", "--log", str(f["one"])]),
-        "fdi-ecu": Case(["--can-config", missing_ini], "missing.ini", ["--table", "nosuch"],
+        "fdi-ecu": Case(["--can-config", missing_ini], "missing.ini", ["--vehicle", "nosuch"],
                         "fdi_host.live.ecu:EcuSession", KeyError, ["--can-config", missing_ini]),
         "fdi-monitor": Case(["--can-config", missing_ini], "missing.ini", ["--grace"],
                             "fdi_host.monitor.cli:Monitor", ZeroDivisionError, ["--can-config", missing_ini]),
@@ -74,8 +74,10 @@ def _cases(f: dict[str, Path], tmp: Path) -> dict[str, Case]:
         "fdi-live": Case(["--can-config", missing_ini, "--out-dir", str(tmp / "live")], "missing.ini",
                          ["--transport", "nosuch"], "fdi_host.live.runner:run_here", KeyError,
                          ["--transport", "current", "--out-dir", str(tmp / "live")]),
-        "fdi-quality": Case(["--quick", "--sizes", str(f["sizes"])], "sizes.toml", ["--table", "nosuch"],
+        "fdi-quality": Case(["--quick", "--sizes", str(f["sizes"])], "sizes.toml", ["--vehicle", "nosuch"],
                             "fdi_host.quality.cli:run_suite", KeyError, ["--quick"]),
+        "fdi-vehicle": Case(["glue", str(f["garbage"])], "garbage.toml", ["new", "--nosuch"],
+                            "fdi_host.vehicle_cli:write_glue", KeyError, ["glue", "three_tank", "--check"]),
     }
 
 

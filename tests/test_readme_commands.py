@@ -58,8 +58,8 @@ PARSE_ONLY: dict[str, str] = {
     "bash scripts/main.sh": "the main job: about 11 minutes from nothing, and a live bus",
     "bash scripts/test.sh": "all tests (this check among them): about 30 minutes; it is what CI runs",
     # README: longer jobs
-    "fdi-live --scenario fig6 --fault f4@5s:0.5 --table kin --out-dir out/live": BUS + ", in real time",
-    "fdi-quality --table romo --out out/quality-romo": SLOW + ": the full suite, about 17 minutes",
+    "fdi-live --scenario fig6 --fault f4@5s:0.5 --vehicle kin --out-dir out/live": BUS + ", in real time",
+    "fdi-quality --vehicle romo --out out/quality-romo": SLOW + ": the full suite, about 17 minutes",
     "fdi-tune screen analysis/models/romo_grouped.toml --thresholds analysis/models/romo_thresholds.toml --sizes "
     "host_tools/scenarios/fault_sizes.toml --out analysis/models/romo_screening.json.gz":
         SLOW + " (about 22 minutes) and " + WRITES,
@@ -105,22 +105,22 @@ PARSE_ONLY: dict[str, str] = {
     "fdi-sim live --scenario fig6 --resume --origin-file out/live/origin.txt --counter-start 9":
         BUS + "; resumes a drive fdi-live started",
     # fdi-ecu, fdi-monitor, fdi-live: processes on a bus
-    "fdi-ecu --interface udp_multicast --table kin --log out/ecu.json": BUS,
-    "fdi-ecu --interface socketcan --channel vcan0 --table romo": BUS,
-    "fdi-ecu --interface pcan --channel PCAN_USBBUS1 --bitrate 500000 --table romo": BUS + " (a PEAK adapter)",
-    "fdi-ecu --can-config bus.ini --can-context vehicle --table romo": BUS + " (from a configuration file)",
-    "fdi-ecu --interface udp_multicast --table kin --idle-exit 2": BUS,
-    "fdi-monitor --interface udp_multicast --table kin --truth out/live/truth.json --out-dir out/live": BUS,
-    "fdi-monitor --interface udp_multicast --table kin --truth t.json --ecu-log out/ecu.json --idle-exit 2": BUS,
-    "fdi-monitor --interface kvaser --channel 0 --bitrate 500000 --table romo": BUS + " (a Kvaser adapter)",
+    "fdi-ecu --interface udp_multicast --vehicle kin --log out/ecu.json": BUS,
+    "fdi-ecu --interface socketcan --channel vcan0 --vehicle romo": BUS,
+    "fdi-ecu --interface pcan --channel PCAN_USBBUS1 --bitrate 500000 --vehicle romo": BUS + " (a PEAK adapter)",
+    "fdi-ecu --can-config bus.ini --can-context vehicle --vehicle romo": BUS + " (from a configuration file)",
+    "fdi-ecu --interface udp_multicast --vehicle kin --idle-exit 2": BUS,
+    "fdi-monitor --interface udp_multicast --vehicle kin --truth out/live/truth.json --out-dir out/live": BUS,
+    "fdi-monitor --interface udp_multicast --vehicle kin --truth t.json --ecu-log out/ecu.json --idle-exit 2": BUS,
+    "fdi-monitor --interface kvaser --channel 0 --bitrate 500000 --vehicle romo": BUS + " (a Kvaser adapter)",
     "fdi-monitor --classes classes.json": BUS + "; the example elides the rest of its options (...)",
-    "fdi-live --scenario straight --duration 12 --no-scenario-faults --fault f4@4s:0.5:end=8s --table kin":
+    "fdi-live --scenario straight --duration 12 --no-scenario-faults --fault f4@4s:0.5:end=8s --vehicle kin":
         BUS + ", in real time",
     "fdi-live --transport current": BUS + "; the example elides the rest of its options (...)",
     "fdi-live --interface socketcan --channel vcan1": BUS + "; the example elides the rest of its options (...)",
     "fdi-live --can-config bus.ini --can-context bench": BUS + "; the example elides the rest of its options (...)",
-    "fdi-live --scenario cornering --fault f4@5s:0.5 --table kin --bus-load 4000": BUS + ", in real time",
-    "fdi-live --scenario fig6 --duration 21.5 --no-scenario-faults --fault f4@16s:0.5 --table kin "
+    "fdi-live --scenario cornering --fault f4@5s:0.5 --vehicle kin --bus-load 4000": BUS + ", in real time",
+    "fdi-live --scenario fig6 --duration 21.5 --no-scenario-faults --fault f4@16s:0.5 --vehicle kin "
     "--restart-ecu-at 1.5 --restart-sim-at 8.5 --sim-counter-start 9": BUS + ", in real time",
     # fdi-replay
     "fdi-replay drive.blf --speed 1 --interface udp_multicast": BUS + ", in real time",
@@ -129,12 +129,12 @@ PARSE_ONLY: dict[str, str] = {
     "fdi-replay drive.asc --can-config bus.ini --can-context bench": BUS + " (from a configuration file)",
     "fdi-replay 'fleet/**/*.blf' --scheduler tcp://10.0.0.5:8786": "needs a Dask cluster",
     # fdi-quality
-    "fdi-quality --table romo --quick --out out/quality-quick":
+    "fdi-quality --vehicle romo --quick --out out/quality-quick":
         "45 s; tests/host/test_quality_suite.py runs the quick suite itself",
-    "fdi-quality --table romo --faults f6 f10 --scenarios cornering slalom --shapes step ramp --multipliers 1 2":
+    "fdi-quality --vehicle romo --faults f6 f10 --scenarios cornering slalom --shapes step ramp --multipliers 1 2":
         SLOW + ": 48 cases and 30 fault-free minutes",
-    "fdi-quality --table romo --linearity --seeds 2001 --out out/linearity": SLOW + ": about 7 minutes",
-    "fdi-quality --table romo --ecu noise_allowance=2 --out out/quality-na2": SLOW + ": the full suite",
+    "fdi-quality --vehicle romo --linearity --seeds 2001 --out out/linearity": SLOW + ": about 7 minutes",
+    "fdi-quality --vehicle romo --ecu noise_allowance=2 --out out/quality-na2": SLOW + ": the full suite",
     "fdi-quality --fleet 25 --out out/fleet": SLOW + ": about 40 minutes",
     "fdi-quality --fleet 2 --quick --out out/fleet-quick":
         "over a minute; tests/host/test_quality_fleet.py runs the quick fleet itself",
@@ -157,7 +157,7 @@ def _fleet_folder(work: Path) -> None:
 
 # what a command run for real needs that no earlier command writes, made just before it
 PREPARE: dict[str, Callable[[Path], None]] = {
-    "fdi-replay drive.log.gz --offline --table kin --strict": _gzip_log,
+    "fdi-replay drive.log.gz --offline --vehicle kin --strict": _gzip_log,
     "fdi-replay fleet/ --out-dir out/fleet": _fleet_folder,
 }
 
@@ -438,9 +438,9 @@ def test_ci_runs_the_readme_test_command() -> None:
 def test_parsing_refuses_an_option_the_program_lacks(monkeypatch: pytest.MonkeyPatch,
                                                      capsys: pytest.CaptureFixture[str]) -> None:
     """The parse of a long command is the program's own: a shown option it does not have fails it."""
-    ns = parse_with_the_cli(("fdi-quality", "--table", "romo", "--out", "out/q"), monkeypatch)
+    ns = parse_with_the_cli(("fdi-quality", "--vehicle", "romo", "--out", "out/q"), monkeypatch)
     assert ns.table == "romo" and str(ns.out) == "out/q"
-    for argv in (("fdi-quality", "--table", "romo", "--no-such-option"), ("fdi-live", "--scenario")):
+    for argv in (("fdi-quality", "--vehicle", "romo", "--no-such-option"), ("fdi-live", "--scenario")):
         with pytest.raises(SystemExit) as exc:
             parse_with_the_cli(argv, monkeypatch)
         assert exc.value.code == 2

@@ -21,7 +21,7 @@ on this virtual machine an idle vCPU otherwise halts and waits for the host to r
 arrives, which dominates the latency on a quiet machine (``--no-pm-qos`` measures without).
 All clocks are the host's wall clock (kernel receive stamps and time.time()).
 
-    python host_tools/bench/bench_can.py [--duration 60] [--table romo] [--bus-load 4000] [--out-dir out/bench_can]
+    python host_tools/bench/bench_can.py [--duration 60] [--vehicle romo] [--bus-load 4000] [--out-dir out/bench_can]
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from fdi_host.can import background, traffic
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.frame import Frame
 from fdi_host.can.log_columns import read_log_columns
 from fdi_host.can.logs import read_log, write_log
@@ -62,6 +62,7 @@ from fdi_host.live.sender import SendLog, send_paced
 from fdi_host.replay import replay_columns, replay_offline, replay_offline_fast
 from fdi_host.sim.scenario import load_scenario
 from fdi_host.sim.vehicle_sim import simulate
+from fdi_host.vehicle import add_vehicle_argument
 
 CHANNEL = "239.74.163.9"
 LISTENER_RCVBUF = 16 * 1024 * 1024  # bytes: the listener is a measuring tool; it must not be the one that drops
@@ -166,7 +167,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"start: {load_start}", flush=True)
     print(f"simulating {args.duration:.0f} s ({args.scenario}) ...", flush=True)
     res = simulate(load_scenario(args.scenario), [], duration=args.duration)
-    sim_frames = traffic.build_frames(res, RomoDatabase())
+    sim_frames = traffic.build_frames(res, CanDatabase())
     sim_rate = len(sim_frames) / args.duration
     bg_frames = background_for(args, sim_frames)
     frames = background.merge_frames(sim_frames, bg_frames)
@@ -187,7 +188,7 @@ def run(args: argparse.Namespace) -> int:
     lis = subprocess.Popen([*me, "--listener", str(out / "listener.npz"), "--out-dir", str(out)], env=env)
     ecu_prog = ["-m", "fdi_host.live.ecu"] if args.ecu_script is None else [str(args.ecu_script)]
     ecu_cmd = [sys.executable, *ecu_prog, "--interface", "udp_multicast", "--channel", CHANNEL,
-               "--table", args.table, "--log", str(out / "ecu.json"), "--ready-file", str(out / "ecu.ready"),
+               "--vehicle", args.vehicle, "--log", str(out / "ecu.json"), "--ready-file", str(out / "ecu.ready"),
                "--rx-log", str(out / "ecu_rx.log"), "--quiet", *([] if args.no_realtime else ["--realtime"]),
                *(["--cpu", str(ECU_CPU)] if args.pin else [])]
     ecu = subprocess.Popen(ecu_cmd, env=env)
@@ -288,16 +289,16 @@ def report(args: argparse.Namespace, out: Path, frames: Sequence[Frame], sim_fra
     lag = (sent_t - log.start_wall) - np.asarray(log.sim_t)
 
     load_off = load_text()
-    off = replay_offline(sim_frames, args.table)
-    fast = replay_offline_fast(sim_frames, args.table)
-    fast_all = replay_offline_fast(frames, args.table) if bg_frames else None
+    off = replay_offline(sim_frames, args.vehicle)
+    fast = replay_offline_fast(sim_frames, args.vehicle)
+    fast_all = replay_offline_fast(frames, args.vehicle) if bg_frames else None
     load_end = load_text()
     behind = log.max_behind * 1e3
     n_sent = len(sent_t)
     n_sim = sum(sent[f] for f in sim_ids)
     print()
     print(f"== live over udp_multicast ({'private netns' if inside_private_netns() else 'this netns'}), "
-          f"{args.duration:.0f} s, table {args.table}; {load_live} (at the end of the live phase)")
+          f"{args.duration:.0f} s, table {args.vehicle}; {load_live} (at the end of the live phase)")
     requested = args.bus_load or round(len(frames) / args.duration)
     print(f"frames sent {n_sent} ({n_sim} simulator, {n_sent - n_sim} other ECUs'); received by the listener "
           f"{int(rx_sent.sum())} at {achieved:.0f} frames/s (requested {requested:.0f})")
@@ -336,7 +337,7 @@ def report(args: argparse.Namespace, out: Path, frames: Sequence[Frame], sim_fra
         t_cols = time.perf_counter()
         columns = read_log_columns(rx_log)
         t_cols = time.perf_counter() - t_cols
-        from_file = replay_columns(columns, args.table)
+        from_file = replay_columns(columns, args.vehicle)
         total = t_cols + from_file.wall
         print(f"  from the ECU's receive log of the run ({rx_log.name}, candump, {len(columns)} frames, "
               f"{from_file.log_duration:.1f} s): read as columns {t_cols:.3f} s (python-can's reader {t_read:.2f} s, "
@@ -362,11 +363,11 @@ def _verdict(speed: float) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None,
-                                 epilog="example: python host_tools/bench/bench_can.py --bus-load 4000 --table romo",
+                                 epilog="example: python host_tools/bench/bench_can.py --bus-load 4000 --vehicle romo",
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--duration", type=float, default=60.0, help="seconds of live traffic (default 60)")
     ap.add_argument("--scenario", default="slalom", help="scenario driven (default slalom)")
-    ap.add_argument("--table", choices=("kin", "romo"), default="romo", help="ECU table (default romo)")
+    add_vehicle_argument(ap)
     ap.add_argument("--bus-load", type=float, default=0.0, metavar="HZ",
                     help="total frames/s on the bus: other ECUs' frames (IDs the ECU does not subscribe to) are "
                     "added to the drive's ~1,200/s (default 0: the drive's traffic only)")

@@ -34,6 +34,7 @@ from fdi_host.sim.drive import write_truth
 from fdi_host.sim.faults import FaultSpec
 from fdi_host.sim.scenario import SCENARIOS, load_scenario
 from fdi_host.sim.vehicle_sim import default_plant, simulate
+from fdi_host.vehicle import add_vehicle_argument
 
 FAULTS = (("f1", 0.3), ("f4", 0.5), ("f5", 0.5), ("f10", 150.0), ("f19", 300.0), ("f22", 1.0), ("f24", 0.5))
 
@@ -73,26 +74,26 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--logs", type=Path, default=Path("out/bench_fleet/logs"), help="folder of the fleet's logs")
     ap.add_argument("--fresh", action="store_true", help="make the drives again")
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="processes, Dask workers (default: cores)")
-    ap.add_argument("--table", choices=("romo", "kin"), default="romo")
+    add_vehicle_argument(ap)
     ap.add_argument("--out", type=Path, default=Path("out/bench_fleet/bench.json"))
     args = ap.parse_args(argv)
     if args.fresh and args.logs.exists():
         shutil.rmtree(args.logs)
     logs = make_fleet(args.drives, args.duration, args.logs, args.workers)
-    task = partial(replay_log, table=args.table, grace=3.0)
-    runs: list[fleet.FleetReport] = [fleet.run_fleet(task, logs, workers=1, table=args.table),
-                                     fleet.run_fleet(task, logs, workers=args.workers, table=args.table)]
+    task = partial(replay_log, table=args.vehicle, grace=3.0)
+    runs: list[fleet.FleetReport] = [fleet.run_fleet(task, logs, workers=1, table=args.vehicle),
+                                     fleet.run_fleet(task, logs, workers=args.workers, table=args.vehicle)]
     try:
         from distributed import LocalCluster
     except ImportError:
         print("no dask.distributed (pip install 'romo-fdi[fleet]'): the Dask row is left out", file=sys.stderr)
     else:
         with LocalCluster(n_workers=args.workers, threads_per_worker=1, dashboard_address=None) as cluster:
-            runs.append(fleet.run_fleet(task, logs, scheduler=cluster.scheduler_address, table=args.table))
+            runs.append(fleet.run_fleet(task, logs, scheduler=cluster.scheduler_address, table=args.vehicle))
     base = runs[0]
     same = all([replace(r, wall=0.0) for r in run.logs] == [replace(r, wall=0.0) for r in base.logs]
                for run in runs[1:])
-    print(f"fleet: {len(logs)} logs, {base.drive_hours:.2f} drive-hours, table {args.table}; "
+    print(f"fleet: {len(logs)} logs, {base.drive_hours:.2f} drive-hours, table {args.vehicle}; "
           f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} before the last run")
     print("| executor | wall [s] | logs/min | drive-hours/min | vs one process |")
     print("|---|---|---|---|---|")

@@ -35,16 +35,17 @@ from tqdm import tqdm
 
 from fdi_analysis.cli.common import EXIT_ERROR, INPUT_ERRORS, add_version, fail, one_line, run, use_file_backend
 from fdi_host import fleet
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.frame import Frame
 from fdi_host.can.log_columns import FrameColumns, frame_columns, read_columns_checked
 from fdi_host.can.logs import LogError, LogIssues, formats_text, is_log, read_log_checked
 from fdi_host.ecu.records import DiagRecord
-from fdi_host.ecu.session import DIAG_ID, ORIGIN_LEAD, EcuSession, table_classes
+from fdi_host.ecu.session import ORIGIN_LEAD, EcuSession, table_classes
 from fdi_host.live.bus import BusOptions, StopFlag, add_bus_arguments, open_cli_bus
 from fdi_host.live.sender import send_paced
 from fdi_host.monitor.report import plot_diagnosis, plot_residuals, score_table, write_reports
 from fdi_host.monitor.score import score_run, windows_from_truth
+from fdi_host.vehicle import add_vehicle_argument
 
 EPILOG = """\
 examples:
@@ -52,9 +53,9 @@ examples:
   fdi-replay drive.log --speed 10 --interface socketcan --channel vcan0
   fdi-replay drive.trc --interface pcan --channel PCAN_USBBUS1 --bitrate 500000   (onto a real bus, PEAK adapter)
   fdi-replay drive.asc --can-config bus.ini --can-context bench     (the bus in a python-can configuration file)
-  fdi-replay drive.log.gz --offline --table kin --strict            (a malformed line is an error, not skipped)
-  fdi-replay drive.blf --offline --table kin                        (through the bindings, prints x real time)
-  fdi-replay drive.blf --offline --table kin --truth drive.truth.json --out-dir out/replay --ecu-log out/ecu.json
+  fdi-replay drive.log.gz --offline --vehicle kin --strict            (a malformed line is an error, not skipped)
+  fdi-replay drive.blf --offline --vehicle kin                        (through the bindings, prints x real time)
+  fdi-replay drive.blf --offline --vehicle kin --truth drive.truth.json --out-dir out/replay --ecu-log out/ecu.json
   fdi-replay fleet/ --out-dir out/fleet                             (every log below fleet/, one process per core)
   fdi-replay 'fleet/**/*.blf' --scheduler tcp://10.0.0.5:8786       (on a Dask cluster; quote the pattern)
 """
@@ -104,9 +105,10 @@ class FastResult:
         return self.log_duration / self.wall if self.wall > 0 else float("inf")
 
 
-def _diag_decoder(db: RomoDatabase) -> Callable[[bytes], list[list[int]]]:
+def _diag_decoder(db: CanDatabase) -> Callable[[bytes], list[list[int]]]:
     """Alarm masks, candidates, isolation classes and statuses of FDI_Diagnosis payloads (8 bytes each,
-    concatenated), one list per field; bit positions from the DBC (little-endian unsigned signals), extracted
+    concatenated), one list per field; bit positions from the DBC (little-endian unsigned signals; the frame is the
+    C ECU core's, the same on every vehicle's bus: dbc/romo.dbc describes it), extracted
     with numpy shifts on all payloads at once (cantools' decode is 20x slower per frame)."""
     msg = db.message("FDI_Diagnosis")
     fields = []
@@ -131,14 +133,14 @@ def replay_columns(columns: FrameColumns, table: str) -> FastResult:
     the columns to the records."""
     session = EcuSession(table)
     ecu = session.ecu
-    decode = _diag_decoder(RomoDatabase())
+    decode = _diag_decoder(CanDatabase())
     t_start = time.perf_counter()
     records: list[DiagRecord] = []
     c_wall = 0.0
     n = len(columns)
     if n:
         ecu.poll(0.0)  # anchors the step schedule, as EcuSession.anchor
-        keep = columns.frame_id != DIAG_ID
+        keep = columns.frame_id != session.diag_id
         sent = columns if keep.all() else columns.select(keep)
         t = sent.t - (columns.t[0] - ORIGIN_LEAD)
         t_c = time.perf_counter()
@@ -234,7 +236,7 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--speed", type=_speed, default=1.0, help="times real time: 1, 10, ... or max (default 1)")
     add_bus_arguments(ap)
     ap.add_argument("--offline", action="store_true", help="no bus: through the ECU bindings as fast as possible")
-    ap.add_argument("--table", choices=("romo", "kin"), default="romo", help="ECU table for --offline")
+    add_vehicle_argument(ap, "the ECU of --offline")
     ap.add_argument("--truth", type=Path, help="with --offline: score against this truth.json")
     ap.add_argument("--out-dir", type=Path, default=Path("out/replay"), help="with --offline --truth: reports")
     ap.add_argument("--ecu-log", type=Path, help="with --offline: write the ECU log (every step)")
@@ -314,11 +316,11 @@ def _offline(args: argparse.Namespace, source: list[Frame] | FrameColumns) -> in
     in one C call from the columns."""
     try:
         if isinstance(source, FrameColumns):
-            fast = replay_columns(source, args.table)
+            fast = replay_columns(source, args.vehicle)
             ecu, records, steps, speed, wall = fast.ecu, fast.records, [], fast.speed, fast.wall
             n, dur = fast.frames, fast.log_duration
         else:
-            res = replay_offline(source, args.table)
+            res = replay_offline(source, args.vehicle)
             ecu, records, steps, speed, wall = res.session.ecu, res.session.records(), res.session.steps, \
                 res.speed, res.wall
             n, dur = len(source), source[-1].timestamp - source[0].timestamp
@@ -337,7 +339,7 @@ def _offline(args: argparse.Namespace, source: list[Frame] | FrameColumns) -> in
         windows = windows_from_truth(truth)
         score = score_run(records, windows, classes, args.grace)
         print(score_table(score))
-        paths = write_reports(args.out_dir, score, None, {"table": args.table, "log": str(args.log),
+        paths = write_reports(args.out_dir, score, None, {"table": args.vehicle, "log": str(args.log),
                                                           "speed_vs_real_time": speed})
         for p in (plot_diagnosis(args.out_dir / "diagnosis.png", records, windows, classes),
                   plot_residuals(args.out_dir / "residuals.png", steps, windows, classes, ORIGIN_LEAD)):
@@ -351,15 +353,15 @@ def _fleet(args: argparse.Namespace) -> int:
     """Many logs through the ECU (local processes or Dask), one quality table."""
     logs = fleet.find_logs(args.logs)
     where = f"Dask at {args.scheduler}" if args.scheduler else "local processes"
-    print(f"fleet: {len(logs)} logs, table {args.table}, on {where}", flush=True)
+    print(f"fleet: {len(logs)} logs, table {args.vehicle}, on {where}", flush=True)
     with tqdm(total=len(logs), unit="log", desc="replay", disable=args.quiet, file=sys.stderr) as bar:
         def progress(r: fleet.LogResult) -> None:
             bar.update(1)
             if r.error is not None:
                 bar.write(f"fdi-replay: {r.error}", file=sys.stderr)
 
-        report = fleet.run_fleet(partial(replay_log, table=args.table, grace=args.grace, strict=args.strict), logs,
-                                 workers=args.workers, scheduler=args.scheduler, progress=progress, table=args.table)
+        report = fleet.run_fleet(partial(replay_log, table=args.vehicle, grace=args.grace, strict=args.strict), logs,
+                                 workers=args.workers, scheduler=args.scheduler, progress=progress, table=args.vehicle)
     print("\n".join(fleet.fault_table(report)))
     print(fleet.free_line(report))
     if len(report.logs) <= 20:

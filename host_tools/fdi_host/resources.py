@@ -8,4 +8,5 @@ from fdi_analysis.resources import DataDir
 
 DBC = DataDir("fdi_host", "data/dbc", "dbc", "*.dbc")
 SCENARIOS = DataDir("fdi_host", "data/scenarios", "host_tools/scenarios", "*.toml")
-PACKAGE_DATA: tuple[DataDir, ...] = (DBC, SCENARIOS)
+VEHICLES = DataDir("fdi_host", "data/vehicles", "host_tools/vehicles", "*.toml")  # the shipped vehicles' manifests
+PACKAGE_DATA: tuple[DataDir, ...] = (DBC, SCENARIOS, VEHICLES)

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.ecu_view import _at_instants, bus_align, ecu_view, step_times
 from fdi_host.can.frame import Frame
 from fdi_host.can.logs import read_log, write_log
@@ -26,7 +26,7 @@ THRESHOLDS = "analysis/models/romo_thresholds.toml"
 
 
 def test_step_times_sample_and_hold_and_alignment() -> None:
-    db = RomoDatabase()
+    db = CanDatabase()
     sim = simulate(load_scenario("cornering"), [], duration=0.2, seed=5)
     frames = build_frames(sim, db)
     t = step_times(frames, 0.01)

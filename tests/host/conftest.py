@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.sim.plant import Plant
 from fdi_host.sim.vehicle_sim import default_plant
 
@@ -15,5 +15,5 @@ def plant() -> Plant:
 
 
 @pytest.fixture(scope="session")
-def db() -> RomoDatabase:
-    return RomoDatabase()
+def db() -> CanDatabase:
+    return CanDatabase()

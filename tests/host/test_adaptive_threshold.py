@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.traffic import build_frames
 from fdi_host.ecu.bindings import EcuResult
 from fdi_host.ecu.offline import replay
@@ -38,7 +38,7 @@ def _mso1(results: Sequence[EcuResult], what: str) -> NDArray[Any]:
 def test_a_grade_alarms_at_the_fixed_gate_and_not_with_the_adaptive_threshold() -> None:
     vehicle = dataclasses.replace(NOMINAL, name="grade 5 %", grade=GRADE)
     base = simulate_truth(load_scenario("straight"), [], vehicle=vehicle, seed=SEED)
-    db = RomoDatabase()
+    db = CanDatabase()
     frames = build_frames(base, db)
     fixed = replay("romo", frames, adaptive=False, estimate=0)  # the fixed gates
     adaptive = replay("romo", frames, adaptive=True, estimate=0)

@@ -263,7 +263,7 @@ def test_live_ecu_over_a_virtual_bus_named_in_a_configuration_file(drive_log: Pa
     thread = threading.Thread(target=sender, daemon=True)
     thread.start()
     rx_log = tmp_path / "rx.csv"
-    rc = ecu_main(["--can-config", str(cfg), "--table", "kin", "--idle-exit", "0.5", "--duration", "60",
+    rc = ecu_main(["--can-config", str(cfg), "--vehicle", "kin", "--idle-exit", "0.5", "--duration", "60",
                    "--ready-file", str(ready), "--rx-log", str(rx_log), "--quiet", "--rcvbuf", "0"])
     thread.join(timeout=30.0)
     out = capsys.readouterr().out

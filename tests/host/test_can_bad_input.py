@@ -16,7 +16,7 @@ from collections.abc import Callable
 import pytest
 
 from fdi_host.can import e2e
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.frame import Frame
 from fdi_host.can.traffic import build_frames
 from fdi_host.ecu.bindings import DIAG_ID, REASONS, Ecu, EcuResult
@@ -161,7 +161,7 @@ def test_gap_sender_silent(clean: list[Frame], message: str) -> None:
     check_invalid_window(res, message)
 
 
-def test_burst_at_10x_rate_is_accepted_or_counted(clean: list[Frame], db: RomoDatabase) -> None:
+def test_burst_at_10x_rate_is_accepted_or_counted(clean: list[Frame], db: CanDatabase) -> None:
     """VelocitySensor at 10x its rate (1 ms) for 1.5 s: with fresh counters every frame is accepted and the
     diagnosis stays quiet and evaluable; as plain copies 9 of 10 are rejected as repeated counters."""
     can_id, _, data_id = MESSAGES["VelocitySensor"]

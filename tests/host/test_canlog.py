@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from fdi_host.can import e2e
-from fdi_host.can.dbc import SIMULATED_MESSAGES, RomoDatabase
+from fdi_host.can.dbc import SIMULATED_MESSAGES, CanDatabase
 from fdi_host.can.frame import Frame
 from fdi_host.can.logs import read_log, write_log
 from fdi_host.can.traffic import build_frames, bus_load, decode_frames
@@ -28,7 +28,7 @@ def frames(drive: SimResult) -> list[Frame]:
     return build_frames(drive, t0=1000.0)
 
 
-def test_frames_follow_cycle_times_counters_and_crc(frames: list[Frame], db: RomoDatabase) -> None:
+def test_frames_follow_cycle_times_counters_and_crc(frames: list[Frame], db: CanDatabase) -> None:
     assert all(a.timestamp <= b.timestamp for a, b in itertools.pairwise(frames))
     for name in SIMULATED_MESSAGES:
         fid = db.message(name).frame_id
@@ -43,7 +43,7 @@ def test_frames_follow_cycle_times_counters_and_crc(frames: list[Frame], db: Rom
 
 
 def test_decoded_values_are_the_quantised_measurements(drive: SimResult, frames: list[Frame],
-                                                       db: RomoDatabase) -> None:
+                                                       db: CanDatabase) -> None:
     dec = decode_frames(frames, db)
     assert dec.e2e_errors == 0
     for sm_name, vals in dec.values.items():
@@ -77,6 +77,6 @@ def test_log_round_trip(frames: list[Frame], tmp_path: Path, suffix: str) -> Non
     np.testing.assert_allclose(t_out - t_out[0], t_in - t_in[0], atol=2e-6)
 
 
-def test_bus_load_is_reasonable(frames: list[Frame], db: RomoDatabase) -> None:
+def test_bus_load_is_reasonable(frames: list[Frame], db: CanDatabase) -> None:
     load = bus_load(frames, db.baudrate(), 2.0)
     assert 0.1 < load < 0.5

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from fdi_host.can import e2e
-from fdi_host.can.dbc import DEFAULT_DBC, SIGNAL_MAP, SIMULATED_MESSAGES, E2EError, RomoDatabase
+from fdi_host.can.dbc import DEFAULT_DBC, SIGNAL_MAP, SIMULATED_MESSAGES, CanDatabase, E2EError
 from fdi_host.sim.sensors import DEMAND_RANGES, SENSOR_BY_KNOWN, SENSORS
 
 
@@ -33,7 +33,7 @@ def test_generated_c_source_compiles_warning_free(tmp_path: Path) -> None:
                         str(tmp_path / (c.stem + ".o"))], check=True)
 
 
-def test_required_messages_and_cycle_times(db: RomoDatabase) -> None:
+def test_required_messages_and_cycle_times(db: CanDatabase) -> None:
     ct = {m: db.cycle_time_ms(m) for m in (*SIMULATED_MESSAGES, "FDI_Diagnosis")}
     assert 5 <= ct["IMU_Motion"] <= 10
     assert all(5 <= ct[f"WheelRobot{i}"] <= 10 for i in (1, 2, 3, 4))
@@ -48,7 +48,7 @@ def test_every_sim_signal_has_a_sensor_spec_and_vice_versa() -> None:
 
 
 @pytest.mark.parametrize("sm", SIGNAL_MAP, ids=lambda s: s.sim)
-def test_range_and_resolution(db: RomoDatabase, sm: object) -> None:
+def test_range_and_resolution(db: CanDatabase, sm: object) -> None:
     from fdi_host.can.dbc import SignalMap
 
     assert isinstance(sm, SignalMap)
@@ -72,13 +72,13 @@ def test_range_and_resolution(db: RomoDatabase, sm: object) -> None:
         assert sig.scale / sm.factor < spec.sigma
 
 
-def test_e2e_on_every_message_with_unique_data_ids(db: RomoDatabase) -> None:
+def test_e2e_on_every_message_with_unique_data_ids(db: CanDatabase) -> None:
     ids = [db.data_id(m) for m in (*SIMULATED_MESSAGES, "FDI_Diagnosis")]
     assert None not in ids and len(set(ids)) == len(ids)
 
 
 @pytest.mark.parametrize("name", [*SIMULATED_MESSAGES, "FDI_Diagnosis"])
-def test_round_trip_every_message(db: RomoDatabase, name: str) -> None:
+def test_round_trip_every_message(db: CanDatabase, name: str) -> None:
     rng = np.random.default_rng(len(name))
     msg = db.message(name)
     pre = db.prefix(name)
@@ -106,7 +106,7 @@ def test_round_trip_every_message(db: RomoDatabase, name: str) -> None:
             db.decode(msg.frame_id, bytes(bad))
 
 
-def test_candidate_bitmask_carries_all_25_faults(db: RomoDatabase) -> None:
+def test_candidate_bitmask_carries_all_25_faults(db: CanDatabase) -> None:
     msg = db.message("FDI_Diagnosis")
     for mask in (0x1FFFFFF, 1, 1 << 24, 0x0AAAAAA):
         data = db.encode("FDI_Diagnosis", {"FDI_CandidateFaults": mask, "FDI_AlarmMask": 0xFFF,

@@ -14,7 +14,7 @@ import itertools
 import pytest
 
 from fdi_host.can import e2e
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.frame import Frame
 from fdi_host.can.traffic import build_frames
 from fdi_host.ecu.bindings import DIAG_ID, REASONS, Ecu, EcuError, bus_info, table_info
@@ -59,7 +59,7 @@ def test_tables_are_exposed() -> None:
     romo = table_info("romo")
     assert romo.n_faults == 25 and romo.n_tests >= 1
     assert romo.iso_class[9] == romo.iso_class[13]  # f10 / f14 share a class (M_TM + M_DB)
-    with pytest.raises(ValueError, match="unknown table"):
+    with pytest.raises(ValueError, match="no vehicle 'nope'"):
         Ecu("nope")
 
 
@@ -77,7 +77,7 @@ def test_fault_free_drive_gives_no_detection(clean_frames: list[Frame]) -> None:
     assert all(m.timeouts == 0 for m in c.messages.values())
 
 
-def test_vx_drift_is_isolated_as_f4(f4_frames: list[Frame], db: RomoDatabase) -> None:
+def test_vx_drift_is_isolated_as_f4(f4_frames: list[Frame], db: CanDatabase) -> None:
     ecu = Ecu("kin")
     diag = _run(ecu, f4_frames)
     detected = [(t, r) for t, r, _ in diag if r.detected]  # type: ignore[attr-defined]
@@ -236,7 +236,7 @@ def test_bus_is_the_dbc() -> None:
     from fdi_host.can.dbc import DIAG_ID as DBC_DIAG_ID
     from fdi_host.can.dbc import SIGNAL_MAP
 
-    db = RomoDatabase()
+    db = CanDatabase()
     bus = bus_info("romo")
     received = sorted((m for m in db.db.messages if "FDI" not in m.senders), key=lambda m: m.frame_id)
     assert bus.messages == tuple((m.name, m.frame_id) for m in received)

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 from fdi_host.can import background, traffic
-from fdi_host.can.dbc import DIAG_ID, RomoDatabase
+from fdi_host.can.dbc import DIAG_ID, CanDatabase
 from fdi_host.can.frame import Frame
 from fdi_host.ecu.session import ORIGIN_LEAD
 from fdi_host.live.netns import check_unshare
@@ -31,12 +31,12 @@ REPO = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")
-def drive(db: RomoDatabase) -> list[Frame]:
+def drive(db: CanDatabase) -> list[Frame]:
     """6 s of the cornering drive, fault-free: the ROMO table's diagnosis raises no alarm on it."""
     return traffic.build_frames(simulate(load_scenario("cornering"), [], duration=6.0), db)
 
 
-def test_background_messages_are_deterministic_realistic_and_never_subscribed(db: RomoDatabase) -> None:
+def test_background_messages_are_deterministic_realistic_and_never_subscribed(db: CanDatabase) -> None:
     excluded = background.excluded_ids(db)
     assert {m.frame_id for m in db.db.messages} == excluded and DIAG_ID in excluded
     msgs = background.background_messages(2800.0, excluded, seed=7)
@@ -55,7 +55,7 @@ def test_background_messages_are_deterministic_realistic_and_never_subscribed(db
         background.background_messages(-1.0, excluded)
 
 
-def test_background_frames_reach_the_requested_rate(db: RomoDatabase) -> None:
+def test_background_frames_reach_the_requested_rate(db: CanDatabase) -> None:
     msgs = background.background_messages(2800.0, background.excluded_ids(db))
     frames = background.background_frames(msgs, 10.0)
     assert len(frames) / 10.0 == pytest.approx(2800.0, rel=0.01)
@@ -73,7 +73,7 @@ def test_background_frames_reach_the_requested_rate(db: RomoDatabase) -> None:
     assert ext.nominal == pytest.approx(4000 * 131 / 500_000)
 
 
-def test_ecu_counts_other_ecus_frames_and_its_diagnosis_does_not_change(db: RomoDatabase,
+def test_ecu_counts_other_ecus_frames_and_its_diagnosis_does_not_change(db: CanDatabase,
                                                                         drive: list[Frame]) -> None:
     msgs = background.background_messages(2800.0, background.excluded_ids(db))
     bg = background.background_frames(msgs, drive[-1].timestamp)
@@ -119,7 +119,7 @@ def test_bench_bus_load_puts_other_ecus_frames_on_the_bus(tmp_path: Path) -> Non
     if not chk.ok:
         pytest.skip(f"no private network namespace for udp_multicast: {chk.reason}")
     cmd = [sys.executable, str(REPO / "host_tools" / "bench" / "bench_can.py"), "--duration", "5", "--bus-load",
-           "4000", "--table", "romo", "--out-dir", str(tmp_path)]
+           "4000", "--vehicle", "romo", "--out-dir", str(tmp_path)]
     # a trial run: docs/results.md is not touched (FDI_RESULTS_DOC empty)
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300, check=False,
                           env={**os.environ, "FDI_RESULTS_DOC": ""})
@@ -147,7 +147,7 @@ def test_live_loop_at_full_bus_load_detects_without_false_alarm(tmp_path: Path) 
     if not chk.ok:
         pytest.skip(f"no private network namespace for udp_multicast: {chk.reason}")
     cmd = [sys.executable, "-m", "fdi_host.live.runner", "--transport", "netns", "--scenario", "cornering",
-           "--no-scenario-faults", "--fault", "f4@5.5s:0.5:end=8s", "--duration", "9", "--table", "kin",
+           "--no-scenario-faults", "--fault", "f4@5.5s:0.5:end=8s", "--duration", "9", "--vehicle", "kin",
            "--out-dir", str(tmp_path), "--channel", "239.74.163.12", "--bus-load", "4000"]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300, check=False)
     assert proc.returncode == 0, proc.stdout + proc.stderr

@@ -33,7 +33,7 @@ def live_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     f, a, b = FAULT
     cmd = [sys.executable, "-m", "fdi_host.live.runner", "--transport", "netns", "--scenario", "cornering",
            "--no-scenario-faults", "--fault", f"{f}@{a}s:0.5:end={b}s", "--duration", str(DURATION),
-           "--table", "kin", "--out-dir", str(out), "--channel", "239.74.163.7"]
+           "--vehicle", "kin", "--out-dir", str(out), "--channel", "239.74.163.7"]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=240, check=False)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     (out / "runner.txt").write_text(proc.stdout + proc.stderr)

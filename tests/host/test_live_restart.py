@@ -20,7 +20,7 @@ from typing import Any
 import pytest
 
 from fdi_host.can import e2e
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.frame import Frame
 from fdi_host.can.logs import LogError, read_log, write_log
 from fdi_host.ecu.session import ORIGIN_LEAD, EcuSession, load_steps
@@ -50,7 +50,7 @@ def restart_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     f, a = FAULT
     cmd = [sys.executable, "-m", "fdi_host.live.runner", "--transport", "netns", "--scenario", "cornering",
            "--no-scenario-faults", "--fault", f"{f}@{a}s:0.5", "--duration", str(DURATION),
-           "--table", "kin", "--out-dir", str(out), "--channel", "239.74.163.8",
+           "--vehicle", "kin", "--out-dir", str(out), "--channel", "239.74.163.8",
            "--restart-ecu-at", str(ECU_KILL), "--ecu-down", str(ECU_DOWN),
            "--restart-sim-at", str(SIM_KILL), "--sim-down", str(SIM_DOWN), "--sim-counter-start", str(COUNTER_START)]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=240, check=False)
@@ -158,7 +158,7 @@ def test_restart_schedule() -> None:
 
 
 def test_resumed_frames_restart_counters_with_valid_crc(tmp_path: Path) -> None:
-    db = RomoDatabase()
+    db = CanDatabase()
     frames = []
     for k in range(40):  # IMU every 5 ms, velocity every 10 ms, counters running from 0
         frames.append(Frame(k * 0.005, 128, db.encode("IMU_Motion", {"IMU_AccelX": 0.01 * k}, k % 15)))
@@ -196,7 +196,7 @@ def test_resumed_frames_restart_counters_with_valid_crc(tmp_path: Path) -> None:
 def test_ecu_joining_a_drive_under_way_starts_on_the_step_grid() -> None:
     """A restarted ECU anchors to the drive's t = 0 and starts at the step boundary before its first frame:
     no catch-up (or skipped) steps for the time it was down, steps on the same k * dt grid."""
-    db = RomoDatabase()
+    db = CanDatabase()
     s = EcuSession("kin")
     origin = 1000.0
     first = origin + 12.3455  # frames on whole milliseconds of the drive, 0.5 ms late on the bus

@@ -135,7 +135,7 @@ def test_replay_from_columns_equals_replay_from_frames(tmp_path: Path, capsys: p
     assert a.records == b.records
     assert any(r.alarm_mask for r in a.records)  # the fault did something to compare
     capsys.readouterr()
-    assert replay_main([str(path), "--offline", "--table", "kin"]) == 0  # the CLI's one-call path: the columns
+    assert replay_main([str(path), "--offline", "--vehicle", "kin"]) == 0  # the CLI's one-call path: the columns
     out = capsys.readouterr().out
     n_alarms = sum(1 for r in a.records if r.alarm_mask)
     assert f"{a.frames} frames, {a.log_duration:.2f} s of log" in out

@@ -91,7 +91,7 @@ def test_every_format_replays_to_the_same_diagnosis(drive: tuple[list[Frame], Fa
         [(r.alarm_mask, r.candidates, r.iso_class) for r in ref.records]
     assert [r.t for r in res.records] == pytest.approx([r.t for r in ref.records], abs=2e-6)
     capsys.readouterr()
-    assert replay_main([str(path), "--offline", "--table", "kin"]) == 0
+    assert replay_main([str(path), "--offline", "--vehicle", "kin"]) == 0
     assert f"{len(frames)} frames" in capsys.readouterr().out
 
 
@@ -243,12 +243,12 @@ def test_replay_reports_skipped_lines_and_strict_fails_with_the_line(tmp_path: P
                                                                      capsys: pytest.CaptureFixture[str]) -> None:
     path = tmp_path / "drive.log"
     _garbage_log(path)
-    assert replay_main([str(path), "--offline", "--table", "kin"]) == 0
+    assert replay_main([str(path), "--offline", "--vehicle", "kin"]) == 0
     out = capsys.readouterr().out
     assert f"skipped: {path}: 5 malformed lines skipped (lines 2, 4, 7, 9, 10;" in out and "4 frames" in out
-    assert replay_main([str(path), "--offline", "--table", "kin", "--ecu-log", str(tmp_path / "e.json")]) == 0
+    assert replay_main([str(path), "--offline", "--vehicle", "kin", "--ecu-log", str(tmp_path / "e.json")]) == 0
     assert "5 malformed lines skipped" in capsys.readouterr().out
-    assert replay_main([str(path), "--offline", "--table", "kin", "--strict"]) == 1
+    assert replay_main([str(path), "--offline", "--vehicle", "kin", "--strict"]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"fdi-replay: error: {path}: line 2: malformed (ValueError")
     only_garbage = tmp_path / "g.log"
@@ -280,13 +280,13 @@ def test_fleet_lists_logs_with_skipped_lines_and_strict_fails_them(drive: tuple[
     assert fleet.skipped_lines(report) == [rows["cut.log"].skipped_note]
     assert "1 logs with malformed lines skipped (2 lines)" in fleet.summary_line(report)
     assert "## Logs with malformed lines (skipped)" in fleet.markdown(report)
-    assert replay_main([str(logs), "--workers", "1", "--table", "kin", "--out-dir", str(tmp_path / "out"),
+    assert replay_main([str(logs), "--workers", "1", "--vehicle", "kin", "--out-dir", str(tmp_path / "out"),
                         "--quiet"]) == 0
     out = capsys.readouterr().out
     assert "logs with malformed lines (skipped): 1" in out and "cut.log: 2 malformed lines skipped (lines" in out
     doc = json.loads((tmp_path / "out" / "fleet.json").read_text(encoding="utf-8"))
     assert doc["logs_with_skipped_lines"] == 1 and doc["skipped_lines"] == 2
-    assert replay_main([str(logs), "--workers", "1", "--table", "kin", "--out-dir", str(tmp_path / "out"),
+    assert replay_main([str(logs), "--workers", "1", "--vehicle", "kin", "--out-dir", str(tmp_path / "out"),
                         "--quiet", "--strict"]) == 1
     err = capsys.readouterr().err
     assert "1 of 2 logs could not be replayed (first: " in err and "cut.log: line " in err and ": malformed" in err

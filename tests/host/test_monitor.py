@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from fdi_host.can import e2e
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.ecu.records import DiagRecord, TableClasses
 from fdi_host.ecu.session import StepRecord
 from fdi_host.monitor.cli import Monitor
@@ -26,12 +26,12 @@ def _truth(windows: list[tuple[str, float, float]], duration: float) -> dict[str
             "faults": [{"fault": f, "intervals": [{"start": a, "end": b, "min": 1, "max": 1}]} for f, a, b in windows]}
 
 
-def _diag_frame(db: RomoDatabase, alarm: int, cand: int, counter: int) -> bytes:
+def _diag_frame(db: CanDatabase, alarm: int, cand: int, counter: int) -> bytes:
     return db.encode("FDI_Diagnosis", {"FDI_AlarmMask": alarm, "FDI_CandidateFaults": cand,
                                        "FDI_IsolationClass": 0, "FDI_Status": 1}, counter)
 
 
-def _run_monitor(db: RomoDatabase, plan: list[tuple[float, float, int, int]], duration: float,
+def _run_monitor(db: CanDatabase, plan: list[tuple[float, float, int, int]], duration: float,
                  drop_imu: set[int], late_imu: dict[int, float]) -> Monitor:
     """IMU frames every 5 ms (some dropped / delayed) and a diagnosis frame every 10 ms following `plan`:
     (from, to, alarm mask, candidates); the bus starts at wall time 1000 s."""
@@ -59,7 +59,7 @@ def _run_monitor(db: RomoDatabase, plan: list[tuple[float, float, int, int]], du
 
 
 @pytest.fixture(scope="module")
-def scored(db: RomoDatabase) -> tuple[Monitor, dict[str, object]]:
+def scored(db: CanDatabase) -> tuple[Monitor, dict[str, object]]:
     plan = [
         (1.0, 1.2, 0b0001, 0),  # false alarm, nothing injected
         (3.25, 5.5, 0b0111, F["f4"]),  # f4 detected 0.25 s late, isolated correctly
@@ -137,7 +137,7 @@ def test_lost_and_late_frames(scored: tuple[Monitor, dict[str, object]]) -> None
     assert len(mon.records) == 1000
 
 
-def test_corrupted_and_unknown_frames_are_counted(db: RomoDatabase) -> None:
+def test_corrupted_and_unknown_frames_are_counted(db: CanDatabase) -> None:
     mon = Monitor(db, KIN)
     good = db.encode("IMU_Motion", {"IMU_AccelX": 0.1}, 0)
     mon.on_frame(128, good, 1.0)
@@ -210,7 +210,7 @@ def test_reports_and_plots(scored: tuple[Monitor, dict[str, object]], tmp_path: 
         assert p.stat().st_size > 0
 
 
-def test_live_table_shows_alarms_and_candidates(db: RomoDatabase) -> None:
+def test_live_table_shows_alarms_and_candidates(db: CanDatabase) -> None:
     mon = Monitor(db, KIN)
     mon.on_frame(128, db.encode("IMU_Motion", {}, 0), 5.0)
     assert mon.table()[-1].startswith("candidates: -")
@@ -231,7 +231,7 @@ def test_unexplained_alarms_are_not_a_wrong_isolation() -> None:
     assert "unexplained" in score_table(s)
 
 
-def test_merged_diagnosis_steps_count_one_late_frame(db: RomoDatabase) -> None:
+def test_merged_diagnosis_steps_count_one_late_frame(db: CanDatabase) -> None:
     """The ECU merges steps that fall due together (one frame, counter + 1): one late frame, no drift after."""
     mon = Monitor(db, KIN)
     mon.on_frame(128, db.encode("IMU_Motion", {}, 0), 1.0)
@@ -245,7 +245,7 @@ def test_merged_diagnosis_steps_count_one_late_frame(db: RomoDatabase) -> None:
     assert st.max_lateness == pytest.approx(0.03, abs=1e-9)
 
 
-def _run_with_silences(db: RomoDatabase, duration: float, imu_off: tuple[float, float] | None,
+def _run_with_silences(db: CanDatabase, duration: float, imu_off: tuple[float, float] | None,
                        diag_off: tuple[float, float] | None, plan: list[tuple[float, float, int, int]] = (),
                        restart_counter: int = 9) -> Monitor:
     """IMU frames every 5 ms and diagnosis frames every 10 ms (alarms per `plan`), each stream silent over
@@ -277,7 +277,7 @@ def _run_with_silences(db: RomoDatabase, duration: float, imu_off: tuple[float, 
     return mon
 
 
-def test_ecu_and_simulator_silences_are_gaps_not_lost_frames(db: RomoDatabase) -> None:
+def test_ecu_and_simulator_silences_are_gaps_not_lost_frames(db: CanDatabase) -> None:
     mon = _run_with_silences(db, 10.0, imu_off=(6.0, 7.5), diag_off=(2.0, 3.2))
     assert [(g.stream, g.resumed) for g in mon.gaps.gaps] == [("diagnosis", True), ("sensors", True)]
     d, s = mon.gaps.gaps
@@ -296,13 +296,13 @@ def test_ecu_and_simulator_silences_are_gaps_not_lost_frames(db: RomoDatabase) -
     assert mon.silence_note(1000.0 + 9.0) == "" and mon.table(1000.0 + 9.0)[-2].startswith("  gap: ECU silent")
 
 
-def test_short_jitter_is_no_gap(db: RomoDatabase) -> None:
+def test_short_jitter_is_no_gap(db: CanDatabase) -> None:
     mon = _run_with_silences(db, 3.0, imu_off=(1.0, 1.2), diag_off=(2.0, 2.2))  # 0.2 s < 0.25 s threshold
     assert mon.gaps.gaps == [] and mon.finish_gaps(3.0) == []
     assert mon.stats.messages[128].gaps == 0
 
 
-def test_silences_that_never_end(db: RomoDatabase) -> None:
+def test_silences_that_never_end(db: CanDatabase) -> None:
     # The ECU dies at 6 s and never comes back while the drive goes on to 10 s: an open diagnosis gap.
     mon = _run_with_silences(db, 10.0, imu_off=None, diag_off=(6.0, 99.0))
     (g,) = mon.finish_gaps(10.0)
@@ -316,7 +316,7 @@ def test_silences_that_never_end(db: RomoDatabase) -> None:
     assert _run_with_silences(db, 10.0, None, None).finish_gaps(10.0) == []
 
 
-def test_gaps_in_scoring_and_reports(db: RomoDatabase, tmp_path: Path) -> None:
+def test_gaps_in_scoring_and_reports(db: CanDatabase, tmp_path: Path) -> None:
     plan = [(8.5, 9.5, 0b0111, F["f4"])]  # f4's second window detected; the alarm before the gap is false
     plan.append((1.0, 1.95, 0b0001, 0))
     mon = _run_with_silences(db, 10.0, imu_off=(4.0, 5.0), diag_off=(1.95, 3.0), plan=plan)

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.traffic import build_frames
 from fdi_host.ecu.bindings import Ecu, EcuResult, table_info
 from fdi_host.ecu.offline import replay
@@ -42,7 +42,7 @@ def _mso1(results: Sequence[EcuResult], what: str) -> NDArray[Any]:
 def test_the_estimates_follow_the_grade_and_the_tilt_and_a_fault_is_not_absorbed() -> None:
     vehicle = dataclasses.replace(NOMINAL, name="grade 5 %", grade=GRADE)
     base = simulate_truth(load_scenario("slalom"), [], vehicle=vehicle, seed=SEED, snapshots=[ONSET])
-    db = RomoDatabase()
+    db = CanDatabase()
     quiet = replay("romo", build_frames(base, db))  # the default configuration: estimation and adaptive thresholds
     status = _mso1(quiet, "test_status")
     t = np.array([x.t_us for x in quiet]) * 1e-6
@@ -89,7 +89,7 @@ def test_the_estimators_cost_no_detection_on_the_model_plant() -> None:
     scenario = load_scenario("straight")
     onset = 0.55 * scenario.duration
     drive = faulty_drive(simulate(scenario, [], seed=SEED), FaultSpec("f1", onset, F1_REQUIRED))
-    res = replay("romo", build_frames(drive, RomoDatabase()))
+    res = replay("romo", build_frames(drive, CanDatabase()))
     t = np.array([x.t_us for x in res]) * 1e-6
     detected = np.flatnonzero((t > onset) & np.array([x.detected for x in res]))
     assert not any(x.detected for x in res[: np.flatnonzero(t <= onset)[-1]])

@@ -69,7 +69,7 @@ def test_a_steering_offset_in_the_slalom_departs_from_its_linearisation() -> Non
 
 
 def test_cli_linearity_of_one_case_writes_its_plot(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["--table", "romo", "--trace", "f2:straight:2001", "--linearity", "--out", str(tmp_path),
+    assert main(["--vehicle", "romo", "--trace", "f2:straight:2001", "--linearity", "--out", str(tmp_path),
                  *FIXED_ARGS]) == 0
     assert "MSO2: rho median 1.00" in capsys.readouterr().out
     assert (tmp_path / "linearity-f2-straight-2001.png").stat().st_size > 10_000
@@ -104,7 +104,7 @@ def test_summaries_count_the_share_within_the_margin() -> None:
 def test_cli_survey_over_cases_writes_its_files(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     # a wheel-4 torque fault enters the tests' wheel equations linearly: both tests that see it stay near rho 1
     # and never differ by the margin
-    args = ["--table", "romo", "--linearity", "--faults", "f13", "--scenarios", "fig6", "--seeds", "2001",
+    args = ["--vehicle", "romo", "--linearity", "--faults", "f13", "--scenarios", "fig6", "--seeds", "2001",
             "--out", str(tmp_path), *FIXED_ARGS]
     assert main(args) == 0
     out = capsys.readouterr().out

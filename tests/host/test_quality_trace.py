@@ -42,7 +42,7 @@ def test_trace_is_the_suite_case_and_names_blind_alarms(tmp_path: Path, capsys: 
     first = next(r for r in case.results if r.detected)
     i = next(i for i in range(case.table.n_tests) if first.alarm_mask >> i & 1)
     assert f"{names[i]} {math.sqrt(first.ratios[i]):.1f}" in "\n".join(lines)
-    code = main(["--table", "romo", "--trace", "f4:cornering:2001", "--out", str(tmp_path)])
+    code = main(["--vehicle", "romo", "--trace", "f4:cornering:2001", "--out", str(tmp_path)])
     assert code == 0
     assert (tmp_path / "trace-f4-cornering-2001.png").stat().st_size > 10_000
     assert "expected class {f4}" in capsys.readouterr().out
@@ -115,7 +115,7 @@ def test_an_ax_offset_is_told_from_a_vx_drift_within_a_second() -> None:
 
 
 def test_trace_cli_follows_the_first_shape(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["--table", "romo", "--shapes", "ramp", "step", "--trace", "f5:straight:2001",
+    assert main(["--vehicle", "romo", "--shapes", "ramp", "step", "--trace", "f5:straight:2001",
                  "--out", str(tmp_path)]) == 0
     assert (tmp_path / "trace-f5-straight-2001-ramp.png").stat().st_size > 10_000
     assert "f5 at 0.6 (a ramp over 2 s)" in capsys.readouterr().out
@@ -178,5 +178,5 @@ def test_ecu_settings_reach_the_ecu(f13_fig6: trace.CaseTrace, capsys: pytest.Ca
     assert pairs and all(b > a for a, b in pairs[:20])
     # the CLI refuses what the ECU does not know, naming it
     for bad, what in (("bogus=1", "bogus"), ("noise_allowance", "KEY=VALUE"), ("mode=weird", "weird")):
-        assert main(["--table", "romo", "--ecu", bad, "--quick"]) == EXIT_ERROR
+        assert main(["--vehicle", "romo", "--ecu", bad, "--quick"]) == EXIT_ERROR
         assert what in capsys.readouterr().err

@@ -33,7 +33,7 @@ def live_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
         pytest.skip(f"no private network namespace for udp_multicast: {chk.reason}")
     out = tmp_path_factory.mktemp("equiv")
     cmd = [sys.executable, "-m", "fdi_host.live.runner", "--transport", "netns", "--scenario", "cornering",
-           "--no-scenario-faults", "--fault", "f5@4s:0.4:end=6s", "--duration", "8", "--table", "kin",
+           "--no-scenario-faults", "--fault", "f5@4s:0.4:end=6s", "--duration", "8", "--vehicle", "kin",
            "--out-dir", str(out), "--channel", "239.74.163.8"]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=240, check=False)
     assert proc.returncode == 0, proc.stdout + proc.stderr

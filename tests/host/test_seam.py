@@ -1,5 +1,5 @@
 """The Python/C seam of the host ECU is named from one source (fdi_analysis.export.seam): the committed C header
-is its rendering, _fdi_ecu.c answers every question by its name (no bare number), and the shared library answers
+is its rendering, fdi_py_seam.c answers every question by its name (no bare number), and the shared library answers
 the names the bindings pass as the header numbers them (a question past the end gets the functions' 'unknown')."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from pathlib import Path
 from fdi_analysis.export.seam import FAMILIES, HEADER, SizeOf, TableInt, render_header
 from fdi_host.ecu import bindings
 
-GLUE = Path("host_tools/fdi_host/ecu/_fdi_ecu.c")
+GLUE = Path("host_tools/fdi_host/ecu/fdi_py_seam.c")
 
 
 def test_committed_header_is_up_to_date(repo: Path) -> None:
@@ -36,7 +36,7 @@ def test_the_library_answers_the_names() -> None:
     assert dll.fdi_py_sizeof(SizeOf.MAX_TESTS) == lib.caps.max_tests > 0
     assert dll.fdi_py_sizeof(SizeOf.DIAG) == lib.diag_size > 0
     assert dll.fdi_py_sizeof(len(SizeOf)) == 0  # past the end: unknown
-    t = dll.fdi_py_table(b"romo")
+    t = dll.fdi_plugin_table()
     assert dll.fdi_py_table_int(t, TableInt.N_FAULTS, 0) == bindings.table_info("romo").n_faults
     assert dll.fdi_py_table_int(t, len(TableInt), 0) == -1
 

@@ -27,7 +27,7 @@ from fdi_analysis.residuals.evaluate import FilterDesign, residual, sensitivity_
 from fdi_analysis.residuals.generator import Generator
 from fdi_analysis.residuals.selected import realizable
 from fdi_host.ecu.bindings import Diagnoser, table_info
-from fdi_host.sim.generic import GenericPlant
+from fdi_host.sim.generic import GenericPlant, Scenario
 from fdi_host.tuning import generic
 
 MODEL = Path("analysis/models/three_tank.toml")
@@ -44,12 +44,12 @@ def model(repo: Path) -> Model:
 
 
 @pytest.fixture(scope="module")
-def scenario(repo: Path) -> generic.Scenario:
-    return generic.Scenario.load(repo / SCENARIO)
+def scenario(repo: Path) -> Scenario:
+    return Scenario.load(repo / SCENARIO)
 
 
 @pytest.fixture(scope="module")
-def gens(repo: Path, model: Model, scenario: generic.Scenario) -> list[Generator]:
+def gens(repo: Path, model: Model, scenario: Scenario) -> list[Generator]:
     th = Thresholds.load(repo / THRESHOLDS)
     from fdi_analysis.residuals.selected import selected_generators
 
@@ -97,7 +97,7 @@ def test_table_is_the_selection(gens: list[Generator]) -> None:
         assert mask == sum(1 << faults.index(f) for f, _ in g.sensitivities)
 
 
-def test_c_equals_the_python_twin(gens: list[Generator], model: Model, scenario: generic.Scenario) -> None:
+def test_c_equals_the_python_twin(gens: list[Generator], model: Model, scenario: Scenario) -> None:
     """On a fault run the residuals of the generic C diagnoser (after each test's warm-up) and its sensitivities
     equal the Python evaluation of the same generators (float against double: within 1e-3 of the scale)."""
     plant = GenericPlant(model)
@@ -117,7 +117,7 @@ def test_c_equals_the_python_twin(gens: list[Generator], model: Model, scenario:
             assert s_err <= 1e-3 * s_scale, f"{g.name} d r / d {f}: C vs Python {s_err:.3g}, scale {s_scale:.3g}"
 
 
-def test_fault_free_drive_gives_no_detection(model: Model, scenario: generic.Scenario) -> None:
+def test_fault_free_drive_gives_no_detection(model: Model, scenario: Scenario) -> None:
     sig = generic.drive(GenericPlant(model), scenario, seed=99)
     results = Diagnoser("three_tank").run(sig).results
     assert not any(r.detected for r in results)
@@ -125,7 +125,7 @@ def test_fault_free_drive_gives_no_detection(model: Model, scenario: generic.Sce
 
 
 @pytest.mark.parametrize("index", [0, 1, 2])
-def test_fault_run_is_detected_and_isolated(index: int, model: Model, scenario: generic.Scenario) -> None:
+def test_fault_run_is_detected_and_isolated(index: int, model: Model, scenario: Scenario) -> None:
     fr = scenario.fault_runs[index]
     info = table_info("three_tank")
     sig = generic.fault_run_signals(GenericPlant(model), scenario, fr)

@@ -21,7 +21,7 @@ from pathlib import Path
 import pytest
 
 from fdi_host.can import e2e
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.logs import read_log, write_log
 from fdi_host.can.traffic import build_frames
 from fdi_host.ecu.bindings import DIAG_ID, Ecu
@@ -42,7 +42,7 @@ cp {bindir}/fdi-can-record {bindir}/fdi-ecu-socketcan {bindir}/fdi-can-play /res
 cd /tmp
 ./fdi-can-record vcan0 /tmp/diag.log --id 200 > /tmp/record.out &
 REC=$!
-./fdi-ecu-socketcan vcan0 --table kin --quiet > /tmp/ecu.out &
+./fdi-ecu-socketcan vcan0 --vehicle kin --quiet > /tmp/ecu.out &
 ECU=$!
 sleep 1
 ./fdi-can-play vcan0 /tmp/drive.log > /tmp/play.out
@@ -105,7 +105,7 @@ def test_guest_ecu_counts_every_frame(guest_run: Path) -> None:
 
 
 def test_guest_diagnosis_equals_offline(guest_run: Path) -> None:
-    db = RomoDatabase()
+    db = CanDatabase()
     guest = read_log(guest_run / "diag.log")
     assert all(f.frame_id == DIAG_ID for f in guest)
     counters = [e2e.counter_of(f.data) for f in guest]

@@ -20,6 +20,10 @@ class CNameError(FdiError, ValueError):
     """A table name that is not a C identifier."""
 
 
+def is_c_identifier(name: str) -> bool:
+    return bool(_IDENT.fullmatch(name))
+
+
 @dataclass(frozen=True)
 class VehicleNames:
     vehicle: str  # e.g. "romo"
@@ -59,6 +63,11 @@ class VehicleNames:
     def gen_set(self) -> str:
         """The generator set of the vehicle's generated generators (fdi_romo_gen_set)."""
         return f"fdi_{self.vehicle}_gen_set"
+
+    @property
+    def plugin(self) -> str:
+        """Base name of the plugin glue (fdi_romo_plugin.c) and the plugin's target (fdi_vehicle_romo)."""
+        return f"fdi_{self.vehicle}_plugin"
 
     @property
     def sig_count(self) -> str:

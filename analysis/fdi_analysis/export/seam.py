@@ -1,8 +1,8 @@
 """The Python/C seam of the host ECU, named: what the ctypes bindings (fdi_host.ecu.bindings) may ask the shared
-library's query functions (host_tools/fdi_host/ecu/_fdi_ecu.c), one list per function, from one source: this module.
+library's query functions (host_tools/fdi_host/ecu/fdi_py_seam.c), one list per function, from one source: this module.
 
 Each list becomes a C enumeration in ``host_tools/fdi_host/ecu/fdi_py_seam.h`` (``python -m
-fdi_analysis.export.seam``; tests/host/test_seam.py fails when the committed copy is stale or when _fdi_ecu.c leaves
+fdi_analysis.export.seam``; tests/host/test_seam.py fails when the committed copy is stale or when fdi_py_seam.c leaves
 a query unanswered) and a Python `enum.IntEnum` (`SizeOf`, `TableInt`, ...) the bindings pass, so neither side
 writes a bare number. A question's number is its place in its class: append, never reorder.
 """
@@ -107,7 +107,7 @@ class BusInt(Query):
 
 @dataclass(frozen=True)
 class Family:
-    """One query function of _fdi_ecu.c (`function`): its questions (`queries`), as C enum type and prefix."""
+    """One query function of fdi_py_seam.c (`function`): its questions (`queries`), as C enum type and prefix."""
 
     function: str
     enum_type: str
@@ -128,7 +128,7 @@ HEADER_FMT = Template("""\
 ${banner}
 /*
  * fdi_py_seam.h - the questions the ctypes bindings (fdi_host/ecu/bindings.py) ask the query functions of
- * _fdi_ecu.c, one enumeration per function, named on both sides from one source (fdi_analysis.export.seam).
+ * fdi_py_seam.c, one enumeration per function, named on both sides from one source (fdi_analysis.export.seam).
  * A question's number is its place in its list; the functions answer an unknown one with 0 / -1 / NULL.
  */
 #ifndef FDI_PY_SEAM_H

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.frame import Frame
 
 __all__ = ["BackgroundMessage", "BusLoad", "background_frames", "background_messages", "bus_load",
@@ -64,10 +64,10 @@ class BackgroundMessage:
         return 1000.0 / self.cycle_ms
 
 
-def excluded_ids(db: RomoDatabase | None = None) -> frozenset[int]:
+def excluded_ids(db: CanDatabase | None = None) -> frozenset[int]:
     """Every ID of the CAN database (default dbc/romo.dbc): background traffic never uses them (neither a message
     the ECU subscribes to nor the diagnosis frame)."""
-    db = db or RomoDatabase()
+    db = db or CanDatabase()
     return frozenset(int(m.frame_id) for m in db.db.messages)
 
 
@@ -157,7 +157,7 @@ def background_frames(messages: Sequence[BackgroundMessage], t_end: float, t0: f
 
 
 def for_drive(frames: Sequence[Frame], total_rate_hz: float, duration: float | None = None,
-              seed: int = DEFAULT_SEED, db: RomoDatabase | None = None) -> list[Frame]:
+              seed: int = DEFAULT_SEED, db: CanDatabase | None = None) -> list[Frame]:
     """Other ECUs' frames that bring a drive's traffic (`frames`, time ordered) to `total_rate_hz` frames/s
     over its `duration` [s] (default: from its first to its last frame), on the drive's clock from its first
     frame to its last; none if the drive alone reaches the rate."""

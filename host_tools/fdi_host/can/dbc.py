@@ -1,4 +1,5 @@
-"""The ROMO CAN database (``dbc/romo.dbc``) seen from the simulator: which model signal goes where.
+"""A vehicle's CAN database (``dbc/romo.dbc`` by default, or a vehicle folder's DBC) seen from the simulator:
+which model signal goes where.
 
 The DBC is the single source of truth for frame layout, scaling, cycle times and E2E data IDs. This module
 only adds the mapping between simulator signals (the model's knowns such as ``vx_m`` in SI units, and the
@@ -48,7 +49,8 @@ SIMULATED_MESSAGES: tuple[str, ...] = tuple(dict.fromkeys(m.message for m in SIG
 DIAG_NODE = "FDI"  # the diagnosis unit: the one message it sends is the diagnosis frame
 
 
-def _diag_id(path: Path) -> int:
+def diag_id_of(path: Path) -> int:
+    """The ID of the diagnosis frame of a DBC: the one message node FDI sends."""
     db = cantools.database.load_file(str(path))
     if not isinstance(db, cantools.database.can.Database):
         raise ValueError(f"{path} is not a DBC CAN database")
@@ -58,7 +60,7 @@ def _diag_id(path: Path) -> int:
     return int(sent[0])
 
 
-DIAG_ID: int = _diag_id(DEFAULT_DBC)  # ID of FDI_Diagnosis, from the DBC (the one definition on the host side)
+DIAG_ID: int = diag_id_of(DEFAULT_DBC)  # ID of FDI_Diagnosis, from the DBC (the one definition on the host side)
 
 
 class E2EError(FdiHostError, ValueError):
@@ -72,8 +74,8 @@ class Decoded:
     counter: int
 
 
-class RomoDatabase:
-    """The loaded DBC plus simulator mapping and E2E handling."""
+class CanDatabase:
+    """The loaded DBC plus simulator mapping (its ModelSignal attributes) and E2E handling."""
 
     def __init__(self, path: str | Path = DEFAULT_DBC) -> None:
         self.path = Path(path)
@@ -84,8 +86,11 @@ class RomoDatabase:
         self._dbc = db.dbc
         self._by_name = {m.name: m for m in self.db.messages}
         self._by_id = {m.frame_id: m for m in self.db.messages}
+        self.signal_map = SIGNAL_MAP if self.path == DEFAULT_DBC else signal_map(self.path)
+        self.simulated_messages: tuple[str, ...] = tuple(dict.fromkeys(m.message for m in self.signal_map))
+        self.diag_id = DIAG_ID if self.path == DEFAULT_DBC else diag_id_of(self.path)
         self.maps_by_message: dict[str, list[SignalMap]] = {}
-        for sm in SIGNAL_MAP:
+        for sm in self.signal_map:
             self.maps_by_message.setdefault(sm.message, []).append(sm)
             self.message(sm.message).get_signal_by_name(sm.signal)  # KeyError if the DBC lacks it
 

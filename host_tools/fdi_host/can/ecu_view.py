@@ -24,7 +24,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from fdi_host.can.dbc import SIGNAL_MAP, RomoDatabase
+from fdi_host.can.dbc import SIGNAL_MAP, CanDatabase
 from fdi_host.can.frame import Frame
 from fdi_host.can.traffic import decode_frames
 
@@ -48,11 +48,11 @@ def step_times(frames: Sequence[Frame], step: float) -> FloatArray:
     return np.asarray(t0 + step * np.arange(1, max(n, 0) + 1), dtype=np.float64)
 
 
-def bus_align(db: RomoDatabase | None = None) -> float:
+def bus_align(db: CanDatabase | None = None) -> float:
     """The alignment in seconds that takes every message's signals at one instant (fdi_ecu_align_us): the longest
     cycle time of the messages that carry frame signals, at most what every such message's kept frames cover
     ((HISTORY - 2) cycles)."""
-    db = db or RomoDatabase()
+    db = db or CanDatabase()
     cycles = [db.cycle_time_ms(m) for m in dict.fromkeys(s.message for s in SIGNAL_MAP)]
     return min(max(cycles), (HISTORY - 2) * min(cycles)) * 1e-3
 
@@ -80,11 +80,11 @@ def _at_instants(times: IntArray, values: FloatArray, steps: IntArray, s: IntArr
     return np.asarray(np.where(seen, out, values[0]), dtype=float)
 
 
-def ecu_view(frames: Sequence[Frame], step: float = 0.01, db: RomoDatabase | None = None,
+def ecu_view(frames: Sequence[Frame], step: float = 0.01, db: CanDatabase | None = None,
              align: float = 0.0) -> tuple[FloatArray, dict[str, FloatArray]]:
     """(step times, simulator signal name -> value at each step) of time-ordered frames; `align` seconds is how far
     behind each step the signals are taken (0, the ECU's default: each message's last frame)."""
-    db = db or RomoDatabase()
+    db = db or CanDatabase()
     align = float(align)
     if not align >= 0.0:
         raise ValueError(f"align must be >= 0, got {align!r}")

@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fdi_host.can import e2e
-from fdi_host.can.dbc import SIMULATED_MESSAGES, RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.frame import Frame
 from fdi_host.sim.vehicle_sim import SimResult
 
@@ -31,26 +31,41 @@ def sim_signal_arrays(result: SimResult) -> dict[str, FloatArray]:
 
 def build_frames(
     result: SimResult,
-    db: RomoDatabase | None = None,
+    db: CanDatabase | None = None,
     t0: float = 0.0,
     progress: Callable[[int], None] | None = None,
     t_from: float = 0.0,
 ) -> list[Frame]:
     """All frames of the drive, time ordered, from `t_from` on (the frames before it are not encoded; the E2E
     counters run as if they were). `t0` is added to every timestamp."""
-    db = db or RomoDatabase()
-    sig = sim_signal_arrays(result)
-    dt = result.config.dt
-    t_end = float(result.t[-1])
+    return frames_from_columns(sim_signal_arrays(result), result.config.dt, float(result.t[-1]), db, t0, progress,
+                               t_from)
+
+
+def frames_from_columns(
+    signals: dict[str, FloatArray],
+    dt: float,
+    t_end: float,
+    db: CanDatabase | None = None,
+    t0: float = 0.0,
+    progress: Callable[[int], None] | None = None,
+    t_from: float = 0.0,
+) -> list[Frame]:
+    """The frames of every message the DBC maps simulator signals to, from signals sampled every `dt` from t = 0
+    to `t_end` (keyed by the DBC's ModelSignal names; any vehicle's database)."""
+    db = db or CanDatabase()
     frames: list[tuple[float, int, bytes]] = []
-    for name in SIMULATED_MESSAGES:
+    for name in db.simulated_messages:
         msg = db.message(name)
         cycle = db.cycle_time_ms(name) * 1e-3
         delay = db.start_delay_ms(name) * 1e-3
         times = np.arange(delay, t_end + 1e-9, cycle)
         idx = np.rint(times / dt).astype(int)
         maps = db.maps_by_message[name]
-        cols = {sm.sim: sig[sm.sim][idx].tolist() for sm in maps}
+        missing = [sm.sim for sm in maps if sm.sim not in signals]
+        if missing:
+            raise KeyError(f"{db.path}: message {name} carries {missing}, which the drive does not have")
+        cols = {sm.sim: signals[sm.sim][idx].tolist() for sm in maps}
         counter = 0
         for j, ts in enumerate(times.tolist()):
             if ts >= t_from:
@@ -72,9 +87,9 @@ class DecodedSignals:
     e2e_errors: int
 
 
-def decode_frames(frames: Sequence[Frame], db: RomoDatabase | None = None) -> DecodedSignals:
+def decode_frames(frames: Sequence[Frame], db: CanDatabase | None = None) -> DecodedSignals:
     """Decode frames into simulator signals; frames with a bad E2E CRC are counted and dropped."""
-    db = db or RomoDatabase()
+    db = db or CanDatabase()
     times: dict[str, list[float]] = {}
     vals: dict[str, list[float]] = {}
     message_of: dict[str, str] = {}

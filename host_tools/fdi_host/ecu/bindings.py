@@ -1,9 +1,10 @@
 """Python bindings (ctypes) of the C ECU core `fw/ecu` and the fw/ diagnoser: an ECU process on any CAN interface,
 and the diagnoser alone on frames of signals.
 
-The shared library is the extension ``fdi_host.ecu._fdi_ecu`` that ``pip install -e .`` builds from the generic
-core (fw/src, fw/ecu/src) and the vehicle targets (fw/vehicles/romo: tables, generators, the bus generated from
-dbc/romo.dbc; fw/vehicles/three_tank) (see setup.py); this module loads it with `ctypes.CDLL` and wraps the C API
+The shared library is a vehicle's plugin (fdi_host.vehicle, fdi_py_plugin.h): the generic core (fw/src,
+fw/ecu/src), the seam (fdi_py_seam.c) and the vehicle's diagnosis in one library per vehicle, the shipped ones
+(romo, kin, three_tank) built by ``pip install -e .`` (setup.py), a user's folder by ``fdi-vehicle build``. This
+module loads it with `ctypes.CDLL` and wraps the C API
 of ``fw/ecu/include/fdi_ecu.h`` and ``fw/include/fdi_diag.h``::
 
     ecu = Ecu("kin")                       # or Ecu("romo", warmup_steps=400, timeout_s={"IMU_Motion": 0.02})
@@ -25,11 +26,11 @@ the library, not kept here.
 from __future__ import annotations
 
 import ctypes
-import importlib.util
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -38,8 +39,9 @@ from numpy.typing import NDArray
 from fdi_analysis.export.seam import BusInt, SizeOf, TableInt, TableReal, TableStr
 from fdi_host.can.dbc import DIAG_ID
 from fdi_host.errors import FdiHostError
+from fdi_host.vehicle import resolve
 
-__all__ = ["BUSES", "DIAG_ID", "REASONS", "TABLES", "BusInfo", "DiagRun", "Diagnoser", "Ecu", "EcuCounters",
+__all__ = ["DIAG_ID", "REASONS", "BusInfo", "DiagRun", "Diagnoser", "Ecu", "EcuCounters",
            "EcuError", "EcuResult", "Evidence", "MessageCounters", "TableInfo", "bus_info", "table_info"]
 
 REASONS: tuple[str, ...] = (
@@ -50,9 +52,6 @@ STATUS_NAMES: dict[int, str] = {
     0: "INIT", 1: "NO_FAULT", 2: "FAULT_DETECTED", 3: "FAULT_ISOLATED", 4: "INPUT_INVALID", 15: "INVALID",
 }
 TEST_STATUS_NAMES: tuple[str, ...] = ("ok", "alarm", "not_evaluable")
-TABLES = ("kin", "romo", "three_tank")
-BUSES = ("romo",)
-TABLE_BUS = {"kin": "romo", "romo": "romo"}  # the bus an ECU of a table listens to (three_tank: none)
 _N_REASONS = len(REASONS)
 _MODES = {"no_exoneration": 0, "exoneration": 1}
 
@@ -167,14 +166,21 @@ class _Lib:
     caps: _Caps
     ecu_size: int
     diag_size: int
+    table: int  # the vehicle's fdi_table_t
+    bus: int  # its fdi_ecu_bus_t; 0 without a bus
+
+
+def _lib(vehicle: str | Path = "romo") -> _Lib:
+    """The plugin of a vehicle (``--vehicle NAME|PATH``, fdi_host.vehicle), loaded once per shared library."""
+    return _load(resolve(vehicle).library)
 
 
 @cache
-def _lib() -> _Lib:
-    spec = importlib.util.find_spec("fdi_host.ecu._fdi_ecu")
-    if spec is None or spec.origin is None:
-        raise ImportError("fdi_host.ecu._fdi_ecu is not built: run `pip install -e .` (scripts/bootstrap.sh)")
-    dll = ctypes.CDLL(spec.origin)
+def _load(library: Path) -> _Lib:
+    try:
+        dll = ctypes.CDLL(str(library))
+    except OSError as exc:
+        raise EcuError(f"cannot load the vehicle plugin {library}: {exc}") from None
     dll.fdi_py_sizeof.restype = ctypes.c_size_t
     dll.fdi_py_sizeof.argtypes = [ctypes.c_int]
 
@@ -199,15 +205,16 @@ def _lib() -> _Lib:
             raise ImportError(f"fdi_host.ecu.bindings: layout of {struct}.{field} differs from its ctypes mirror")
     vp, st = ctypes.c_void_p, ctypes.c_int
     sigs: dict[str, tuple[Any, list[Any]]] = {
-        "fdi_py_table": (vp, [ctypes.c_char_p]),
-        "fdi_py_bus": (vp, [ctypes.c_char_p]),
+        "fdi_plugin_name": (ctypes.c_char_p, []),
+        "fdi_plugin_table": (vp, []),
+        "fdi_plugin_bus": (vp, []),
+        "fdi_plugin_param_index": (ctypes.c_int, [ctypes.c_char_p]),
+        "fdi_plugin_ecu_config_default": (st, [vp]),
         "fdi_py_table_int": (ctypes.c_longlong, [vp, ctypes.c_int, ctypes.c_int]),
         "fdi_py_table_str": (ctypes.c_char_p, [vp, ctypes.c_int, ctypes.c_int]),
         "fdi_py_table_real": (ctypes.c_double, [vp, ctypes.c_int, ctypes.c_int]),
         "fdi_py_bus_int": (ctypes.c_longlong, [vp, ctypes.c_int, ctypes.c_int]),
         "fdi_py_bus_str": (ctypes.c_char_p, [vp, ctypes.c_int]),
-        "fdi_py_param_index": (ctypes.c_int, [ctypes.c_char_p]),
-        "fdi_py_ecu_config_default": (st, [vp, vp, vp]),
         "fdi_ecu_init": (st, [vp, vp]),
         "fdi_ecu_rx": (st, [vp, ctypes.c_uint32, ctypes.c_uint8, ctypes.c_char_p, ctypes.c_uint32]),
         "fdi_ecu_poll": (st, [vp, ctypes.c_uint32, vp]),
@@ -223,10 +230,16 @@ def _lib() -> _Lib:
         "fdi_py_diag_run": (ctypes.c_long, [vp, ctypes.c_long, ctypes.c_int, vp, vp, vp, vp]),
     }
     for name, (res, args) in sigs.items():
-        fn = getattr(dll, name)
+        try:
+            fn = getattr(dll, name)
+        except AttributeError:
+            raise EcuError(f"{library} is not a vehicle plugin: it has no {name} (fdi_py_plugin.h)") from None
         fn.restype = res
         fn.argtypes = args
-    return _Lib(dll, types, caps, size(SizeOf.ECU), size(SizeOf.DIAG))
+    table = dll.fdi_plugin_table()
+    if not table:
+        raise EcuError(f"the vehicle plugin {library} has no table")
+    return _Lib(dll, types, caps, size(SizeOf.ECU), size(SizeOf.DIAG), int(table), int(dll.fdi_plugin_bus() or 0))
 
 
 # ------------------------------------------------------------------------------------------ tables
@@ -269,19 +282,11 @@ class TableInfo:
         return [j for j in range(32) if self.sens_masks[test] >> j & 1]
 
 
-def _table_ptr(name: str) -> int:
-    if name not in TABLES:
-        raise ValueError(f"unknown table {name!r}; use one of {TABLES}")
-    ptr = _lib().dll.fdi_py_table(name.encode())
-    if not ptr:
-        raise EcuError(f"table {name!r} is not in the library")
-    return int(ptr)
-
-
 @cache
-def table_info(name: str) -> TableInfo:
-    dll = _lib().dll
-    t = _table_ptr(name)
+def table_info(name: str | Path) -> TableInfo:
+    """The diagnosis table of vehicle `name` (a shipped vehicle's name or a vehicle folder)."""
+    lib = _lib(name)
+    dll, t = lib.dll, lib.table
     nf, nt = int(dll.fdi_py_table_int(t, TableInt.N_FAULTS, 0)), int(dll.fdi_py_table_int(t, TableInt.N_TESTS, 0))
     ns = int(dll.fdi_py_table_int(t, TableInt.N_SIGNALS, 0))
 
@@ -294,7 +299,7 @@ def table_info(name: str) -> TableInfo:
     mso = ints(TableInt.MSO_ID, nt)
     interp = strs(TableStr.INTERPRETATION, nt)
     return TableInfo(
-        name=name, n_faults=nf, fault_names=strs(TableStr.FAULT_NAME, nf),
+        name=str(name), n_faults=nf, fault_names=strs(TableStr.FAULT_NAME, nf),
         test_names=tuple(f"MSO{m}: {s}" for m, s in zip(mso, interp, strict=True)), mso_ids=mso,
         test_fault_masks=ints(TableInt.FAULT_MASK, nt), test_input_masks=ints(TableInt.INPUT_MASK, nt),
         has_generator=tuple(k != 0 for k in ints(TableInt.HAS_GENERATOR, nt)),
@@ -325,37 +330,38 @@ class BusInfo:
         return tuple(n for n, _ in self.messages)
 
 
-def _bus_ptr(name: str) -> int:
-    if name not in BUSES:
-        raise ValueError(f"unknown bus {name!r}; use one of {BUSES}")
-    ptr = _lib().dll.fdi_py_bus(name.encode())
-    if not ptr:
-        raise EcuError(f"bus {name!r} is not in the library")
-    return int(ptr)
+def _bus_lib(vehicle: str | Path) -> _Lib:
+    lib = _lib(vehicle)
+    if not lib.bus:
+        raise EcuError(f"vehicle {str(vehicle)!r} has no bus (no DBC): use Diagnoser({str(vehicle)!r}) with frames "
+                       "of its signals")
+    return lib
 
 
-def kept_frames() -> int:
+def kept_frames(vehicle: str | Path = "romo") -> int:
     """Frames the ECU core keeps per message for the time alignment (FDI_ECU_HISTORY of the built library)."""
-    return _lib().caps.kept_frames
+    return _lib(vehicle).caps.kept_frames
 
 
-def bus_align(name: str = "romo") -> float:
-    """Seconds of the alignment that takes every message's signals of bus `name` at one instant
+def bus_align(vehicle: str | Path = "romo") -> float:
+    """Seconds of the alignment that takes every message's signals of the vehicle's bus at one instant
     (fdi_ecu_align_us; use as ``Ecu(..., align_s=...)``)."""
-    return int(_lib().dll.fdi_ecu_align_us(_bus_ptr(name))) * 1e-6
+    lib = _bus_lib(vehicle)
+    return int(lib.dll.fdi_ecu_align_us(lib.bus)) * 1e-6
 
 
 @cache
-def bus_info(name: str = "romo") -> BusInfo:
-    dll = _lib().dll
-    b = _bus_ptr(name)
+def bus_info(vehicle: str | Path = "romo") -> BusInfo:
+    """The bus of a vehicle (generated from its DBC), as its plugin holds it."""
+    lib = _bus_lib(vehicle)
+    dll, b = lib.dll, lib.bus
     n = int(dll.fdi_py_bus_int(b, BusInt.N_MSGS, 0))
 
     def ints(what: BusInt) -> tuple[int, ...]:
         return tuple(int(dll.fdi_py_bus_int(b, what, i)) for i in range(n))
 
     names = tuple((dll.fdi_py_bus_str(b, i) or b"").decode() for i in range(n))
-    return BusInfo(name, tuple(zip(names, ints(BusInt.CAN_ID), strict=True)), ints(BusInt.CYCLE_MS),
+    return BusInfo(str(vehicle), tuple(zip(names, ints(BusInt.CAN_ID), strict=True)), ints(BusInt.CYCLE_MS),
                    ints(BusInt.SIGNALS), ints(BusInt.DATA_ID), int(dll.fdi_py_bus_int(b, BusInt.DIAG_ID, 0)),
                    int(dll.fdi_py_bus_int(b, BusInt.DIAG_DATA_ID, 0)))
 
@@ -385,14 +391,12 @@ def _estimate_mask(value: Any, mso_ids: Sequence[int], n_est: Sequence[int] = ()
     return mask
 
 
-def _apply_diag(d: Any, ov: dict[str, Any], mso_ids: Sequence[int], n_est: Sequence[int] = ()) -> None:
-    """Overrides of the diagnoser settings (fdi_diag_config_t), consumed from `ov`."""
-    dll = _lib().dll
-    for key in ("d_x", "d_y"):
-        if key in ov:
-            k = int(dll.fdi_py_param_index(key.encode()))
-            assert k >= 0, key
-            d.gen_param[k] = float(ov.pop(key))
+def _apply_diag(dll: ctypes.CDLL, d: Any, ov: dict[str, Any], mso_ids: Sequence[int],
+                n_est: Sequence[int] = ()) -> None:
+    """Overrides of the diagnoser settings (fdi_diag_config_t), consumed from `ov`; a run-time generator parameter
+    of the vehicle (ROMO's ``d_x``, ``d_y``) by its name, as the plugin knows it."""
+    for key in [k for k in ov if int(dll.fdi_plugin_param_index(k.encode())) >= 0]:
+        d.gen_param[int(dll.fdi_plugin_param_index(key.encode()))] = float(ov.pop(key))
     for key in ("cusum_k", "cusum_h", "noise_allowance", "estimate_kappa", "estimate_decorrelation"):
         if key in ov:
             setattr(d, key, float(ov.pop(key)))
@@ -510,10 +514,12 @@ def _t_us(t: float) -> int:
 
 
 class Ecu:
-    """One ECU core instance (C struct in a ctypes buffer) on table ``"romo"`` (generated) or ``"kin"``, listening
-    to the table's bus (``TABLE_BUS``: the ROMO bus generated from dbc/romo.dbc).
+    """One ECU core instance (C struct in a ctypes buffer) of a vehicle with a bus (``--vehicle NAME|PATH``:
+    ``"romo"``, its generated table, or ``"kin"``, on the ROMO bus generated from dbc/romo.dbc; or a vehicle folder
+    whose plugin is built), listening to the vehicle's bus.
 
-    Overrides: ``d_x``, ``d_y`` (the ROMO kinematic generators' parameters), ``cusum_k``, ``cusum_h``,
+    Overrides: the vehicle's run-time generator parameters by name (ROMO: ``d_x``, ``d_y`` of the kinematic
+    generators), ``cusum_k``, ``cusum_h``,
     ``set_count``, ``clear_count``, ``warmup_steps``, ``reentry_steps``, ``mode`` ("exoneration" | "no_exoneration"),
     ``episode_clear_steps``, ``noise_allowance``, ``sensitivities``, ``sens_every``, ``adaptive``, ``estimate`` (a
     test mask, MSO ids: "MSO1,MSO39", or "all": every test whose generator declares estimable quantities),
@@ -523,18 +529,15 @@ class Ecu:
     0: sample-and-hold).
     """
 
-    def __init__(self, table: str = "romo", **overrides: Any) -> None:
-        lib = _lib()
+    def __init__(self, table: str | Path = "romo", **overrides: Any) -> None:
+        lib = _bus_lib(table)
         self._dll = lib.dll
         self._types = lib.types
         self.table = table_info(table)
-        if table not in TABLE_BUS:
-            raise ValueError(f"table {table!r} has no bus to listen to; use Diagnoser({table!r})")
-        self.bus = bus_info(TABLE_BUS[table])
+        self.bus = bus_info(table)
         cfg = lib.types["Config"]()
-        _check(self._dll.fdi_py_ecu_config_default(ctypes.byref(cfg), _table_ptr(table), _bus_ptr(self.bus.name)),
-               "fdi_ecu_config_default")
-        self._apply(cfg, dict(overrides), self.bus.names, self.table.mso_ids, self.table.n_est)
+        _check(self._dll.fdi_plugin_ecu_config_default(ctypes.byref(cfg)), "fdi_ecu_config_default")
+        self._apply(self._dll, cfg, dict(overrides), self.bus.names, self.table.mso_ids, self.table.n_est)
         self.config = cfg
         self._buf = ctypes.create_string_buffer(lib.ecu_size)
         self._self = ctypes.cast(self._buf, ctypes.c_void_p)
@@ -542,9 +545,9 @@ class Ecu:
         self._tx = lib.types["Tx"]()
 
     @staticmethod
-    def _apply(cfg: Any, ov: dict[str, Any], names: Sequence[str], mso_ids: Sequence[int],
+    def _apply(dll: ctypes.CDLL, cfg: Any, ov: dict[str, Any], names: Sequence[str], mso_ids: Sequence[int],
                n_est: Sequence[int] = ()) -> None:
-        _apply_diag(cfg.diag, ov, mso_ids, n_est)
+        _apply_diag(dll, cfg.diag, ov, mso_ids, n_est)
         if "timeout_s" in ov:
             to = ov.pop("timeout_s")
             items: Iterable[tuple[str, float]] = (
@@ -712,16 +715,16 @@ class Diagnoser:
     table): frames of the table's signals in, alarms, isolation and sensitivities out, one step per frame.
     Overrides as `Ecu` (no bus options); defaults fdi_diag_config_default."""
 
-    def __init__(self, table: str, **overrides: Any) -> None:
-        lib = _lib()
+    def __init__(self, table: str | Path, **overrides: Any) -> None:
+        lib = _lib(table)
         self._dll = lib.dll
         self._types = lib.types
         self._caps = lib.caps
         self.table = table_info(table)
         cfg = lib.types["DiagConfig"]()
-        _check(self._dll.fdi_diag_config_default(ctypes.byref(cfg), _table_ptr(table)), "fdi_diag_config_default")
+        _check(self._dll.fdi_diag_config_default(ctypes.byref(cfg), lib.table), "fdi_diag_config_default")
         ov = dict(overrides)
-        _apply_diag(cfg, ov, self.table.mso_ids, self.table.n_est)
+        _apply_diag(self._dll, cfg, ov, self.table.mso_ids, self.table.n_est)
         if ov:
             raise TypeError(f"unknown Diagnoser option(s): {sorted(ov)}")
         self.config = cfg

@@ -97,6 +97,7 @@ class EcuSession:
     ecu: Any = None
     next_step: float = 0.0  # ECU time of the next step not yet run [s]; due for a frame in a later microsecond
     dt: float = 0.01  # diagnosis step [s], from the table
+    diag_id: int = DIAG_ID  # the ECU's diagnosis frame on its vehicle's bus
 
     def __post_init__(self) -> None:
         if self.ecu is None:
@@ -104,6 +105,9 @@ class EcuSession:
 
             self.ecu = Ecu(self.table)
         self.dt = float(self.ecu.step_s)
+        bus = getattr(self.ecu, "bus", None)
+        if bus is not None:
+            self.diag_id = int(bus.diag_id)
 
     def _t(self, wall: float) -> float:
         origin = self.origin if self.origin is not None else wall - ORIGIN_LEAD
@@ -111,7 +115,7 @@ class EcuSession:
 
     def feed(self, frame_id: int, data: bytes, wall: float, now: float = 0.0) -> list[tuple[int, bytes]]:
         """One received frame (timestamp `wall`); returns the diagnosis frames to send now."""
-        if frame_id == DIAG_ID:  # our own frame echoed by the bus
+        if frame_id == self.diag_id:  # our own frame echoed by the bus
             return []
         out: list[tuple[int, bytes]] = []
         if self.origin is None:  # anchor the step schedule (T_k = k * dt) half a millisecond before the frame
@@ -128,10 +132,11 @@ class EcuSession:
         """`feed` for a whole log, as fast as possible (offline replay): the same calls in the same order,
         with the per-frame Python work cut to the minimum (own frames skipped, poll only when a step is due)."""
         rx = self.ecu.rx
+        own = self.diag_id
         n = 0
         t = self.last_t
         for frame_id, data, wall in frames:
-            if frame_id == DIAG_ID:
+            if frame_id == own:
                 continue
             if self.origin is None:
                 self.anchor(wall)

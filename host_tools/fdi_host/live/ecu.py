@@ -36,7 +36,7 @@ from fdi_analysis.cli.common import run as run_main
 from fdi_analysis.errors import FdiError
 from fdi_host.can.frame import Frame
 from fdi_host.can.logs import write_log
-from fdi_host.ecu.session import DIAG_ID, EcuSession
+from fdi_host.ecu.session import EcuSession
 from fdi_host.live.bus import (
     CAN_EFF_FLAG,
     CAN_EFF_MASK,
@@ -54,16 +54,17 @@ from fdi_host.live.bus import (
     signal_ready,
     try_realtime,
 )
+from fdi_host.vehicle import add_vehicle_argument
 
 DEFAULT_RCVBUF = 4 * 1024 * 1024  # bytes: ~1 s of a full bus in python-can's udp_multicast datagrams
 
 EPILOG = """\
 examples:
-  fdi-ecu --interface udp_multicast --table kin --log out/ecu.json
-  fdi-ecu --interface socketcan --channel vcan0 --table romo
-  fdi-ecu --interface pcan --channel PCAN_USBBUS1 --bitrate 500000 --table romo     (a PEAK adapter)
-  fdi-ecu --can-config bus.ini --can-context vehicle --table romo   (python-can's configuration file)
-  fdi-ecu --interface udp_multicast --table kin --idle-exit 2     (exit 2 s after the traffic stops)
+  fdi-ecu --interface udp_multicast --vehicle kin --log out/ecu.json
+  fdi-ecu --interface socketcan --channel vcan0 --vehicle romo
+  fdi-ecu --interface pcan --channel PCAN_USBBUS1 --bitrate 500000 --vehicle romo     (a PEAK adapter)
+  fdi-ecu --can-config bus.ini --can-context vehicle --vehicle romo   (python-can's configuration file)
+  fdi-ecu --interface udp_multicast --vehicle kin --idle-exit 2     (exit 2 s after the traffic stops)
 """
 
 
@@ -71,7 +72,7 @@ def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="fdi-ecu", description=__doc__.splitlines()[0] if __doc__ else None,
                                  epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_bus_arguments(ap)
-    ap.add_argument("--table", choices=("romo", "kin"), default="romo", help="diagnosis table (default romo)")
+    add_vehicle_argument(ap)
     ap.add_argument("--log", type=Path, help="ECU log to write at exit (JSON: every diagnosis step)")
     ap.add_argument("--duration", type=float, help="stop after this many seconds")
     ap.add_argument("--idle-exit", type=float, help="stop when no frame arrived for this many seconds "
@@ -131,9 +132,10 @@ class SendFirst:
         return getattr(self._ecu, name)
 
 
-def _log_frame(can_id: int, data: bytes, ts: float, rx_log: list[tuple[float, int, bytes]]) -> None:
-    """A received data frame for the --rx-log file (IDs above 0x7FF are extended there: `Frame`)."""
-    if can_id & (CAN_RTR_FLAG | CAN_ERR_FLAG) or can_id == DIAG_ID:
+def _log_frame(can_id: int, data: bytes, ts: float, rx_log: list[tuple[float, int, bytes]], own: int) -> None:
+    """A received data frame for the --rx-log file (IDs above 0x7FF are extended there: `Frame`); not the ECU's
+    own diagnosis frame `own`."""
+    if can_id & (CAN_RTR_FLAG | CAN_ERR_FLAG) or can_id == own:
         return
     rx_log.append((ts, can_id & CAN_EFF_MASK if can_id & CAN_EFF_FLAG else can_id, data))
 
@@ -168,13 +170,14 @@ def run(bus: can.BusABC, session: EcuSession, stop: StopFlag, duration: float | 
             if frames:
                 last_rx = time.monotonic()
                 for fid, data, ts in frames:
-                    if session.origin is None and fid != DIAG_ID and origin_file is not None and origin_file.exists() \
+                    if session.origin is None and fid != session.diag_id and origin_file is not None \
+                            and origin_file.exists() \
                             and session.anchor(float(origin_file.read_text(encoding="utf-8")), 0.0, ts):
                         session.steps[-1].tx_wall = tx.last_tx_wall
                     if session.feed(fid, data, ts, 0.0):
                         session.steps[-1].tx_wall = tx.last_tx_wall
                     if rx_log is not None:
-                        _log_frame(fid, data, ts, rx_log)
+                        _log_frame(fid, data, ts, rx_log, session.diag_id)
             elif session.tick(time.time(), grace):
                 session.steps[-1].tx_wall = tx.last_tx_wall
             if tx.sent != sent:  # a diagnosis frame went out: the quiet part of the step
@@ -195,7 +198,7 @@ def serve(args: argparse.Namespace) -> int:
     """``fdi-ecu`` after its options are parsed: the ECU on the bus until the end of the drive or Ctrl-C."""
     stop = StopFlag()
     try:
-        session = EcuSession(args.table)
+        session = EcuSession(args.vehicle)
     except (ImportError, OSError, FdiError) as exc:  # not built, or the library lacks the table (EcuError)
         return fail("fdi-ecu", f"cannot load the ECU bindings ({one_line(exc)}); build them with `pip install -e .`")
     opened = open_cli_bus("fdi-ecu", BusOptions.from_args(args))
@@ -219,7 +222,7 @@ def serve(args: argparse.Namespace) -> int:
             setup.append(qos.note)
         signal_ready(args.ready_file)
         if not args.quiet:
-            print(f"fdi-ecu: table {args.table} on {bus_config.describe()}; Ctrl-C to stop", flush=True)
+            print(f"fdi-ecu: table {args.vehicle} on {bus_config.describe()}; Ctrl-C to stop", flush=True)
         print(f"fdi-ecu: {', '.join(setup)}", flush=True)
         rx_log: list[tuple[float, int, bytes]] | None = [] if args.rx_log is not None else None
         run(bus, session, stop, args.duration, args.idle_exit, rx_log, args.origin_file, reader=reader)

@@ -49,17 +49,18 @@ from fdi_host.live.netns import check_unshare, inside_private_netns, netns_comma
 from fdi_host.live.restart import Managed, RestartEvent, restart_schedule
 from fdi_host.live.sender import SendLog
 from fdi_host.sim.options import add_drive_arguments
+from fdi_host.vehicle import add_vehicle_argument
 
 EPILOG = """\
 examples:
-  fdi-live --scenario fig6 --fault f4@5s:0.5 --table kin --out-dir out/live
-  fdi-live --scenario straight --duration 12 --no-scenario-faults --fault f4@4s:0.5:end=8s --table kin
+  fdi-live --scenario fig6 --fault f4@5s:0.5 --vehicle kin --out-dir out/live
+  fdi-live --scenario straight --duration 12 --no-scenario-faults --fault f4@4s:0.5:end=8s --vehicle kin
   fdi-live --transport current ...     (udp_multicast in this network namespace, no unshare)
   fdi-live --interface socketcan --channel vcan1 ...      (any bus python-can opens; the same for the 3 programs)
   fdi-live --can-config bus.ini --can-context bench ...   (the bus in a python-can configuration file)
-  fdi-live --scenario cornering --fault f4@5s:0.5 --table kin --bus-load 4000
+  fdi-live --scenario cornering --fault f4@5s:0.5 --vehicle kin --bus-load 4000
                                        (other ECUs' frames up to 4,000 frames/s: counted and ignored by the ECU)
-  fdi-live --scenario fig6 --duration 21.5 --no-scenario-faults --fault f4@16s:0.5 --table kin
+  fdi-live --scenario fig6 --duration 21.5 --no-scenario-faults --fault f4@16s:0.5 --vehicle kin
            --restart-ecu-at 1.5 --restart-sim-at 8.5 --sim-counter-start 9
                                        (ECU and simulator killed and restarted; the monitor reports both gaps)
 
@@ -75,8 +76,7 @@ def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="fdi-live", description=__doc__.splitlines()[0] if __doc__ else None,
                                  epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_drive_arguments(ap, noise=False)
-    ap.add_argument("--table", choices=("romo", "kin"), default="romo",
-                    help="ECU diagnosis table: romo (generated, default) or kin (hand-written kinematic tests)")
+    add_vehicle_argument(ap, "the ECU's diagnosis (romo: generated; kin: the hand-written kinematic tests)")
     ap.add_argument("--transport", choices=("auto", "bus", "vcan", "netns", "current"), default="auto",
                     help="bus: the bus the options below or python-can's configuration name; vcan: vcan0; netns: "
                     "udp_multicast in a private network namespace; current: udp_multicast here (default auto: bus "
@@ -226,10 +226,10 @@ def run_here(args: argparse.Namespace, bus: list[str], label: str) -> int:
         (out / f).unlink(missing_ok=True)
     for old in out.glob("send.resume*.npz"):
         old.unlink()
-    ecu_cmd = _py("fdi_host.live.ecu", *bus, "--table", args.table, "--log", str(out / "ecu.json"),
+    ecu_cmd = _py("fdi_host.live.ecu", *bus, "--vehicle", args.vehicle, "--log", str(out / "ecu.json"),
                   "--rx-log", str(out / "ecu_rx.log"), "--ready-file", str(out / "ecu.ready"), "--quiet",
                   "--origin-file", str(out / "origin.txt"), "--realtime", "--cpu-latency", "0")
-    mon_cmd = _py("fdi_host.monitor.cli", *bus, "--table", args.table, "--truth", str(out / "truth.json"),
+    mon_cmd = _py("fdi_host.monitor.cli", *bus, "--vehicle", args.vehicle, "--truth", str(out / "truth.json"),
                   "--ecu-log", str(out / "ecu.json"), "--out-dir", str(out), "--grace", str(args.grace),
                   "--ready-file", str(out / "monitor.ready"), "--quiet",
                   "--origin-file", str(out / "origin.txt"), "--gap-threshold", str(args.gap_threshold))
@@ -251,7 +251,7 @@ def run_here(args: argparse.Namespace, bus: list[str], label: str) -> int:
     # the sending process restarted; live_sim directly, without the simulator's imports, is back in ~1 s.
     sim_resume_cmd = _py("fdi_host.live.sim", *drive, "--resume", "--counter-start", str(args.sim_counter_start),
                          "--frames-from", str(out / "drive.blf"))
-    print(f"fdi-live: {label}, table {args.table}, scenario {args.scenario} {' '.join(args.fault)}", flush=True)
+    print(f"fdi-live: {label}, table {args.vehicle}, scenario {args.scenario} {' '.join(args.fault)}", flush=True)
     if schedule:
         print("fdi-live: restarts: " + ", ".join(f"{e.target} {e.action} at t={e.t:g} s" for e in schedule),
               flush=True)

@@ -24,7 +24,7 @@ import can
 import numpy as np
 
 from fdi_host.can import e2e
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.frame import Frame
 
 
@@ -119,13 +119,13 @@ def _send_loop(bus: can.BusABC, frames: Sequence[Frame], speed: float | None, st
 
 
 def resume_frames(frames: Sequence[Frame], t_from: float, counter_start: int,
-                  db: RomoDatabase | None = None) -> list[Frame]:
+                  db: CanDatabase | None = None) -> list[Frame]:
     """The frames of a drive from drive time `t_from` on, each message's alive counter restarted at
     `counter_start` (0..14) and its E2E CRC recomputed, as a restarted sender would send them (frames of IDs
     not in the DBC, other ECUs' traffic, as they are)."""
     if not 0 <= counter_start <= e2e.COUNTER_MAX:
         raise ValueError(f"counter start {counter_start} outside 0..{e2e.COUNTER_MAX}")
-    db = db or RomoDatabase()
+    db = db or CanDatabase()
     counters: dict[int, int] = {}
     data_ids: dict[int, int | None] = {}
     out = []

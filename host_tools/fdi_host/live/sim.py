@@ -32,7 +32,7 @@ import can
 
 from fdi_analysis.cli.common import EXIT_ERROR
 from fdi_host.can import background
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.frame import Frame
 from fdi_host.can.logs import formats_text, is_log, read_log, write_log
 from fdi_host.live.bus import BusOptions, StopFlag, add_bus_arguments, open_cli_bus, try_realtime
@@ -115,7 +115,7 @@ def _drive_frames(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Sequ
 
     drive = simulate_from_args(ap, args)
     result, plant, duration = drive.result, drive.plant, drive.duration
-    frames = traffic.build_frames(result, RomoDatabase())
+    frames = traffic.build_frames(result, CanDatabase())
     if args.bus_load > 0.0:
         bg = background.for_drive(frames, args.bus_load, duration, args.bus_load_seed)
         print(f"other ECUs' traffic: {len(bg)} frames ({len(bg) / duration:.0f}/s, "

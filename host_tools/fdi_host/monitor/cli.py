@@ -27,9 +27,9 @@ from typing import Any
 
 from fdi_analysis.cli.common import EXIT_ERROR, add_version, fail, one_line, run, use_file_backend
 from fdi_analysis.errors import FdiError
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.ecu.records import DiagRecord, TableClasses
-from fdi_host.ecu.session import DIAG_ID, ORIGIN_LEAD, load_steps
+from fdi_host.ecu.session import ORIGIN_LEAD, load_steps
 from fdi_host.errors import FdiHostError
 from fdi_host.live.bus import BusOptions, StopFlag, add_bus_arguments, open_cli_bus, signal_ready
 from fdi_host.monitor.frames import FrameStats
@@ -37,12 +37,13 @@ from fdi_host.monitor.gaps import Gap, GapTracker, gap_summary
 from fdi_host.monitor.report import frame_table, plot_diagnosis, plot_residuals, score_table, write_reports
 from fdi_host.monitor.score import Score, score_run, windows_from_truth
 from fdi_host.sim.faults import FAULT_IDS
+from fdi_host.vehicle import add_vehicle_argument, resolve
 
 EPILOG = """\
 examples:
-  fdi-monitor --interface udp_multicast --table kin --truth out/live/truth.json --out-dir out/live
-  fdi-monitor --interface udp_multicast --table kin --truth t.json --ecu-log out/ecu.json --idle-exit 2
-  fdi-monitor --interface kvaser --channel 0 --bitrate 500000 --table romo     (a Kvaser adapter)
+  fdi-monitor --interface udp_multicast --vehicle kin --truth out/live/truth.json --out-dir out/live
+  fdi-monitor --interface udp_multicast --vehicle kin --truth t.json --ecu-log out/ecu.json --idle-exit 2
+  fdi-monitor --interface kvaser --channel 0 --bitrate 500000 --vehicle romo     (a Kvaser adapter)
   fdi-monitor --classes classes.json ...     (signatures given as JSON instead of from the ECU bindings:
                                               {"signature": [13, 14, 15, 7, 11], "test_names": ["r1", ...]})
 """
@@ -52,7 +53,7 @@ examples:
 class Monitor:
     """Bus-independent core: feed frames with `on_frame`, read `records` and `stats`."""
 
-    db: RomoDatabase
+    db: CanDatabase
     classes: TableClasses
     step: float = 0.01  # diagnosis step [s]: the diagnosis frame's cycle
     stats: FrameStats = field(init=False)
@@ -64,13 +65,13 @@ class Monitor:
     new_gaps: list[Gap] = field(default_factory=list)  # gaps ended since the caller last emptied this list
 
     def __post_init__(self) -> None:
-        self.stats = FrameStats(self.db, {DIAG_ID: self.step}, self.gap_threshold)
+        self.stats = FrameStats(self.db, {self.db.diag_id: self.step}, self.gap_threshold)
         self.gaps = GapTracker(self.gap_threshold)
 
     def on_frame(self, frame_id: int, data: bytes, t_rx: float) -> DiagRecord | None:
         self.last_rx = t_rx
         ok = self.stats.add(frame_id, data, t_rx)
-        if frame_id != DIAG_ID:
+        if frame_id != self.db.diag_id:
             if self.t0 is None and ok:
                 self.t0 = t_rx
             if self.t0 is not None and frame_id in self.stats.messages:  # a known sensor message
@@ -187,7 +188,7 @@ def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="fdi-monitor", description=__doc__.splitlines()[0] if __doc__ else None,
                                  epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_bus_arguments(ap)
-    ap.add_argument("--table", choices=("romo", "kin"), default="romo", help="the ECU's diagnosis table")
+    add_vehicle_argument(ap)
     ap.add_argument("--classes", type=Path, help="fault signatures as JSON (instead of the ECU bindings)")
     ap.add_argument("--truth", type=Path, help="ground truth (truth.json of fdi-sim) to score against")
     ap.add_argument("--ecu-log", type=Path, help="ECU log (fdi-ecu --log) for the residual plot, read at the end")
@@ -223,7 +224,7 @@ def finish(mon: Monitor, args: argparse.Namespace) -> int:
     score = mon.score(truth, args.grace)
     print(score_table(score), flush=True)
     windows = windows_from_truth(truth)
-    paths = write_reports(args.out_dir, score, mon.stats, {"table": args.table, "truth": str(args.truth),
+    paths = write_reports(args.out_dir, score, mon.stats, {"table": args.vehicle, "truth": str(args.truth),
                                                            "diagnosis_frames": len(mon.records)})
     p = plot_diagnosis(args.out_dir / "diagnosis.png", mon.records, windows, mon.classes, score.gaps)
     paths += [p] if p else []
@@ -256,12 +257,14 @@ def monitor(args: argparse.Namespace) -> int:
     """``fdi-monitor`` after its options are parsed: listen, show, then score and report."""
     stop = StopFlag()
     try:
-        classes, step = classes_for(args.table, args.classes)
+        classes, step = classes_for(args.vehicle, args.classes)
     except (ImportError, OSError, FdiError) as exc:
         if args.classes is not None:  # ClassesFileError or OSError: the message names the file
             return fail("fdi-monitor", f"--classes {one_line(exc)}")
-        return fail("fdi-monitor", f"no fault signatures for table {args.table}: {one_line(exc)}")
-    mon = Monitor(RomoDatabase(), classes, step, gap_threshold=args.gap_threshold)
+        return fail("fdi-monitor", f"no fault signatures for table {args.vehicle}: {one_line(exc)}")
+    dbc = resolve(args.vehicle).dbc if args.classes is None else None
+    mon = Monitor(CanDatabase(dbc) if dbc is not None else CanDatabase(), classes, step,
+                  gap_threshold=args.gap_threshold)
     opened = open_cli_bus("fdi-monitor", BusOptions.from_args(args))
     if opened is None:
         return EXIT_ERROR

@@ -19,7 +19,7 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from fdi_host.can import e2e
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 
 
 @dataclass
@@ -50,7 +50,7 @@ class MessageStats:
 class FrameStats:
     """Feed every received frame to `add`; read `messages` (by frame id)."""
 
-    def __init__(self, db: RomoDatabase, cycles: dict[int, float] | None = None, gap_threshold: float = 0.25) -> None:
+    def __init__(self, db: CanDatabase, cycles: dict[int, float] | None = None, gap_threshold: float = 0.25) -> None:
         if not gap_threshold > 0.0:
             raise ValueError(f"gap threshold must be > 0 s, got {gap_threshold}")
         self.db = db

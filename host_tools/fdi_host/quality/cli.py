@@ -14,26 +14,27 @@ from tqdm import tqdm
 
 from fdi_analysis.cli.common import add_version, fail, run
 from fdi_analysis.errors import FdiError, InputError
-from fdi_host.ecu.bindings import TABLES, Ecu, EcuError
+from fdi_host.ecu.bindings import Ecu, EcuError
 from fdi_host.quality.report import markdown, write_json, write_markdown
 from fdi_host.quality.suite import CASE_SEEDS, DEFAULT_SIZES, SHAPES, SuiteConfig, run_suite
 from fdi_host.sim.scenario import SCENARIOS
+from fdi_host.vehicle import add_vehicle_argument
 
 EXAMPLES = """examples:
-  fdi-quality --table romo --out out/quality-romo     # full run: 5 scenarios x 3 seeds, steps at the required sizes,
+  fdi-quality --vehicle romo --out out/quality-romo     # full run: 5 scenarios x 3 seeds, steps at the required sizes,
                                                       # 30 min fault-free
-  fdi-quality --table romo --quick --out out/quality-quick   # CI size: cornering, one seed, 0.3 min fault-free
-  fdi-quality --table romo --faults f6 f10 --scenarios cornering slalom --shapes step ramp --multipliers 1 2
-  fdi-quality --table romo --trace f6:straight:2001 --out out/trace   # one case step by step: alarms, candidates,
+  fdi-quality --vehicle romo --quick --out out/quality-quick   # CI size: cornering, one seed, 0.3 min fault-free
+  fdi-quality --vehicle romo --faults f6 f10 --scenarios cornering slalom --shapes step ramp --multipliers 1 2
+  fdi-quality --vehicle romo --trace f6:straight:2001 --out out/trace   # one case step by step: alarms, candidates,
                                                                       # the exoneration's evidence, ratios plot
                                                                       # (trace-f6-straight-2001.png)
-  fdi-quality --table romo --trace f6:slalom:2001 --linearity --out out/trace   # and how far each test's response
+  fdi-quality --vehicle romo --trace f6:slalom:2001 --linearity --out out/trace   # and how far each test's response
                                                       # departs from what its sensitivity predicts (rho), with a
                                                       # plot (linearity-f6-slalom-2001.png)
-  fdi-quality --table romo --linearity --seeds 2001 --out out/linearity   # the same over every fault x scenario:
+  fdi-quality --vehicle romo --linearity --seeds 2001 --out out/linearity   # the same over every fault x scenario:
                                                       # where the tests' rho differ by more than the rule's margin
                                                       # (linearity.json, linearity.md, linearity.png)
-  fdi-quality --table romo --ecu noise_allowance=2 --out out/quality-na2   # a study with another ECU setting
+  fdi-quality --vehicle romo --ecu noise_allowance=2 --out out/quality-na2   # a study with another ECU setting
   fdi-quality --fleet 25 --out out/fleet      # truth-plant fleet: 25 vehicles x 8 scenarios, the model plant beside,
                                               # false alarms per hour, minimum detectable faults (about 40 min)
   fdi-quality --fleet 2 --quick --out out/fleet-quick   # CI size: 2 vehicles, cornering and the wet patch
@@ -76,7 +77,7 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="fdi-quality", description=__doc__, epilog=EXAMPLES,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     add_version(p)
-    p.add_argument("--table", choices=TABLES, default="romo", help="diagnosis table of the ECU (default romo)")
+    add_vehicle_argument(p)
     p.add_argument("--quick", action="store_true", help="small run for CI (cornering, one seed)")
     p.add_argument("--scenarios", nargs="+", default=None, help=f"scenarios (default: {' '.join(SCENARIOS)})")
     p.add_argument("--faults", nargs="+", default=None, help="faults to run (default: every fault of the table)")
@@ -117,7 +118,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _main(args: argparse.Namespace) -> int:
     """The chosen job; a bad value, file or setting raises (one line and exit 1 through `run`)."""
-    args.ecu = parse_ecu_settings(args.table, args.ecu)
+    args.ecu = parse_ecu_settings(args.vehicle, args.ecu)
     if args.replot is not None:
         return _replot(args.replot, args.out)
     if args.trace is not None:
@@ -151,9 +152,9 @@ def _progress(desc: str, unit: str) -> Iterator[Callable[[str], None]]:
 
 def _config(args: argparse.Namespace) -> SuiteConfig:
     """The suite's configuration from the command line (--quick's defaults, then what is given)."""
-    base = quick_config(args.table) if args.quick else SuiteConfig(table=args.table)
+    base = quick_config(args.vehicle) if args.quick else SuiteConfig(table=args.vehicle)
     return SuiteConfig(
-        table=args.table,
+        table=args.vehicle,
         scenarios=tuple(args.scenarios) if args.scenarios else base.scenarios,
         seeds=tuple(args.seeds) if args.seeds else base.seeds,
         multipliers=tuple(args.multipliers) if args.multipliers else base.multipliers,
@@ -169,7 +170,7 @@ def _fleet(args: argparse.Namespace) -> int:
     from fdi_host.quality import fleet, fleet_plots, fleet_report
 
     try:
-        base = fleet.quick_config(args.table) if args.quick else fleet.FleetConfig(table=args.table)
+        base = fleet.quick_config(args.vehicle) if args.quick else fleet.FleetConfig(table=args.vehicle)
         cfg = dataclasses.replace(
             base, vehicles=args.fleet, scenarios=tuple(args.scenarios) if args.scenarios else base.scenarios,
             faults=tuple(args.faults) if args.faults else (), sizes_file=args.sizes, ecu=args.ecu,
@@ -225,8 +226,8 @@ def _trace(args: argparse.Namespace) -> int:
         fault, scenario, seed = trace.parse_case(args.trace)
         mult = args.multipliers[0] if args.multipliers else 1.0
         shape = args.shapes[0] if args.shapes else "step"
-        case = trace.trace_case(args.table, fault, scenario, seed, mult,
-                                SuiteConfig(table=args.table, sizes_file=args.sizes, ecu=args.ecu), shape)
+        case = trace.trace_case(args.vehicle, fault, scenario, seed, mult,
+                                SuiteConfig(table=args.vehicle, sizes_file=args.sizes, ecu=args.ecu), shape)
         print(trace.report(case))
         if args.out is not None:
             args.out.mkdir(parents=True, exist_ok=True)
@@ -236,8 +237,8 @@ def _trace(args: argparse.Namespace) -> int:
         if args.linearity:
             from fdi_host.quality import linearity
 
-            lin = linearity.check_case(args.table, fault, scenario, seed, mult,
-                                       SuiteConfig(table=args.table, sizes_file=args.sizes, ecu=args.ecu), shape)
+            lin = linearity.check_case(args.vehicle, fault, scenario, seed, mult,
+                                       SuiteConfig(table=args.vehicle, sizes_file=args.sizes, ecu=args.ecu), shape)
             print(linearity.report(lin))
             if args.out is not None:
                 png = args.out / f"linearity-{fault}-{scenario}-{seed}{'' if shape == 'step' else '-' + shape}.png"

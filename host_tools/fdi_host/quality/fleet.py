@@ -35,7 +35,7 @@ from pathlib import Path
 from typing import Any
 
 from fdi_analysis.export.fault_sizes import FaultSizes, FaultSizesError
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.traffic import build_frames
 from fdi_host.ecu.bindings import EcuResult, table_info
 from fdi_host.ecu.offline import replay
@@ -204,7 +204,7 @@ def run_task(task: Task) -> TaskResult:
     scen = load_scenario(task.scenario)
     onset = round(cfg.onset_fraction * scen.duration, 3)
     base = _base_drive(task, onset)
-    db = RomoDatabase()
+    db = CanDatabase()
     ecu: dict[str, Any] = dict(cfg.ecu)
     t_start = 0.0 if cfg.pre_onset_s is None else max(0.0, onset - cfg.pre_onset_s)
     base_frames = build_frames(base, db, t_from=0.0 if task.fault_free else t_start)

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.traffic import build_frames
 from fdi_host.ecu.bindings import EcuResult, TableInfo, table_info
 from fdi_host.ecu.offline import replay
@@ -110,7 +110,7 @@ def check_case(table: str, fault: str, scenario: str, seed: int, multiplier: flo
     base = simulate(load_scenario(scenario), [], seed=seed)
     onset = case_onset(cfg, base)
     spec, _ = case_spec(cfg, fault, onset, size, shape, multiplier)
-    db = RomoDatabase()
+    db = CanDatabase()
     settings = {**ecu_settings(cfg), "sensitivities": True}
     start = replay_start(cfg, onset)
     pairs = [(a, b) for a, b in _aligned(replay(table, build_frames(faulty_drive(base, spec), db), t_start=start,

@@ -11,7 +11,7 @@ rho alarmed while the other stayed quiet, the single-test clearing could have cl
 rule did (its alarm memory, noise allowance, confirmation and the latch of the first class isolated come on top) is
 the quality suite's count of wrong classes; the survey says where the margin alone does not hold.
 
-`fdi-quality --table romo --linearity [--seeds ...] [--out DIR]` (without --trace) runs it.
+`fdi-quality --vehicle romo --linearity [--seeds ...] [--out DIR]` (without --trace) runs it.
 """
 
 from __future__ import annotations

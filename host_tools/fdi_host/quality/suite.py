@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from fdi_analysis.export.fault_sizes import FaultSizes, FaultSizesError
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.traffic import build_frames
 from fdi_host.ecu.bindings import EcuResult, TableInfo, table_info
 from fdi_host.ecu.offline import replay
@@ -241,7 +241,7 @@ def replay_start(cfg: SuiteConfig, onset: float) -> float:
     return 0.0 if cfg.pre_onset_s is None else max(0.0, onset - cfg.pre_onset_s)
 
 
-def replay_case(cfg: SuiteConfig, drive: SimResult, onset: float, db: RomoDatabase) -> list[EcuResult]:
+def replay_case(cfg: SuiteConfig, drive: SimResult, onset: float, db: CanDatabase) -> list[EcuResult]:
     """The ECU's steps of one case's faulty drive, replayed from `replay_start`."""
     return replay(cfg.table, build_frames(drive, db), t_start=replay_start(cfg, onset), **ecu_settings(cfg))
 
@@ -269,7 +269,7 @@ def run_suite(cfg: SuiteConfig, progress: Callable[[str], None] | None = None) -
     sizes = load_fault_sizes(cfg.sizes_file)
     faults, skipped = fault_cases(cfg, table, sizes)
     result = SuiteResult(cfg, table, sizes, not_in_table=skipped)
-    db = RomoDatabase()
+    db = CanDatabase()
     for scen_name in cfg.scenarios:
         scen = load_scenario(scen_name)
         for seed in cfg.seeds:
@@ -306,7 +306,7 @@ def _fault_free_schedule(cfg: SuiteConfig) -> Iterator[tuple[str, int]]:
 
 
 def fault_free_drives(
-    cfg: SuiteConfig, db: RomoDatabase, progress: Callable[[str], None] | None = None
+    cfg: SuiteConfig, db: CanDatabase, progress: Callable[[str], None] | None = None
 ) -> list[FaultFreeResult]:
     out: list[FaultFreeResult] = []
     total = 0.0

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.traffic import build_frames
 from fdi_host.ecu.bindings import EcuResult, Evidence, TableInfo, table_info
 from fdi_host.ecu.offline import replay_explained
@@ -85,7 +85,7 @@ def trace_case(table: str, fault: str, scenario: str, seed: int, multiplier: flo
     onset = case_onset(cfg, base)
     spec, _ = case_spec(cfg, fault, onset, size, shape, multiplier)
     drive = faulty_drive(base, spec)
-    frames = build_frames(drive, RomoDatabase())
+    frames = build_frames(drive, CanDatabase())
     steps = [s for s in replay_explained(table, frames, t_start=replay_start(cfg, onset), **ecu_settings(cfg))
              if s[0].t_us * 1e-6 <= onset + AFTER_ONSET_S]
     window = (drive.t >= onset) & (drive.t <= onset + AFTER_ONSET_S)

@@ -48,8 +48,8 @@ class FaultSpec:
     end: float | None = None  # s, fault removed at this time (None: stays)
 
     def __post_init__(self) -> None:
-        if self.fault not in FAULT_IDS:
-            raise FaultSpecError(f"unknown fault {self.fault!r}; faults are f1..f25 (Table I)")
+        if not self.fault.isidentifier():
+            raise FaultSpecError(f"bad fault name {self.fault!r}")
         if self.shape not in ("step", "ramp", "intermittent"):
             raise FaultSpecError(f"{self.fault}: unknown shape {self.shape!r}")
         if self.shape == "ramp" and self.ramp <= 0.0:
@@ -61,6 +61,7 @@ class FaultSpec:
 
     @property
     def index(self) -> int:
+        """The fault's column among ROMO's faults (Table I)."""
         return FAULT_IDS.index(self.fault)
 
     def profile(self, t: FloatArray) -> FloatArray:
@@ -99,8 +100,16 @@ def _seconds(text: str, what: str) -> float:
     return v / 1000.0 if m.group(2) == "ms" else v
 
 
-def parse_fault(text: str) -> FaultSpec:
-    """Parse ``fID@ONSET:MAGNITUDE[:ramp=T][:end=T][:for=T][:intermittent=PERIOD[/DUTY]]``."""
+def _known(spec: FaultSpec, names: Sequence[str]) -> FaultSpec:
+    if spec.fault not in names:
+        which = "f1..f25 (Table I)" if tuple(names) == FAULT_IDS else ", ".join(names)
+        raise FaultSpecError(f"unknown fault {spec.fault!r}; faults are {which}")
+    return spec
+
+
+def parse_fault(text: str, names: Sequence[str] = FAULT_IDS) -> FaultSpec:
+    """Parse ``fID@ONSET:MAGNITUDE[:ramp=T][:end=T][:for=T][:intermittent=PERIOD[/DUTY]]``, a fault of `names`
+    (ROMO's by default; a vehicle's model's for another vehicle)."""
     head, _, rest = text.partition(":")
     if "@" not in head or not rest:
         raise FaultSpecError(f"bad fault {text!r}; expected e.g. f4@5s:0.5 or f6@10s:0.02:ramp=2s")
@@ -127,10 +136,10 @@ def parse_fault(text: str) -> FaultSpec:
                 kw["duty"] = float(duty)
         else:
             raise FaultSpecError(f"unknown fault option {key!r} in {text!r} (ramp, end, for, intermittent)")
-    return FaultSpec(fault=fid.strip(), onset=onset, magnitude=magnitude, **kw)
+    return _known(FaultSpec(fault=fid.strip(), onset=onset, magnitude=magnitude, **kw), names)
 
 
-def fault_from_table(tab: Mapping[str, Any]) -> FaultSpec:
+def fault_from_table(tab: Mapping[str, Any], names: Sequence[str] = FAULT_IDS) -> FaultSpec:
     """A ``[[fault]]`` table of a scenario file (keys as `FaultSpec` fields; ``duration`` sets ``end``)."""
     allowed = {"fault", "onset", "magnitude", "shape", "ramp", "period", "duty", "end", "duration"}
     unknown = set(tab) - allowed
@@ -142,14 +151,14 @@ def fault_from_table(tab: Mapping[str, Any]) -> FaultSpec:
     for k in ("onset", "magnitude", "ramp", "period", "duty", "end"):
         if k in kw and kw[k] is not None:
             kw[k] = float(kw[k])
-    return FaultSpec(**kw)
+    return _known(FaultSpec(**kw), names)
 
 
-def fault_matrix(specs: Iterable[FaultSpec], t: FloatArray) -> FloatArray:
-    """(len(t), 25) fault values; several specs of one fault add up."""
-    out = np.zeros((t.size, len(FAULT_IDS)))
+def fault_matrix(specs: Iterable[FaultSpec], t: FloatArray, names: Sequence[str] = FAULT_IDS) -> FloatArray:
+    """(len(t), len(names)) fault values (ROMO's 25 by default); several specs of one fault add up."""
+    out = np.zeros((t.size, len(names)))
     for s in specs:
-        out[:, s.index] += s.profile(t)
+        out[:, list(names).index(_known(s, names).fault)] += s.profile(t)
     return out
 
 
@@ -164,12 +173,13 @@ def active_intervals(values: FloatArray, t: FloatArray) -> list[tuple[float, flo
 
 
 def ground_truth(
-    specs: Sequence[FaultSpec], t: FloatArray, fault_info: Mapping[str, Mapping[str, Any]]
+    specs: Sequence[FaultSpec], t: FloatArray, fault_info: Mapping[str, Mapping[str, Any]],
+    names: Sequence[str] = FAULT_IDS,
 ) -> dict[str, Any]:
-    """JSON-ready ground truth: the specs and, per fault, when it is active and with which values."""
-    F = fault_matrix(specs, t)
+    """JSON-ready ground truth: the specs and, per fault of `names`, when it is active and with which values."""
+    F = fault_matrix(specs, t, names)
     faults = []
-    for k, fid in enumerate(FAULT_IDS):
+    for k, fid in enumerate(names):
         col = F[:, k]
         if not col.any():
             continue

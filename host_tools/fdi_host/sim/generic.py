@@ -12,8 +12,12 @@ sample time with the inputs and faults held over each step; measurement noise is
 
 from __future__ import annotations
 
+import math
+import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 import sympy
@@ -22,20 +26,13 @@ from numpy.typing import NDArray
 from fdi_analysis.model import Model
 from fdi_analysis.residuals.solvability import Solution, Solver
 from fdi_host.errors import FdiHostError
+from fdi_host.sim.faults import FaultSpec, fault_matrix, ground_truth
 
 FloatArray = NDArray[np.float64]
 
 
 class GenericPlantError(FdiHostError, ValueError):
     """A model the generic simulator cannot order causally (an algebraic loop, a state without a derivative)."""
-
-
-@dataclass(frozen=True)
-class StepFault:
-    fault: str
-    onset: float  # s
-    size: float  # in the fault's unit
-    end: float = float("inf")
 
 
 @dataclass(frozen=True)
@@ -106,7 +103,7 @@ class GenericPlant:
         return np.asarray(self._y(*x, *u, *f), dtype=np.float64)
 
     def simulate(self, x0: Mapping[str, float], inputs: Mapping[str, Callable[[float], float]], duration: float,
-                 dt: float = 0.01, faults: Sequence[StepFault] = (), noise: Mapping[str, float] | None = None,
+                 dt: float = 0.01, faults: Sequence[FaultSpec] = (), noise: Mapping[str, float] | None = None,
                  seed: int = 0) -> Run:
         """A run from the state `x0` with `inputs` (functions of time) and step `faults`; `noise` is the
         standard deviation per measured known (0 where not given)."""
@@ -119,18 +116,12 @@ class GenericPlant:
         ys = np.zeros((n, len(self.measured)))
         us = np.zeros((n, len(self.inputs)))
         x = np.array([float(x0[s]) for s in self.states], dtype=np.float64)
-
-        def fault_values(tk: float) -> list[float]:
-            out = [0.0] * len(self.faults)
-            for fs in faults:
-                if fs.onset <= tk < fs.end:
-                    out[self.faults.index(fs.fault)] += fs.size
-            return out
+        F = fault_matrix(faults, t, self.faults)  # held over each step
 
         for k in range(n):
             tk = float(t[k])
             u = [float(inputs[name](tk)) for name in self.inputs]
-            fv = fault_values(tk)
+            fv = F[k].tolist()
             xs[k], us[k] = x, u
             ys[k] = self.measurements(x, u, fv)
             k1 = self.derivatives(x, u, fv)
@@ -144,3 +135,82 @@ class GenericPlant:
                     for i, name in enumerate(self.measured)}
         return Run(t, {s: xs[:, i] for i, s in enumerate(self.states)}, measured,
                    {name: us[:, i] for i, name in enumerate(self.inputs)})
+
+
+@dataclass(frozen=True)
+class FaultRun:
+    fault: str
+    size: float
+    onset: float
+    seed: int
+    candidates: tuple[str, ...] = ()  # the candidate faults the diagnoser must end with
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A scenario file: one drive (initial state, inputs as offset plus sines, sensor noise) and its seeds."""
+
+    source: str
+    dt: float
+    duration: float
+    initial: dict[str, float]
+    inputs: dict[str, tuple[float, tuple[tuple[float, float], ...]]]  # input -> (offset, ((amplitude, period)))
+    noise: dict[str, float]
+    reference_seed: int
+    seeds: tuple[int, ...]
+    warmup: float
+    fault_runs: tuple[FaultRun, ...]
+    sweep_seed: int = 0
+
+    @staticmethod
+    def load(path: Path) -> Scenario:
+        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+        d = doc["drive"]
+        inputs = {name: (float(v.get("offset", 0.0)), tuple((float(a), float(p)) for a, p in v.get("sines", [])))
+                  for name, v in d.get("inputs", {}).items()}
+        runs = tuple(FaultRun(str(r["fault"]), float(r["size"]), float(r["onset"]), int(r["seed"]),
+                              tuple(str(c) for c in r.get("candidates", [])))
+                     for r in doc.get("fault_run", []))
+        return Scenario(path.as_posix(), float(d["dt"]), float(d["duration"]),
+                        {k: float(v) for k, v in d["initial"].items()}, inputs,
+                        {k: float(v) for k, v in d.get("noise", {}).items()}, int(doc["reference"]["seed"]),
+                        tuple(int(s) for s in doc["calibration"]["seeds"]), float(doc["calibration"]["warmup"]), runs,
+                        int(doc.get("sweep", {}).get("seed", 0)))
+
+    def input_functions(self) -> dict[str, Callable[[float], float]]:
+        def make(offset: float, sines: tuple[tuple[float, float], ...]) -> Callable[[float], float]:
+            return lambda t: offset + sum(a * math.sin(2.0 * math.pi * t / p) for a, p in sines)
+
+        return {name: make(o, s) for name, (o, s) in self.inputs.items()}
+
+
+def drive(plant: GenericPlant, sc: Scenario, seed: int, faults: Sequence[FaultSpec] = ()) -> dict[str, FloatArray]:
+    """The knowns (measured with noise, and the inputs) of one drive of the scenario."""
+    run = plant.simulate(sc.initial, sc.input_functions(), sc.duration, sc.dt, faults, sc.noise, seed)
+    return {**run.measured, **run.inputs}
+
+
+@dataclass(frozen=True)
+class VehicleDrive:
+    """One drive of a vehicle's model plant: the signals its bus carries (measured with noise, and the inputs),
+    sampled every `dt`, and the ground truth in the form ``fdi-sim`` writes for ROMO (``<log>.truth.json``)."""
+
+    t: FloatArray
+    dt: float
+    signals: dict[str, FloatArray]
+    truth: dict[str, Any]
+
+
+def vehicle_drive(model: Model, sc: Scenario, faults: Sequence[FaultSpec] = (), seed: int | None = None,
+                  duration: float | None = None, noise: bool = True, label: str = "") -> VehicleDrive:
+    """A drive of the scenario on the model plant of `model` with `faults` (any shape of `FaultSpec`)."""
+    plant = GenericPlant(model)
+    seed = sc.seeds[0] if seed is None else seed
+    length = sc.duration if duration is None else duration
+    run = plant.simulate(sc.initial, sc.input_functions(), length, sc.dt, faults, sc.noise if noise else {}, seed)
+    info = {f.name: {"unit": f.unit, "desc": f.desc, "equations": [e.id for e in model.equations if f.name in e.faults]}
+            for f in model.faults}
+    truth = ground_truth(faults, run.t, info, plant.faults) | {
+        "scenario": sc.source, "seed": seed, "duration": length, "start_time": 0.0, "noise": noise,
+        "plant": label or f"model plant of {model.name}"}
+    return VehicleDrive(run.t, sc.dt, {**run.measured, **run.inputs}, truth)

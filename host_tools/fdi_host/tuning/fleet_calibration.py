@@ -271,7 +271,7 @@ def fleet_drives(vehicles: Sequence[int], scenarios: Sequence[str], dt: float,
                  progress: Callable[[str], None] | None = None) -> list[dict[str, FloatArray]]:
     """The measured signals, as the ECU sees them, of each calibration vehicle's fault-free drive of each scenario
     (its first noise seed of the fleet plan)."""
-    from fdi_host.can.dbc import RomoDatabase
+    from fdi_host.can.dbc import CanDatabase
     from fdi_host.can.ecu_view import ecu_view
     from fdi_host.can.traffic import build_frames
     from fdi_host.sim.scenario import FLEET_SCENARIOS, load_scenario
@@ -283,7 +283,7 @@ def fleet_drives(vehicles: Sequence[int], scenarios: Sequence[str], dt: float,
     if outside:
         raise CalibrationError(f"vehicles {outside[:5]} are not calibration vehicles ({CALIBRATION_VEHICLES.start} .. "
                          f"{CALIBRATION_VEHICLES.stop - 1})")
-    db = RomoDatabase()
+    db = CanDatabase()
     out = []
     for v in vehicles:
         vehicle = draw_vehicle(v)

@@ -19,10 +19,8 @@ they decide which quiet test may exonerate which fault (fdi_analysis.export.faul
 from __future__ import annotations
 
 import argparse
-import math
 import sys
-import tomllib
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -37,7 +35,8 @@ from fdi_analysis.residuals.evaluate import FilterDesign, evaluable_segments
 from fdi_analysis.residuals.generator import Generator
 from fdi_analysis.residuals.observer import ObserverReference
 from fdi_analysis.residuals.selected import selected_generators
-from fdi_host.sim.generic import GenericPlant, StepFault
+from fdi_host.sim.faults import FaultSpec
+from fdi_host.sim.generic import FaultRun, GenericPlant, Scenario, drive
 from fdi_host.tuning.calibrate import MARGIN, calibrate, first_alarm
 from fdi_host.tuning.sweep import grid, next_grid
 
@@ -51,61 +50,8 @@ NOT_DETECTED = "not detectable by this test up to the limit"
 FloatArray = NDArray[np.float64]
 
 
-@dataclass(frozen=True)
-class FaultRun:
-    fault: str
-    size: float
-    onset: float
-    seed: int
-    candidates: tuple[str, ...] = ()  # the candidate faults the diagnoser must end with
-
-
-@dataclass(frozen=True)
-class Scenario:
-    """A scenario file: one drive (initial state, inputs as offset plus sines, sensor noise) and its seeds."""
-
-    source: str
-    dt: float
-    duration: float
-    initial: dict[str, float]
-    inputs: dict[str, tuple[float, tuple[tuple[float, float], ...]]]  # input -> (offset, ((amplitude, period)))
-    noise: dict[str, float]
-    reference_seed: int
-    seeds: tuple[int, ...]
-    warmup: float
-    fault_runs: tuple[FaultRun, ...]
-    sweep_seed: int = 0
-
-    @staticmethod
-    def load(path: Path) -> Scenario:
-        doc = tomllib.loads(path.read_text(encoding="utf-8"))
-        d = doc["drive"]
-        inputs = {name: (float(v.get("offset", 0.0)), tuple((float(a), float(p)) for a, p in v.get("sines", [])))
-                  for name, v in d.get("inputs", {}).items()}
-        runs = tuple(FaultRun(str(r["fault"]), float(r["size"]), float(r["onset"]), int(r["seed"]),
-                              tuple(str(c) for c in r.get("candidates", [])))
-                     for r in doc.get("fault_run", []))
-        return Scenario(path.as_posix(), float(d["dt"]), float(d["duration"]),
-                        {k: float(v) for k, v in d["initial"].items()}, inputs,
-                        {k: float(v) for k, v in d.get("noise", {}).items()}, int(doc["reference"]["seed"]),
-                        tuple(int(s) for s in doc["calibration"]["seeds"]), float(doc["calibration"]["warmup"]), runs,
-                        int(doc.get("sweep", {}).get("seed", 0)))
-
-    def input_functions(self) -> dict[str, Callable[[float], float]]:
-        def make(offset: float, sines: tuple[tuple[float, float], ...]) -> Callable[[float], float]:
-            return lambda t: offset + sum(a * math.sin(2.0 * math.pi * t / p) for a, p in sines)
-
-        return {name: make(o, s) for name, (o, s) in self.inputs.items()}
-
-
-def drive(plant: GenericPlant, sc: Scenario, seed: int, faults: Sequence[StepFault] = ()) -> dict[str, FloatArray]:
-    """The knowns (measured with noise, and the inputs) of one drive of the scenario."""
-    run = plant.simulate(sc.initial, sc.input_functions(), sc.duration, sc.dt, faults, sc.noise, seed)
-    return {**run.measured, **run.inputs}
-
-
 def fault_run_signals(plant: GenericPlant, sc: Scenario, run: FaultRun) -> dict[str, FloatArray]:
-    return drive(plant, sc, run.seed, [StepFault(run.fault, run.onset, run.size)])
+    return drive(plant, sc, run.seed, [FaultSpec(run.fault, run.onset, run.size)])
 
 
 def reference(plant: GenericPlant, sc: Scenario) -> ObserverReference:
@@ -177,7 +123,7 @@ def sweep(model: Model, th: Thresholds, sc: Scenario, limits: Mapping[str, float
             todo = [(g, s) for g, s in tests if g.name not in found]
             if not todo:
                 break
-            sig = drive(plant, short, seed, [StepFault(f, SWEEP_LEAD_S, size)])
+            sig = drive(plant, short, seed, [FaultSpec(f, SWEEP_LEAD_S, size)])
             for g, s in todo:
                 for start, r in evaluable_segments(g, sig, skip, design):
                     k = first_alarm(r, s, th.gate)

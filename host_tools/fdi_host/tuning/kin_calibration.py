@@ -25,7 +25,7 @@ import numpy as np
 from fdi_analysis.export import kin_calibration as emit_kin
 from fdi_analysis.export.fault_sizes import EXONERATION_MARGIN, FaultSizes
 from fdi_analysis.export.kin_calibration import KinCalibrationFile, KinTest, labels_of
-from fdi_host.can.dbc import RomoDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.traffic import build_frames
 from fdi_host.ecu.bindings import table_info
 from fdi_host.ecu.offline import replay
@@ -50,7 +50,7 @@ def kin_residuals(progress: Callable[[str], None] | None = None) -> list[list[np
     """Per test of the kinematic table, the residual of every drive on its evaluable steps."""
     n = table_info("kin").n_tests
     per_test: list[list[np.ndarray]] = [[] for _ in range(n)]
-    db = RomoDatabase()
+    db = CanDatabase()
     for name in SCENARIOS:
         scen = load_scenario(name)
         for seed in SEEDS:
@@ -86,7 +86,7 @@ def reaction_sizes(variance: list[float], progress: Callable[[str], None] | None
     info = table_info("kin")
     sizes = FaultSizes.load(FAULT_SIZES_FILE)
     sigma = [float(np.sqrt(v)) for v in variance]
-    db = RomoDatabase()
+    db = CanDatabase()
     scen = load_scenario("cornering")
     bases = [simulate(scen, [], seed=seed) for seed in SIZE_SEEDS]
     out: list[list[float]] = []

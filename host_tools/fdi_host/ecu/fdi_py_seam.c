@@ -1,24 +1,17 @@
 /*
- * _fdi_ecu.c - glue of the shared library fdi_host.ecu._fdi_ecu: the generic fw/ diagnoser and ECU core with the
- * vehicle targets (ROMO: tables, generators, bus; three-tank: table, generators), compiled into the same .so by
- * setup.py, plus a few helpers that let host_tools/fdi_host/ecu/bindings.py use them through ctypes without
- * mirroring structs that may change (tables, buses) and check the layout of those it mirrors (sizes).
- * The Python module itself is empty; it exists so that setuptools builds and installs the library.
+ * fdi_py_seam.c - the host side of a vehicle plugin: the questions the ctypes bindings
+ * (host_tools/fdi_host/ecu/bindings.py) ask a plugin's generic fw/ diagnoser and ECU core without mirroring the
+ * structs that may change (tables, buses), and the sizes of those they mirror, which they check. Compiled into every
+ * vehicle plugin (fdi_py_plugin.h: a shared library of the core, this file, the vehicle's generated diagnosis and
+ * its plugin glue), by setup.py for the shipped vehicles and by the vehicle's generated CMake file for the others.
+ * No Python header: the plugin is loaded with ctypes.
  */
-#define PY_SSIZE_T_CLEAN
-#include <Python.h>
-
 #include <stddef.h>
 #include <string.h>
 
 #include "fdi_diag.h"
 #include "fdi_ecu.h"
-#include "fdi_kin_table.h"
-#include "fdi_romo_bus.h"
-#include "fdi_romo_ecu.h"
-#include "fdi_romo_kin.h"
-#include "fdi_romo_table.h"
-#include "fdi_three_tank_table.h"
+#include "fdi_py_plugin.h"
 #include "fdi_py_seam.h"
 
 /* sizeof / offsetof / capacities the bindings check (fdi_py_sizeof_t, fdi_py_seam.h); 0 for an unknown one. */
@@ -59,64 +52,10 @@ int fdi_py_diag_init(fdi_diag_t *d, const fdi_diag_config_t *cfg)
     return (int)fdi_diag_init(d, cfg);
 }
 
-/* The built-in tables by name ("kin", "romo", "three_tank"); NULL for others. */
-const fdi_table_t *fdi_py_table(const char *name)
-{
-    const fdi_table_t *t = NULL;
-    if (name != NULL)
-    {
-        if (strcmp(name, "kin") == 0)
-        {
-            t = &fdi_kin_table;
-        }
-        else if (strcmp(name, "romo") == 0)
-        {
-            t = &fdi_romo_table;
-        }
-        else if (strcmp(name, "three_tank") == 0)
-        {
-            t = &fdi_three_tank_table;
-        }
-    }
-    return t;
-}
-
 /* The exoneration's evidence of an ECU's diagnoser after its last step (fdi_diag_explain). */
 int fdi_py_ecu_explain(const fdi_ecu_t *ecu, fdi_diag_evidence_t *out)
 {
     return (int)((ecu != NULL) ? fdi_diag_explain(&ecu->diag, out) : FDI_BAD_ARG);
-}
-
-/* The built-in buses by name ("romo"); NULL for others. */
-const fdi_ecu_bus_t *fdi_py_bus(const char *name)
-{
-    return ((name != NULL) && (strcmp(name, "romo") == 0)) ? &fdi_romo_bus : NULL;
-}
-
-/* The ECU defaults of a table on a bus: the vehicle's own defaults (ROMO: the kinematic parameters d_x, d_y). */
-int fdi_py_ecu_config_default(fdi_ecu_config_t *cfg, const fdi_table_t *table, const fdi_ecu_bus_t *bus)
-{
-    return (int)((bus == &fdi_romo_bus) ? fdi_romo_ecu_config_default(cfg, table)
-                                        : fdi_ecu_config_default(cfg, table, bus));
-}
-
-/* Index in fdi_diag_config_t.gen_param of a named run-time generator parameter ("d_x", "d_y" of the ROMO
-   kinematic generators); -1 for others. */
-int fdi_py_param_index(const char *name)
-{
-    int k = -1;
-    if (name != NULL)
-    {
-        if (strcmp(name, "d_x") == 0)
-        {
-            k = (int)FDI_ROMO_KIN_PARAM_D_X;
-        }
-        else if (strcmp(name, "d_y") == 0)
-        {
-            k = (int)FDI_ROMO_KIN_PARAM_D_Y;
-        }
-    }
-    return k;
 }
 
 /* Integers of a table (fdi_py_table_int_t, fdi_py_seam.h); -1 on bad arguments. */
@@ -300,13 +239,4 @@ long fdi_py_diag_run(fdi_diag_t *d, long n, int n_signals, const float *values, 
         }
     }
     return n;
-}
-
-static struct PyModuleDef fdi_ecu_module = {PyModuleDef_HEAD_INIT, "_fdi_ecu",
-                                            "fw/ diagnoser and ECU core; use fdi_host.ecu.bindings", -1, NULL,
-                                            NULL, NULL, NULL, NULL};
-
-PyMODINIT_FUNC PyInit__fdi_ecu(void)
-{
-    return PyModule_Create(&fdi_ecu_module);
 }
