@@ -62,10 +62,8 @@ fi
 .venv/bin/fdi-analyze export-can analysis/models/romo_grouped.toml --dbc dbc/romo.dbc --out "$romo/can"
 # analysis/models/three_tank_thresholds.toml [generated], [observer]  <- fault-free drives of the generic simulator
 #   (~1 min); host_tools/scenarios/three_tank_fault_sizes.toml [per_test.*]  <- the step-fault sweep (~1 min)
-generic=(analysis/models/three_tank.toml --thresholds analysis/models/three_tank_thresholds.toml
-         --scenario host_tools/scenarios/three_tank.toml)
-.venv/bin/python -m fdi_host.tuning.generic calibrate "${generic[@]}"
-.venv/bin/python -m fdi_host.tuning.generic fault-sizes "${generic[@]}" --sizes host_tools/scenarios/three_tank_fault_sizes.toml
+.venv/bin/fdi-tune calibrate --vehicle three_tank    # its thresholds, scenario and fault sizes: host_tools/vehicles
+.venv/bin/fdi-tune fault-sizes --vehicle three_tank
 # fw/vehicles/three_tank/generated/fdi_three_tank_{table,generators,signals}.{h,c}
 .venv/bin/fdi-analyze export-c analysis/models/three_tank.toml \
   --thresholds analysis/models/three_tank_thresholds.toml --fault-sizes host_tools/scenarios/three_tank_fault_sizes.toml \

@@ -7,7 +7,6 @@ to `fdi_host.live.sim`, so this one entry point spans the simulator, the paper a
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -22,9 +21,8 @@ from fdi_host.can.frame import Frame
 from fdi_host.can.logs import formats_text, is_log, write_log
 from fdi_host.live import sim as live_sim
 from fdi_host.paper import fig6
-from fdi_host.sim.drive import simulate_from_args, write_truth
-from fdi_host.sim.faults import FaultSpecError, parse_fault
-from fdi_host.sim.options import DEFAULT_SCENARIO, add_drive_arguments
+from fdi_host.sim.drive import simulate_from_args, simulate_vehicle_from_args, write_truth, write_vehicle_truth
+from fdi_host.sim.options import add_drive_arguments
 from fdi_host.sim.scenario import available, load_scenario
 from fdi_host.vehicle import Vehicle, add_vehicle_argument, resolve
 
@@ -131,31 +129,14 @@ def simulate_command(ap: argparse.ArgumentParser, args: argparse.Namespace) -> i
 
 def simulate_vehicle(ap: argparse.ArgumentParser, args: argparse.Namespace, vehicle: Vehicle) -> int:
     """``fdi-sim --vehicle`` of a vehicle on the generic simulator: a drive of its scenario on its model plant,
-    with step, ramp or intermittent faults of its model, written as CAN logs through its DBC and as truth."""
-    from fdi_analysis.model_loader import load_model
-    from fdi_host.sim import generic
-
-    if args.truth_vehicle is not None:
-        ap.error(f"--truth-vehicle: vehicle {vehicle.name} has no truth plant, only its model plant")
-    scenario = vehicle.scenario if args.scenario == DEFAULT_SCENARIO else Path(args.scenario)
-    if scenario is None:
-        ap.error(f"vehicle {vehicle.name} has no scenario (scenario = ... in {vehicle.manifest}); give --scenario FILE")
-    model = load_model(vehicle.model)
-    names = [f.name for f in model.faults]
-    try:
-        faults = [parse_fault(text, names) for text in args.fault]
-    except FaultSpecError as exc:
-        ap.error(str(exc))
-    dbc = vehicle.dbc
-    if args.out and dbc is None:
+    with faults of its model, written as CAN logs through its DBC, as truth and as arrays."""
+    if args.out and vehicle.dbc is None:
         ap.error(f"--out: vehicle {vehicle.name} has no DBC, so no bus to log; write --npz instead")
-    sc = generic.Scenario.load(scenario)
-    if not args.quiet:
-        print(f"simulate {vehicle.name}: {scenario.name} on the model plant of {vehicle.model.name}", flush=True)
-    drive = generic.vehicle_drive(model, sc, faults, args.seed, args.duration, not args.no_noise,
-                                  f"model plant of {vehicle.name} ({vehicle.model.name})")
-    if args.out and dbc is not None:
-        db = CanDatabase(dbc)
+    if args.plot:
+        ap.error("--plot: ROMO's drives only")
+    drive = simulate_vehicle_from_args(ap, args, vehicle)
+    if args.out and vehicle.dbc is not None:
+        db = CanDatabase(vehicle.dbc)
         frames = traffic.frames_from_columns(drive.signals, drive.dt, float(drive.t[-1]), db, t0=args.start_time)
         for out in args.out:
             n = write_log(frames, out)
@@ -163,17 +144,12 @@ def simulate_vehicle(ap: argparse.ArgumentParser, args: argparse.Namespace, vehi
                   f"{100 * traffic.bus_load(frames, db.baudrate(), float(drive.t[-1])):.1f} %)")
     truth_path = args.truth or (args.out[0].with_suffix(".truth.json") if args.out else None)
     if truth_path is not None:
-        truth = drive.truth | {"start_time": args.start_time, "vehicle": vehicle.name}
-        truth_path.parent.mkdir(parents=True, exist_ok=True)
-        truth_path.write_text(json.dumps(truth, indent=2) + "\n", encoding="utf-8")
-        print(f"wrote {truth_path}")
+        print(f"wrote {write_vehicle_truth(drive, vehicle, args.start_time, truth_path)}")
     if args.npz:
         args.npz.parent.mkdir(parents=True, exist_ok=True)
         arrays = {"t": drive.t} | {f"meas_{k}": v for k, v in drive.signals.items()}
         np.savez_compressed(args.npz, **arrays)  # type: ignore[arg-type]
         print(f"wrote {args.npz}")
-    if args.plot:
-        ap.error("--plot: ROMO's drives only")
     return 0
 
 

@@ -89,6 +89,11 @@ class Vehicle:
         return self.manifest.parent
 
     @property
+    def spec(self) -> str:
+        """How the tools name it (``--vehicle``): a shipped vehicle by its name, a user's by its folder."""
+        return self.name if self.shipped else str(self.folder)
+
+    @property
     def c_sources(self) -> list[Path]:
         """The vehicle's C files of its plugin, the glue last (without the fw/ core and the seam)."""
         files: list[Path] = []
@@ -225,7 +230,7 @@ def vehicle_arg(text: str) -> str:
         v = resolve(text)
     except VehicleError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
-    return v.name if v.shipped else str(v.folder)
+    return v.spec
 
 
 def add_vehicle_argument(ap: argparse.ArgumentParser, what: str = "the ECU's diagnosis",

@@ -17,11 +17,12 @@ import shutil
 import subprocess
 import sys
 import tomllib
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from fdi_analysis.cli.common import EXIT_ERROR, add_version, run
 from fdi_analysis.export.c_names import VehicleNames
+from fdi_analysis.export.fault_sizes import FaultSizes
 from fdi_analysis.export.plugin import PluginSpec, render_cmake, render_glue
 from fdi_analysis.resources import REPO
 from fdi_host.vehicle import MANIFEST, Vehicle, VehicleError, read_manifest, resolve
@@ -117,9 +118,8 @@ def new(folder: Path, model: Path, name: str | None, scenario: Path | None, dbc:
 
 
 # ------------------------------------------------------------------------------------------ regenerate
-def _step(what: str, main: object, argv: list[str]) -> None:
+def _step(what: str, main: Callable[[list[str]], int], argv: list[str]) -> None:
     print(f"fdi-vehicle: {what}", flush=True)
-    assert callable(main)
     rc = main(argv)
     if rc:
         raise VehicleError(f"{what} failed (exit {rc}): {' '.join(argv)}")
@@ -133,7 +133,7 @@ def _calibrated(thresholds: Path) -> bool:
 def regenerate(v: Vehicle, workers: int, recalibrate: bool) -> None:
     """Everything generated in a vehicle folder, from its model, thresholds, scenario and DBC."""
     from fdi_analysis.cli import main as analyze
-    from fdi_host.tuning import generic
+    from fdi_host.tuning.generic import tune_vehicle
 
     if v.shipped:
         raise VehicleError(f"{v.name} is a shipped vehicle: scripts/generate.sh regenerates it in the checkout")
@@ -144,12 +144,13 @@ def regenerate(v: Vehicle, workers: int, recalibrate: bool) -> None:
     common = ["--workers", str(workers), "--no-progress"]
     _step("structural report -> report/", analyze, ["report", model, "-o", str(folder / "report")])
     if v.simulator == "generic" and v.scenario is not None and (recalibrate or not _calibrated(v.thresholds)):
-        _step("calibration on the scenario's fault-free drives -> thresholds [generated]", generic.main,
-              ["calibrate", model, "--thresholds", thr, "--scenario", str(v.scenario)])
-        if v.fault_sizes is not None:
-            _step("fault-size sweep -> fault sizes", generic.main,
-                  ["fault-sizes", model, "--thresholds", thr, "--scenario", str(v.scenario),
-                   "--sizes", str(v.fault_sizes)])
+        _step("calibration on the scenario's fault-free drives -> thresholds [generated]",
+              lambda _: tune_vehicle(v, "calibrate", workers), [])
+        if v.fault_sizes is not None and FaultSizes.load(v.fault_sizes).limits:
+            _step("fault-size sweep -> fault sizes", lambda _: tune_vehicle(v, "fault-sizes", workers), [])
+        elif v.fault_sizes is not None:
+            print(f"fdi-vehicle: no fault-size sweep: {v.fault_sizes} has no [limits] (per fault, the largest size "
+                  "to sweep up to); every test of a fault's signature may exonerate it")
     uncalibrated = [] if _calibrated(v.thresholds) else ["--uncalibrated"]
     sizes = ["--fault-sizes", str(v.fault_sizes)] if v.fault_sizes is not None else []
     _step("generated C -> generated/", analyze,

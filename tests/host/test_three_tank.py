@@ -2,8 +2,8 @@
 physics) through the whole chain, on the same generic C library as ROMO.
 
 analysis (structure, MSO sets, the realizable selection) -> thresholds calibrated on drives of the generic
-simulator and the fault-size sweep (python -m fdi_host.tuning.generic) -> generated C of its own vehicle target
-(fw/vehicles/three_tank/generated, fdi-analyze export-c) -> the generic diagnoser running it (the ctypes bindings:
+simulator and the fault-size sweep (fdi-tune calibrate|fault-sizes --vehicle three_tank) -> generated C of its own
+vehicle target (fw/vehicles/three_tank/generated, fdi-analyze export-c) -> the generic diagnoser running it (the ctypes bindings:
 Diagnoser("three_tank")) -> simulated fault runs (host_tools/scenarios/three_tank.toml [[fault_run]]): detected
 within 2 s, no alarm before, the candidates as stated; the C residuals and sensitivities equal the Python twin's.
 The committed generated files (C and the thresholds/fault-size tables) come out byte for byte from their sources
@@ -81,9 +81,8 @@ def test_generated_files_reproduce(repo: Path, tmp_path: Path,
     assert set(made) == set(committed)
     for name, text in made.items():
         assert committed[name] == text, f"{OUT / name} is stale: run scripts/generate.sh"
-    common = [str(MODEL), "--thresholds", str(THRESHOLDS), "--scenario", str(SCENARIO)]
-    for cmd in (["calibrate", *common, "--check"], ["fault-sizes", *common, "--sizes", str(SIZES), "--check"]):
-        res = other_fp_path([sys.executable, "-m", "fdi_host.tuning.generic", *cmd])
+    for cmd in ("calibrate", "fault-sizes"):
+        res = other_fp_path([sys.executable, "-m", "fdi_host.tuning.cli", cmd, "--vehicle", "three_tank", "--check"])
         assert res.returncode == 0, res.stderr
 
 

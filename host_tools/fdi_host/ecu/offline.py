@@ -7,17 +7,18 @@ from collections.abc import Iterator, Sequence
 from typing import Any
 
 from fdi_host.can.frame import Frame
-from fdi_host.ecu.bindings import DIAG_ID, Ecu, EcuResult, Evidence
+from fdi_host.ecu.bindings import Ecu, EcuResult, Evidence
 
 
 def _steps(ecu: Ecu, frames: Sequence[Frame], t_start: float) -> Iterator[None]:
     """Feed the frames from t_start on; yields after every diagnosis step (when its frame is sent)."""
+    own = ecu.bus.diag_id
     for f in frames:
         if f.timestamp < t_start:
             continue
         ecu.rx(f.frame_id, f.data, f.timestamp)
         for fid, _ in ecu.poll(f.timestamp):
-            if fid == DIAG_ID:
+            if fid == own:
                 yield None
 
 

@@ -233,7 +233,8 @@ def run_here(args: argparse.Namespace, bus: list[str], label: str) -> int:
                   "--ecu-log", str(out / "ecu.json"), "--out-dir", str(out), "--grace", str(args.grace),
                   "--ready-file", str(out / "monitor.ready"), "--quiet",
                   "--origin-file", str(out / "origin.txt"), "--gap-threshold", str(args.gap_threshold))
-    drive = ["--scenario", args.scenario, *bus, "--quiet", "--origin-file", str(out / "origin.txt"), "--realtime"]
+    drive = ["--scenario", args.scenario, "--vehicle", args.vehicle, *bus, "--quiet", "--origin-file",
+             str(out / "origin.txt"), "--realtime"]
     for f in args.fault:
         drive += ["--fault", f]
     if args.no_scenario_faults:

@@ -38,6 +38,7 @@ from fdi_host.can.logs import formats_text, is_log, read_log, write_log
 from fdi_host.live.bus import BusOptions, StopFlag, add_bus_arguments, open_cli_bus, try_realtime
 from fdi_host.live.sender import SendLog, resume_frames, send_paced
 from fdi_host.sim.options import add_drive_arguments
+from fdi_host.vehicle import add_vehicle_argument, resolve
 
 EPILOG = """\
 examples:
@@ -79,6 +80,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="seed of the other ECUs' traffic")
     ap.add_argument("--realtime", action="store_true", help="SCHED_FIFO priority while sending (root)")
     ap.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_vehicle_argument(ap, "the vehicle whose drive is sent (romo, kin: ROMO's simulators; another: the model "
+                             "plant of its model over its DBC)")
     return ap
 
 
@@ -111,19 +114,29 @@ def _drive_frames(ap: argparse.ArgumentParser, args: argparse.Namespace) -> Sequ
         except (OSError, ValueError) as exc:
             raise SystemExit(f"fdi-sim live: cannot read --frames-from {args.frames_from}: {exc}") from exc
     from fdi_host.can import traffic  # the simulator: seconds of imports, not needed with --frames-from
-    from fdi_host.sim.drive import simulate_from_args, write_truth
+    from fdi_host.sim.drive import simulate_from_args, simulate_vehicle_from_args, write_truth, write_vehicle_truth
 
-    drive = simulate_from_args(ap, args)
-    result, plant, duration = drive.result, drive.plant, drive.duration
-    frames = traffic.build_frames(result, CanDatabase())
+    vehicle = resolve(args.vehicle)
+    truth = args.truth or (args.out.with_suffix(".truth.json") if args.out else None)
+    if vehicle.simulator == "generic":
+        if vehicle.dbc is None:
+            ap.error(f"vehicle {vehicle.name} has no DBC: nothing to send on a bus")
+        vdrive = simulate_vehicle_from_args(ap, args, vehicle)
+        duration = float(vdrive.t[-1])
+        frames = traffic.frames_from_columns(vdrive.signals, vdrive.dt, duration, CanDatabase(vehicle.dbc))
+        if truth is not None:
+            print(f"wrote {write_vehicle_truth(vdrive, vehicle, 0.0, truth)}")
+    else:
+        drive = simulate_from_args(ap, args)
+        duration = drive.duration
+        frames = traffic.build_frames(drive.result, CanDatabase())
+        if truth is not None:
+            print(f"wrote {write_truth(drive.result, drive.plant, duration, 0.0, not args.no_noise, truth)}")
     if args.bus_load > 0.0:
         bg = background.for_drive(frames, args.bus_load, duration, args.bus_load_seed)
         print(f"other ECUs' traffic: {len(bg)} frames ({len(bg) / duration:.0f}/s, "
               f"{len({f.frame_id for f in bg})} IDs), {(len(frames) + len(bg)) / duration:.0f} frames/s in total")
         frames = background.merge_frames(frames, bg)
-    truth = args.truth or (args.out.with_suffix(".truth.json") if args.out else None)
-    if truth is not None:
-        print(f"wrote {write_truth(result, plant, duration, 0.0, not args.no_noise, truth)}")
     if args.out is not None:
         print(f"wrote {args.out} ({write_log(frames, args.out)} frames)")
     return frames

@@ -14,11 +14,11 @@ from tqdm import tqdm
 
 from fdi_analysis.cli.common import add_version, fail, run
 from fdi_analysis.errors import FdiError, InputError
-from fdi_host.ecu.bindings import Ecu, EcuError
+from fdi_host.ecu.bindings import Diagnoser, Ecu, EcuError
 from fdi_host.quality.report import markdown, write_json, write_markdown
 from fdi_host.quality.suite import CASE_SEEDS, DEFAULT_SIZES, SHAPES, SuiteConfig, run_suite
 from fdi_host.sim.scenario import SCENARIOS
-from fdi_host.vehicle import add_vehicle_argument
+from fdi_host.vehicle import add_vehicle_argument, resolve
 
 EXAMPLES = """examples:
   fdi-quality --vehicle romo --out out/quality-romo     # full run: 5 scenarios x 3 seeds, steps at the required sizes,
@@ -63,7 +63,7 @@ def parse_ecu_settings(table: str, items: list[str]) -> tuple[tuple[str, float |
         out.append((key.strip(), value))
     if out:
         try:
-            Ecu(table, **dict(out))
+            (Ecu if resolve(table).has_bus else Diagnoser)(table, **dict(out))
         except (TypeError, ValueError, EcuError) as exc:
             raise InputError(f"--ecu: {exc}") from exc
     return tuple(out)
@@ -121,6 +121,8 @@ def _main(args: argparse.Namespace) -> int:
     args.ecu = parse_ecu_settings(args.vehicle, args.ecu)
     if args.replot is not None:
         return _replot(args.replot, args.out)
+    if resolve(args.vehicle).simulator == "generic":
+        return _vehicle_suite(args)
     if args.trace is not None:
         return _trace(args)
     if args.fleet is not None:
@@ -164,6 +166,29 @@ def _config(args: argparse.Namespace) -> SuiteConfig:
         sizes_file=args.sizes,
         ecu=args.ecu,
     )
+
+
+def _vehicle_suite(args: argparse.Namespace) -> int:
+    """The suite of a vehicle on the generic simulator: its model plant, its faults, sizes and scenario."""
+    from fdi_host.quality import vehicle_suite as vs
+
+    for option, given in (("--fleet", args.fleet is not None), ("--scenarios", bool(args.scenarios)),
+                          ("--shapes", bool(args.shapes)), ("--linearity", args.linearity),
+                          ("--trace", args.trace is not None)):
+        if given:
+            raise InputError(f"{option}: ROMO's suite only; vehicle {args.vehicle} runs on the generic simulator")
+    base = vs.quick_config(args.vehicle) if args.quick else vs.VehicleSuiteConfig(args.vehicle)
+    cfg = dataclasses.replace(
+        base, seeds=tuple(args.seeds) if args.seeds else base.seeds, faults=tuple(args.faults or ()),
+        multipliers=tuple(args.multipliers) if args.multipliers else base.multipliers,
+        fault_free_minutes=base.fault_free_minutes if args.fault_free_minutes is None else args.fault_free_minutes,
+        sizes_file=None if args.sizes == DEFAULT_SIZES else args.sizes, ecu=args.ecu)
+    with _progress("quality", "run") as progress:
+        result = vs.run_vehicle_suite(cfg, progress)
+    print(vs.markdown(result))
+    if args.out is not None:
+        print("wrote " + " and ".join(str(p) for p in vs.write(result, args.out)))
+    return 0
 
 
 def _fleet(args: argparse.Namespace) -> int:

@@ -168,7 +168,7 @@ def evaluate_case(
     """(detected, delay from t_ref, outcome, isolation delay from the detection, exact share, final candidates,
     detections before onset); the final candidates named by `faults` (the table's, bit j = faults[j]; by default the
     simulator's, FAULT_IDS)."""
-    j = FAULT_IDS.index(spec.fault)
+    j = list(faults).index(spec.fault)
     pre = 0
     prev = False
     detect_t: float | None = None

@@ -7,14 +7,20 @@ import argparse
 import json
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from tqdm import tqdm
 
 from fdi_host.sim.faults import FaultSpecError, ground_truth, parse_fault
+from fdi_host.sim.options import DEFAULT_SCENARIO
 from fdi_host.sim.plant import Plant
 from fdi_host.sim.scenario import ScenarioError, load_scenario
 from fdi_host.sim.vehicle_envelope import VehicleDrawError, vehicle_from_option
 from fdi_host.sim.vehicle_sim import SimConfig, SimResult, default_plant, simulate
+
+if TYPE_CHECKING:
+    from fdi_host.sim.generic import VehicleDrive
+    from fdi_host.vehicle import Vehicle as VehicleSpec
 
 
 def write_truth(result: SimResult, plant: Plant, duration: float, start_time: float, noise: bool,
@@ -78,3 +84,36 @@ def simulate_from_args(ap: argparse.ArgumentParser, args: argparse.Namespace) ->
             result = simulate_truth(sc, faults, vehicle=vehicle, seed=args.seed, config=cfg, duration=duration,
                                     progress=bar.update)
     return Drive(result=result, plant=plant, duration=duration)
+
+
+def simulate_vehicle_from_args(ap: argparse.ArgumentParser, args: argparse.Namespace,
+                               vehicle: VehicleSpec) -> VehicleDrive:
+    """The drive options of `fdi-sim` and `fdi-sim live` for a vehicle on the generic simulator: its scenario (or
+    --scenario FILE), faults of its model (--fault, any shape), seed, duration and noise; a drive of its model
+    plant. A bad option is a usage error (ap.error)."""
+    from fdi_analysis.model_loader import load_model
+    from fdi_host.sim import generic
+
+    if getattr(args, "truth_vehicle", None) is not None:
+        ap.error(f"--truth-vehicle: vehicle {vehicle.name} has no truth plant, only its model plant")
+    scenario = vehicle.scenario if args.scenario == DEFAULT_SCENARIO else Path(args.scenario)
+    if scenario is None:
+        ap.error(f"vehicle {vehicle.name} has no scenario (scenario = ... in {vehicle.manifest}); give --scenario FILE")
+    model = load_model(vehicle.model)
+    try:
+        faults = [parse_fault(text, [f.name for f in model.faults]) for text in args.fault]
+    except FaultSpecError as exc:
+        ap.error(str(exc))
+    if not getattr(args, "quiet", False):
+        print(f"simulate {vehicle.name}: {scenario.name} on the model plant of {vehicle.model.name}", flush=True)
+    return generic.vehicle_drive(model, generic.Scenario.load(scenario), faults, args.seed, args.duration,
+                                 not getattr(args, "no_noise", False),
+                                 f"model plant of {vehicle.name} ({vehicle.model.name})")
+
+
+def write_vehicle_truth(drive: VehicleDrive, vehicle: VehicleSpec, start_time: float, path: Path) -> Path:
+    """The ground truth of a vehicle's drive, as `write_truth` for ROMO's."""
+    truth = drive.truth | {"start_time": start_time, "vehicle": vehicle.name}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(truth, indent=2) + "\n", encoding="utf-8")
+    return path

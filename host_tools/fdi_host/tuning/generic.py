@@ -8,17 +8,13 @@ alarm within RESPONSE_S of a step fault, stated as the next grid value (as `fdi-
 [per_test.<fault>] tables of the fault-size file (its hand-written [requirement] and [limits] above are kept);
 they decide which quiet test may exonerate which fault (fdi_analysis.export.fault_sizes).
 
-    python -m fdi_host.tuning.generic calibrate analysis/models/three_tank.toml \\
-        --thresholds analysis/models/three_tank_thresholds.toml --scenario host_tools/scenarios/three_tank.toml
-    python -m fdi_host.tuning.generic fault-sizes analysis/models/three_tank.toml \\
-        --thresholds analysis/models/three_tank_thresholds.toml --scenario host_tools/scenarios/three_tank.toml \\
-        --sizes host_tools/scenarios/three_tank_fault_sizes.toml
+    fdi-tune calibrate --vehicle three_tank      (a vehicle's model, thresholds file and scenario: fdi_host.vehicle)
+    fdi-tune fault-sizes --vehicle three_tank    (and its fault-size file)
     (add --check to exit 1 when the file's generated tables are stale; scripts/generate.sh runs both)
 """
 
 from __future__ import annotations
 
-import argparse
 import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
@@ -35,15 +31,22 @@ from fdi_analysis.residuals.evaluate import FilterDesign, evaluable_segments
 from fdi_analysis.residuals.generator import Generator
 from fdi_analysis.residuals.observer import ObserverReference
 from fdi_analysis.residuals.selected import selected_generators
+from fdi_host.errors import FdiHostError
 from fdi_host.sim.faults import FaultSpec
 from fdi_host.sim.generic import FaultRun, GenericPlant, Scenario, drive
 from fdi_host.tuning.calibrate import MARGIN, calibrate, first_alarm
 from fdi_host.tuning.sweep import grid, next_grid
+from fdi_host.vehicle import Vehicle
+
+
+class GenericTuningError(FdiHostError, ValueError):
+    """A vehicle or a fault-size file the generic tuning cannot work with."""
+
 
 RESPONSE_S = REACTION_WINDOW_S  # a test reacts to a step fault when it raises a raw alarm within this time
 SWEEP_LEAD_S = 12.0  # fault-free seconds of each sweep drive before the step (the warm-up, the filters settle)
 SWEEP_DECADES = 2.0  # the sweep starts at the fault's limit / 10^SWEEP_DECADES
-SIZES_MARKER = ("# ---- per-test sizes: written by `python -m fdi_host.tuning.generic fault-sizes`, "
+SIZES_MARKER = ("# ---- per-test sizes: written by `fdi-tune fault-sizes --vehicle`, "
                 "do not edit below ----")
 NOT_DETECTED = "not detectable by this test up to the limit"
 
@@ -71,7 +74,7 @@ class Calibrated:
     provenance: str
 
 
-def calibration(model: Model, th: Thresholds, sc: Scenario, model_path: Path, workers: int = 2,
+def calibration(model: Model, th: Thresholds, sc: Scenario, vehicle: str, workers: int = 2,
                 log: Callable[[str], None] = lambda s: None) -> Calibrated:
     plant = GenericPlant(model)
     ref = reference(plant, sc)
@@ -93,7 +96,7 @@ def calibration(model: Model, th: Thresholds, sc: Scenario, model_path: Path, wo
             assert c_ref is not None
             observer_rows.append((" ".join(g.equations), c_ref,
                                   f"{g.name}: observer for {g.observer.state}, residual {g.residual_equation}"))
-    provenance = (f"python -m fdi_host.tuning.generic calibrate {model_path.as_posix()} --scenario {sc.source}: "
+    provenance = (f"fdi-tune calibrate --vehicle {vehicle}: "
                   f"fault-free drives of the generic simulator (seeds {' '.join(map(str, sc.seeds))}, "
                   f"{sc.duration:g} s, warm-up {sc.warmup:g} s); no raw alarm (|r| > gate sigma or CUSUM k = 1.5, "
                   f"h = 150) in any of them, sigma times {MARGIN}; observer reference: seed {sc.reference_seed}")
@@ -117,7 +120,8 @@ def sweep(model: Model, th: Thresholds, sc: Scenario, limits: Mapping[str, float
         if not tests:
             continue
         if f not in limits:
-            raise ValueError(f"{sc.source}: no [limits] value for fault {f}")
+            raise GenericTuningError(f"the fault-size file has no [limits] value for fault {f} (the largest size "
+                                     "the sweep goes up to)")
         found: dict[str, float] = {}
         for size in grid(limits[f] / 10.0**SWEEP_DECADES, limits[f]):
             todo = [(g, s) for g, s in tests if g.name not in found]
@@ -137,7 +141,7 @@ def sweep(model: Model, th: Thresholds, sc: Scenario, limits: Mapping[str, float
 
 def with_sizes(text: str, per_test: Mapping[str, Mapping[str, float | str]], provenance: str) -> str:
     """The fault-size file's text with its [per_test.<fault>] tables replaced (the part above the marker kept)."""
-    head = text.split(SIZES_MARKER)[0].rstrip("\n") + "\n\n"
+    head = text.split(SIZES_MARKER.split(":")[0])[0].rstrip("\n") + "\n\n"  # the marker's text may have changed
     lines = [SIZES_MARKER, *(f"# {x}" for x in provenance.splitlines())]
     for f, row in per_test.items():
         lines += ["", f"[per_test.{f}]"]
@@ -150,7 +154,7 @@ def _write_or_check(path: Path, new: str, check: bool) -> int:
     old = path.read_text(encoding="utf-8")
     if check:
         if new != old:
-            print(f"{path} is stale: run scripts/generate.sh", file=sys.stderr)
+            print(f"{path} is stale: run the command without --check to rewrite it", file=sys.stderr)
             return 1
         print(f"{path} is up to date")
         return 0
@@ -159,45 +163,29 @@ def _write_or_check(path: Path, new: str, check: bool) -> int:
     return 0
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m fdi_host.tuning.generic", description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    sub = ap.add_subparsers(dest="cmd", required=True)
-    c = sub.add_parser("calibrate", help="write the [generated] and [observer] tables of the thresholds file",
-                       description="Calibrate the variances of the generated residuals of MODEL on the fault-free "
-                       "drives of the scenario file, and the observers' reference, into the thresholds file.")
-    c.add_argument("model", type=Path)
-    c.add_argument("--thresholds", type=Path, required=True)
-    c.add_argument("--scenario", type=Path, required=True)
-    c.add_argument("--workers", type=int, default=2)
-    c.add_argument("--check", action="store_true", help="do not write: exit 1 when the file is stale")
-    z = sub.add_parser("fault-sizes", help="write the [per_test.<fault>] tables of the fault-size file",
-                       description="Sweep step faults in short drives of the scenario (one seed): per fault and test "
-                       "of its signature the stated reaction size (see the module doc).")
-    z.add_argument("model", type=Path)
-    z.add_argument("--thresholds", type=Path, required=True)
-    z.add_argument("--scenario", type=Path, required=True)
-    z.add_argument("--sizes", type=Path, required=True, help="fault-size file with [requirement] and [limits]")
-    z.add_argument("--workers", type=int, default=2)
-    z.add_argument("--check", action="store_true", help="do not write: exit 1 when the file is stale")
-    args = ap.parse_args(argv)
-    model = load_model(args.model)
-    th = Thresholds.load(args.thresholds)
-    sc = Scenario.load(args.scenario)
+def tune_vehicle(vehicle: Vehicle, command: str, workers: int = 2, check: bool = False) -> int:
+    """``fdi-tune calibrate|fault-sizes --vehicle`` of a vehicle on the generic simulator: its thresholds file's
+    [generated] and [observer] tables, or its fault-size file's per-test tables, from drives of its scenario."""
+    if vehicle.thresholds is None or vehicle.scenario is None:
+        raise GenericTuningError(f"vehicle {vehicle.name}: tuning needs its thresholds and scenario files "
+                                 f"(thresholds = ..., scenario = ... in {vehicle.manifest})")
+    model = load_model(vehicle.model)
+    th = Thresholds.load(vehicle.thresholds)
+    sc = Scenario.load(vehicle.scenario)
     log = lambda s: print(s, file=sys.stderr)  # noqa: E731
-    if args.cmd == "calibrate":
-        cal = calibration(model, th, sc, args.model, args.workers, log=log)
-        new = with_generated(args.thresholds.read_text(encoding="utf-8"), cal.rows, cal.provenance, cal.observer_rows)
-        return _write_or_check(args.thresholds, new, args.check)
-    limits = FaultSizes.load(args.sizes).limits
-    per_test = sweep(model, th, sc, limits, sc.sweep_seed, args.workers, log=log)
-    provenance = (f"python -m fdi_host.tuning.generic fault-sizes {args.model.as_posix()} --scenario {sc.source}: "
-                  f"a step fault after {SWEEP_LEAD_S:g} s fault-free (seed {sc.sweep_seed}), sizes on the grid from "
-                  f"the limit / {10**SWEEP_DECADES:g} up to it; the size at which the test raises a raw alarm "
-                  f"within {RESPONSE_S:g} s of the step, stated as the next grid value")
-    return _write_or_check(args.sizes, with_sizes(args.sizes.read_text(encoding="utf-8"), per_test, provenance),
-                           args.check)
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
+    if command == "calibrate":
+        cal = calibration(model, th, sc, vehicle.spec, workers, log=log)
+        new = with_generated(vehicle.thresholds.read_text(encoding="utf-8"), cal.rows, cal.provenance,
+                             cal.observer_rows)
+        return _write_or_check(vehicle.thresholds, new, check)
+    if vehicle.fault_sizes is None:
+        raise GenericTuningError(f"vehicle {vehicle.name}: no fault-size file (fault_sizes = ... in "
+                                 f"{vehicle.manifest})")
+    limits = FaultSizes.load(vehicle.fault_sizes).limits
+    per_test = sweep(model, th, sc, limits, sc.sweep_seed, workers, log=log)
+    provenance = (f"fdi-tune fault-sizes --vehicle {vehicle.spec}: a step fault after {SWEEP_LEAD_S:g} s "
+                  f"fault-free (seed {sc.sweep_seed}), sizes on the grid from the limit / {10**SWEEP_DECADES:g} up "
+                  f"to it; the size at which the test raises a raw alarm within {RESPONSE_S:g} s of the step, "
+                  "stated as the next grid value")
+    text = vehicle.fault_sizes.read_text(encoding="utf-8")
+    return _write_or_check(vehicle.fault_sizes, with_sizes(text, per_test, provenance), check)

@@ -13,6 +13,7 @@ from fdi_analysis.cli.common import EXIT_ERROR
 from fdi_analysis.errors import InputError
 from fdi_analysis.names import in_order
 from fdi_host.tuning.seeds import CALIBRATION_SEEDS, CONFIRM_SEED_OFFSETS, SWEEP_SEEDS
+from fdi_host.vehicle import resolve, vehicle_arg
 
 if TYPE_CHECKING:
     from fdi_analysis.export.thresholds import Thresholds
@@ -49,8 +50,9 @@ def register(sub: Any) -> None:
         "its [envelope_limits] table (the rest of the file is kept).",
         epilog=EXAMPLE,
     )
-    p.add_argument("model", type=Path, help="model file (.toml)")
-    p.add_argument("--thresholds", type=Path, required=True, help="thresholds file to update")
+    p.add_argument("model", type=Path, nargs="?", help="model file (.toml); or give --vehicle")
+    p.add_argument("--thresholds", type=Path, help="thresholds file to update (with MODEL)")
+    _add_vehicle(p)
     p.add_argument("--scenarios", nargs="+", default=list(DEFAULT_SCENARIOS), help="fault-free drives")
     p.add_argument("--duration", type=float, default=CALIBRATION_DURATION,
                    help="seconds per drive (default: each scenario's own duration)")
@@ -83,9 +85,13 @@ def register(sub: Any) -> None:
         epilog="example: fdi-tune fault-sizes analysis/models/romo_grouped.toml --thresholds "
         "analysis/models/romo_thresholds.toml --sizes host_tools/scenarios/fault_sizes.toml",
     )
-    q.add_argument("model", type=Path, help="model file (.toml)")
-    q.add_argument("--thresholds", type=Path, required=True, help="thresholds file (gate, sigmas)")
-    q.add_argument("--sizes", type=Path, required=True, help="fault-size file with [requirement] and [limits]")
+    q.add_argument("model", type=Path, nargs="?", help="model file (.toml); or give --vehicle")
+    q.add_argument("--thresholds", type=Path, help="thresholds file (gate, sigmas) (with MODEL)")
+    q.add_argument("--sizes", type=Path, help="fault-size file with [requirement] and [limits] (with MODEL)")
+    _add_vehicle(q)
+    q.add_argument("--check", action="store_true",
+                   help="a vehicle on the generic simulator: do not write, exit 1 when the file's per-test tables "
+                        "differ from the sweep now")
     q.add_argument("--scenario", default=SWEEP_SCENARIO, help="fault-free scenario the faults are injected in")
     q.add_argument("--seeds", type=int, nargs="+", default=list(SWEEP_SEEDS),
                    help="noise seeds of the sweep drives; an alarm counts when every seed alarms (default 777 778)")
@@ -120,7 +126,43 @@ class Tables:
     estimation: list[EstimationRow]
 
 
+def _add_vehicle(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--vehicle", type=vehicle_arg, metavar="NAME|PATH",
+                   help="instead of MODEL, --thresholds and --sizes: a vehicle's files (fdi_host.vehicle); one on the "
+                        "generic simulator (three_tank, a vehicle folder) is tuned on drives of its scenario "
+                        "(fdi_host.tuning.generic; the ROMO options do not apply)")
+
+
+def _files(args: argparse.Namespace, command: str) -> int | None:
+    """--vehicle: a generic vehicle tuned here (its exit code), or ROMO's files filled into args (None); without
+    it, MODEL and the files must be given."""
+    if args.vehicle is None:
+        missing = [o for o, v in (("MODEL", args.model), ("--thresholds", args.thresholds),
+                                  ("--sizes", getattr(args, "sizes", True))) if v is None]
+        if missing:
+            raise InputError(f"fdi-tune {command}: give {', '.join(missing)}, or --vehicle NAME|PATH")
+        if command == "fault-sizes" and args.check:
+            raise InputError("fdi-tune fault-sizes --check: for a vehicle on the generic simulator only")
+        return None
+    v = resolve(args.vehicle)
+    if v.simulator == "generic":
+        from fdi_host.tuning.generic import tune_vehicle
+
+        return tune_vehicle(v, command, args.workers, args.check)
+    if command == "fault-sizes" and args.check:
+        raise InputError("fdi-tune fault-sizes --check: for a vehicle on the generic simulator only")
+    if v.thresholds is None or (command == "fault-sizes" and v.fault_sizes is None):
+        raise InputError(f"vehicle {v.name}: its manifest {v.manifest} names no thresholds or fault-size file")
+    args.model, args.thresholds = v.model, v.thresholds
+    if command == "fault-sizes":
+        args.sizes = v.fault_sizes
+    return None
+
+
 def run(args: argparse.Namespace) -> int:
+    done = _files(args, "calibrate")
+    if done is not None:
+        return done
     from fdi_analysis.export.thresholds import Thresholds, with_generated
     from fdi_analysis.model_loader import load_model
     from fdi_analysis.residuals.evaluate import FilterDesign
@@ -240,6 +282,9 @@ def _model_plant_tables(args: argparse.Namespace, th: Thresholds, gens: list[Gen
 
 
 def run_sizes(args: argparse.Namespace) -> int:
+    done = _files(args, "fault-sizes")
+    if done is not None:
+        return done
     from fdi_analysis.export.thresholds import Thresholds
     from fdi_analysis.model_loader import load_model
     from fdi_analysis.residuals.selected import selected_generators
