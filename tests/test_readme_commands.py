@@ -40,7 +40,7 @@ REPO = Path(__file__).resolve().parents[1]
 VENV_BIN = Path(sys.executable).parent
 PYPROJECT = tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))
 ENTRY_POINTS: dict[str, str] = PYPROJECT["project"]["scripts"]
-INPUT_FOLDERS = ("analysis/models", "host_tools/scenarios", "dbc")
+INPUT_FOLDERS = ("analysis/models", "host_tools/scenarios", "dbc", "examples/traction_motor")
 RUN_TIMEOUT_S = 120  # per command run for real; the quick ones take 2-16 s on the 2-core machine under load
 
 BUS = "needs a CAN bus (a live process on python-can's bus)"
@@ -439,7 +439,7 @@ def test_parsing_refuses_an_option_the_program_lacks(monkeypatch: pytest.MonkeyP
                                                      capsys: pytest.CaptureFixture[str]) -> None:
     """The parse of a long command is the program's own: a shown option it does not have fails it."""
     ns = parse_with_the_cli(("fdi-quality", "--vehicle", "romo", "--out", "out/q"), monkeypatch)
-    assert ns.table == "romo" and str(ns.out) == "out/q"
+    assert ns.vehicle == "romo" and str(ns.out) == "out/q"
     for argv in (("fdi-quality", "--vehicle", "romo", "--no-such-option"), ("fdi-live", "--scenario")):
         with pytest.raises(SystemExit) as exc:
             parse_with_the_cli(argv, monkeypatch)

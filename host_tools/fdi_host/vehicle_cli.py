@@ -1,12 +1,13 @@
 """fdi-vehicle: a vehicle is a folder the user owns (fdi_host.vehicle). Make one from a model, regenerate everything
-in it, build its plugin, or write a vehicle's plugin glue.
+in it, build its plugin, or write a shipped vehicle's plugin glue.
 
-    fdi-vehicle new ~/cars/my_car --model my_car.toml --scenario my_drive.toml [--dbc my_car.dbc]
-    fdi-vehicle regenerate ~/cars/my_car     # report, calibration, generated C, CAN codec, plugin glue, CMake file
-    fdi-vehicle build ~/cars/my_car          # CMake: build/libfdi_vehicle_my_car.so, the host tools' plugin
-    fdi-sim --vehicle ~/cars/my_car ...      # then every tool takes the folder
-
-    fdi-vehicle glue romo [--check]          # a shipped vehicle's glue (scripts/generate.sh)
+examples:
+  fdi-vehicle new out/my_motor --model examples/traction_motor/motor.toml --scenario examples/traction_motor/drive.toml \\
+      --dbc examples/traction_motor/motor.dbc --fault-sizes examples/traction_motor/fault_sizes.toml
+  fdi-vehicle regenerate out/my_motor     # report, calibration, fault sizes, generated C, CAN codec, glue, CMake file
+  fdi-vehicle build out/my_motor          # CMake: out/my_motor/build/libfdi_vehicle_my_motor.so, the host tools' plugin
+  fdi-sim --vehicle out/my_motor --fault speed_offset@60s:2 --out out/my_motor.blf   # then every tool takes the folder
+  fdi-vehicle glue three_tank --check  # a shipped vehicle's glue is up to date (scripts/generate.sh writes it)
 """
 
 from __future__ import annotations
@@ -201,10 +202,9 @@ def build(v: Vehicle, source: Path | None, jobs: int) -> Path:
 
 # ------------------------------------------------------------------------------------------ CLI
 def _parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="fdi-vehicle", description=__doc__.split("\n\n")[0],
-                                 epilog="example: fdi-vehicle new ~/cars/my_car --model my_car.toml "
-                                        "--scenario my_drive.toml",
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    doc = __doc__ or ""
+    ap = argparse.ArgumentParser(prog="fdi-vehicle", description=doc.split("\n\n")[0],
+                                 epilog=doc.split("\n\n", 1)[1], formatter_class=argparse.RawDescriptionHelpFormatter)
     add_version(ap)
     sub = ap.add_subparsers(dest="command", required=True)
     p = sub.add_parser("new", help="make a vehicle folder from a model (copied in, with a thresholds file)")

@@ -24,7 +24,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from fdi_host.can.dbc import SIGNAL_MAP, CanDatabase
+from fdi_host.can.dbc import CanDatabase
 from fdi_host.can.frame import Frame
 from fdi_host.can.traffic import decode_frames
 
@@ -53,7 +53,7 @@ def bus_align(db: CanDatabase | None = None) -> float:
     cycle time of the messages that carry frame signals, at most what every such message's kept frames cover
     ((HISTORY - 2) cycles)."""
     db = db or CanDatabase()
-    cycles = [db.cycle_time_ms(m) for m in dict.fromkeys(s.message for s in SIGNAL_MAP)]
+    cycles = [db.cycle_time_ms(m) for m in db.simulated_messages]
     return min(max(cycles), (HISTORY - 2) * min(cycles)) * 1e-3
 
 

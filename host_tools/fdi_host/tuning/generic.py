@@ -31,6 +31,9 @@ from fdi_analysis.residuals.evaluate import FilterDesign, evaluable_segments
 from fdi_analysis.residuals.generator import Generator
 from fdi_analysis.residuals.observer import ObserverReference
 from fdi_analysis.residuals.selected import selected_generators
+from fdi_host.can.dbc import CanDatabase
+from fdi_host.can.ecu_view import ecu_view
+from fdi_host.can.traffic import frames_from_columns
 from fdi_host.errors import FdiHostError
 from fdi_host.sim.faults import FaultSpec
 from fdi_host.sim.generic import FaultRun, GenericPlant, Scenario, drive
@@ -74,13 +77,23 @@ class Calibrated:
     provenance: str
 
 
+def seen_by_ecu(signals: dict[str, FloatArray], dt: float, db: CanDatabase | None) -> dict[str, FloatArray]:
+    """A drive's signals as the ECU's steps see them on the vehicle's bus (its DBC: frames at their cycle times,
+    quantised, held at the steps; fdi_host.can.ecu_view), or as they are for a vehicle without a bus."""
+    if db is None:
+        return signals
+    n = len(next(iter(signals.values())))
+    _, view = ecu_view(frames_from_columns(signals, dt, (n - 1) * dt, db), dt, db)
+    return view
+
+
 def calibration(model: Model, th: Thresholds, sc: Scenario, vehicle: str, workers: int = 2,
-                log: Callable[[str], None] = lambda s: None) -> Calibrated:
+                log: Callable[[str], None] = lambda s: None, db: CanDatabase | None = None) -> Calibrated:
     plant = GenericPlant(model)
     ref = reference(plant, sc)
     gens = generators(model, th, ref, workers)
     design = FilterDesign(th.design[0], th.design[1], th.design[2])
-    drives = [drive(plant, sc, s) for s in sc.seeds]
+    drives = [seen_by_ecu(drive(plant, sc, s), sc.dt, db) for s in sc.seeds]
     skip = round(sc.warmup / design.dt)
     rows = []
     for g in gens:
@@ -97,14 +110,16 @@ def calibration(model: Model, th: Thresholds, sc: Scenario, vehicle: str, worker
             observer_rows.append((" ".join(g.equations), c_ref,
                                   f"{g.name}: observer for {g.observer.state}, residual {g.residual_equation}"))
     provenance = (f"fdi-tune calibrate --vehicle {vehicle}: "
-                  f"fault-free drives of the generic simulator (seeds {' '.join(map(str, sc.seeds))}, "
+                  f"fault-free drives of the generic simulator{' as its ECU sees them on its bus' if db else ''} "
+                  f"(seeds {' '.join(map(str, sc.seeds))}, "
                   f"{sc.duration:g} s, warm-up {sc.warmup:g} s); no raw alarm (|r| > gate sigma or CUSUM k = 1.5, "
                   f"h = 150) in any of them, sigma times {MARGIN}; observer reference: seed {sc.reference_seed}")
     return Calibrated(rows, observer_rows, provenance)
 
 
 def sweep(model: Model, th: Thresholds, sc: Scenario, limits: Mapping[str, float], seed: int, workers: int = 2,
-          log: Callable[[str], None] = lambda s: None) -> dict[str, dict[str, float | str]]:
+          log: Callable[[str], None] = lambda s: None, db: CanDatabase | None = None
+          ) -> dict[str, dict[str, float | str]]:
     """Per fault of the selection and test of its signature: the stated size (next grid value above the first
     alarming one) or why there is none (see the module doc)."""
     plant = GenericPlant(model)
@@ -127,7 +142,7 @@ def sweep(model: Model, th: Thresholds, sc: Scenario, limits: Mapping[str, float
             todo = [(g, s) for g, s in tests if g.name not in found]
             if not todo:
                 break
-            sig = drive(plant, short, seed, [FaultSpec(f, SWEEP_LEAD_S, size)])
+            sig = seen_by_ecu(drive(plant, short, seed, [FaultSpec(f, SWEEP_LEAD_S, size)]), sc.dt, db)
             for g, s in todo:
                 for start, r in evaluable_segments(g, sig, skip, design):
                     k = first_alarm(r, s, th.gate)
@@ -173,8 +188,9 @@ def tune_vehicle(vehicle: Vehicle, command: str, workers: int = 2, check: bool =
     th = Thresholds.load(vehicle.thresholds)
     sc = Scenario.load(vehicle.scenario)
     log = lambda s: print(s, file=sys.stderr)  # noqa: E731
+    db = CanDatabase(vehicle.dbc) if vehicle.dbc is not None else None
     if command == "calibrate":
-        cal = calibration(model, th, sc, vehicle.spec, workers, log=log)
+        cal = calibration(model, th, sc, vehicle.spec, workers, log=log, db=db)
         new = with_generated(vehicle.thresholds.read_text(encoding="utf-8"), cal.rows, cal.provenance,
                              cal.observer_rows)
         return _write_or_check(vehicle.thresholds, new, check)
@@ -182,7 +198,7 @@ def tune_vehicle(vehicle: Vehicle, command: str, workers: int = 2, check: bool =
         raise GenericTuningError(f"vehicle {vehicle.name}: no fault-size file (fault_sizes = ... in "
                                  f"{vehicle.manifest})")
     limits = FaultSizes.load(vehicle.fault_sizes).limits
-    per_test = sweep(model, th, sc, limits, sc.sweep_seed, workers, log=log)
+    per_test = sweep(model, th, sc, limits, sc.sweep_seed, workers, log=log, db=db)
     provenance = (f"fdi-tune fault-sizes --vehicle {vehicle.spec}: a step fault after {SWEEP_LEAD_S:g} s "
                   f"fault-free (seed {sc.sweep_seed}), sizes on the grid from the limit / {10**SWEEP_DECADES:g} up "
                   f"to it; the size at which the test raises a raw alarm within {RESPONSE_S:g} s of the step, "
