@@ -2,8 +2,9 @@
 in it, build its plugin, or write a shipped vehicle's plugin glue.
 
 examples:
-  fdi-vehicle new out/my_motor --model examples/traction_motor/motor.toml --scenario examples/traction_motor/drive.toml \\
-      --dbc examples/traction_motor/motor.dbc --fault-sizes examples/traction_motor/fault_sizes.toml
+  fdi-vehicle new out/my_motor --model examples/traction_motor/motor.toml \\
+      --scenario examples/traction_motor/drive.toml --dbc examples/traction_motor/motor.dbc \\
+      --fault-sizes examples/traction_motor/fault_sizes.toml
   fdi-vehicle regenerate out/my_motor     # report, calibration, fault sizes, generated C, CAN codec, glue, CMake file
   fdi-vehicle build out/my_motor          # CMake: out/my_motor/build/libfdi_vehicle_my_motor.so, the host tools' plugin
   fdi-sim --vehicle out/my_motor --fault speed_offset@60s:2 --out out/my_motor.blf   # then every tool takes the folder

@@ -3,9 +3,10 @@ physics) through the whole chain, on the same generic C library as ROMO.
 
 analysis (structure, MSO sets, the realizable selection) -> thresholds calibrated on drives of the generic
 simulator and the fault-size sweep (fdi-tune calibrate|fault-sizes --vehicle three_tank) -> generated C of its own
-vehicle target (fw/vehicles/three_tank/generated, fdi-analyze export-c) -> the generic diagnoser running it (the ctypes bindings:
-Diagnoser("three_tank")) -> simulated fault runs (host_tools/scenarios/three_tank.toml [[fault_run]]): detected
-within 2 s, no alarm before, the candidates as stated; the C residuals and sensitivities equal the Python twin's.
+vehicle target (fw/vehicles/three_tank/generated, fdi-analyze export-c) -> the generic diagnoser running it (the
+ctypes bindings: Diagnoser("three_tank")) -> simulated fault runs (host_tools/scenarios/three_tank.toml
+[[fault_run]]): detected within 2 s, no alarm before, the candidates as stated; the C residuals and sensitivities
+equal the Python twin's.
 The committed generated files (C and the thresholds/fault-size tables) come out byte for byte from their sources
 in another process on another floating-point path. (tests/fw/test_three_tank.c: the same runs in pure C.)"""
 

@@ -105,7 +105,8 @@ def render_glue(spec: PluginSpec, command: str = PLUGIN_COMMAND) -> str:
         banner=banner(command), vehicle=spec.vehicle, table=spec.table,
         bus_text=f" on the bus {spec.bus}" if spec.bus else ", without a bus", includes=includes,
         name_literal=c_string(spec.vehicle), bus_ref=f"&{spec.bus}" if spec.bus else "NULL", config_body=config,
-        params_body="".join(PARAM_FMT.substitute(literal=c_string(n), index=c) for n, c in spec.params))
+        params_body="".join(PARAM_FMT.substitute(literal=c_string(n), index=c) for n, c in spec.params)
+        or "    (void)name; /* no run-time parameters */\n")
 
 
 CMAKE_FMT = Template("""\

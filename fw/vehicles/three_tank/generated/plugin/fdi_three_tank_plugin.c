@@ -33,5 +33,6 @@ int fdi_plugin_ecu_config_default(fdi_ecu_config_t *cfg)
 int fdi_plugin_param_index(const char *name)
 {
     int k = -1;
+    (void)name; /* no run-time parameters */
     return k;
 }
