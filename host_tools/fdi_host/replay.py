@@ -53,8 +53,8 @@ examples:
   fdi-replay drive.log --speed 10 --interface socketcan --channel vcan0
   fdi-replay drive.trc --interface pcan --channel PCAN_USBBUS1 --bitrate 500000   (onto a real bus, PEAK adapter)
   fdi-replay drive.asc --can-config bus.ini --can-context bench     (the bus in a python-can configuration file)
-  fdi-replay drive.log.gz --offline --vehicle kin --strict            (a malformed line is an error, not skipped)
-  fdi-replay drive.blf --offline --vehicle kin                        (through the bindings, prints x real time)
+  fdi-replay drive.log.gz --offline --vehicle kin --strict          (a malformed line is an error, not skipped)
+  fdi-replay drive.blf --offline --vehicle kin                      (through the bindings, prints x real time)
   fdi-replay drive.blf --offline --vehicle kin --truth drive.truth.json --out-dir out/replay --ecu-log out/ecu.json
   fdi-replay fleet/ --out-dir out/fleet                             (every log below fleet/, one process per core)
   fdi-replay 'fleet/**/*.blf' --scheduler tcp://10.0.0.5:8786       (on a Dask cluster; quote the pattern)

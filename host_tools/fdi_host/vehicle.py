@@ -30,6 +30,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import tomllib
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -165,21 +166,17 @@ def read_manifest(path: Path, shipped: bool = False) -> Vehicle:
     if simulator not in SIMULATORS:
         raise VehicleError(f"{where}: simulator {simulator!r}; use one of {SIMULATORS}")
 
-    def file(key: str, shipped_lookup: object = None) -> Path | None:
+    def file(key: str, shipped: Callable[[str], Path]) -> Path | None:
+        """The file `key` names: beside the manifest, else a shipped file of that name."""
         text = _str(raw, key, where)
         if not text:
             return None
-        local = base / text
-        if local.exists():
-            return local.resolve()
-        if callable(shipped_lookup):
-            found = Path(shipped_lookup(text))
+        for found in (base / text, shipped(text)):
             if found.exists():
                 return found.resolve()
-        raise VehicleError(f"{where}: {key} = {text!r}: no such file beside the manifest"
-                           + (" nor a shipped one" if shipped_lookup else ""))
+        raise VehicleError(f"{where}: {key} = {text!r}: no such file beside the manifest nor a shipped one")
 
-    def scenario(n: str) -> Path:
+    def shipped_scenario(n: str) -> Path:
         return SCENARIOS.path() / f"{n}.toml"
 
     model = file("model", model_file)
@@ -207,12 +204,14 @@ def read_manifest(path: Path, shipped: bool = False) -> Vehicle:
         raise VehicleError(f"{pw}: table and table_header are required")
     return Vehicle(name=name, manifest=path.resolve(), model=model, plugin=info, simulator=simulator,
                    thresholds=file("thresholds", thresholds_file), dbc=file("dbc", lambda n: DBC.path() / f"{n}.dbc"),
-                   scenario=file("scenario", scenario), fault_sizes=file("fault_sizes", scenario), shipped=shipped)
+                   scenario=file("scenario", shipped_scenario), fault_sizes=file("fault_sizes", shipped_scenario),
+                   shipped=shipped)
 
 
 @cache
 def resolve(spec: str | Path) -> Vehicle:
-    """``--vehicle NAME|PATH``: a shipped vehicle by name, else a vehicle folder (or its manifest) by path."""
+    """``--vehicle NAME|PATH``: a shipped vehicle by name, else a vehicle folder (or its manifest) by path (its
+    manifest read once per process)."""
     text = str(spec)
     p = Path(text)
     if len(p.parts) == 1 and not p.suffix and text in shipped_vehicles():

@@ -132,7 +132,7 @@ def _calibrated(thresholds: Path) -> bool:
     return bool(raw.get("generated"))
 
 
-def regenerate(v: Vehicle, workers: int, recalibrate: bool) -> None:
+def regenerate(v: Vehicle, workers: int, keep_calibration: bool = False) -> None:
     """Everything generated in a vehicle folder, from its model, thresholds, scenario and DBC."""
     from fdi_analysis.cli import main as analyze
     from fdi_host.tuning.generic import tune_vehicle
@@ -145,7 +145,7 @@ def regenerate(v: Vehicle, workers: int, recalibrate: bool) -> None:
     model, thr = str(v.model), str(v.thresholds)
     common = ["--workers", str(workers), "--no-progress"]
     _step("structural report -> report/", analyze, ["report", model, "-o", str(folder / "report")])
-    if v.simulator == "generic" and v.scenario is not None and (recalibrate or not _calibrated(v.thresholds)):
+    if v.simulator == "generic" and v.scenario is not None and not (keep_calibration and _calibrated(v.thresholds)):
         _step("calibration on the scenario's fault-free drives -> thresholds [generated]",
               lambda _: tune_vehicle(v, "calibrate", workers), [])
         if v.fault_sizes is not None and FaultSizes.load(v.fault_sizes).limits:
@@ -219,7 +219,9 @@ def _parser() -> argparse.ArgumentParser:
     p = sub.add_parser("regenerate", help="regenerate everything in a vehicle folder")
     p.add_argument("vehicle", help="the vehicle folder")
     p.add_argument("--workers", type=int, default=2, help="processes of the MSO search (default 2)")
-    p.add_argument("--recalibrate", action="store_true", help="calibrate again even when [generated] is filled")
+    p.add_argument("--keep-calibration", action="store_true",
+                   help="keep the thresholds' [generated] and the fault sizes' per-test tables as they are (default: "
+                        "calibrate and sweep again on the scenario, for the tests selected now)")
     p = sub.add_parser("build", help="build a vehicle folder's plugin (CMake)")
     p.add_argument("vehicle", help="the vehicle folder")
     p.add_argument("--fdi-source", type=Path, help="the fdi source tree (default: FDI_SOURCE_DIR or this checkout)")
@@ -238,7 +240,7 @@ def _main(argv: Sequence[str] | None) -> int:
         return 0
     v = resolve(args.vehicle)
     if args.command == "regenerate":
-        regenerate(v, args.workers, args.recalibrate)
+        regenerate(v, args.workers, args.keep_calibration)
     elif args.command == "build":
         print(f"fdi-vehicle: built {build(v, args.fdi_source, args.jobs)}")
     elif not write_glue(v, args.check):

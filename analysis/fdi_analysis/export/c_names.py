@@ -17,7 +17,7 @@ _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
 class CNameError(FdiError, ValueError):
-    """A table name that is not a C identifier."""
+    """A name of generated C (a table, a vehicle's plugin symbols) that is not a C identifier."""
 
 
 def is_c_identifier(name: str) -> bool:

@@ -4,7 +4,8 @@ host_tools/fdi_host/ecu/fdi_py_plugin.h), and the CMake file that builds the veh
 the fw/ core, the seam (host_tools/fdi_host/ecu/fdi_py_seam.c), the vehicle's generated C and that glue.
 
 The host ECU (fdi_host.ecu.bindings) loads the plugin with ctypes and holds no list of vehicles: the shipped ones
-are built by setup.py from their folders' ``vehicle.toml``, a user's by ``fdi-vehicle build`` with the CMake file.
+are built by setup.py from their manifests (host_tools/vehicles/<vehicle>.toml), a user's by ``fdi-vehicle build``
+with the CMake file.
 Both files start with the banner of the project's generated files (`c_text.banner`).
 """
 
@@ -14,7 +15,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from string import Template
 
-from fdi_analysis.export.c_names import is_c_identifier
+from fdi_analysis.export.c_names import CNameError, is_c_identifier
 from fdi_analysis.export.c_text import banner, c_string
 
 PLUGIN_COMMAND = "fdi-vehicle regenerate"  # the command that writes a vehicle folder's generated files
@@ -38,11 +39,11 @@ class PluginSpec:
         for what, value in (("vehicle", self.vehicle), ("table", self.table), ("bus", self.bus),
                             ("config_default", self.config_default), *(("param", c) for _, c in self.params)):
             if value and not is_c_identifier(value):
-                raise ValueError(f"plugin of {self.vehicle!r}: {what} {value!r} is not a C identifier")
+                raise CNameError(f"plugin of {self.vehicle!r}: {what} {value!r} is not a C identifier")
         if self.bus and not self.bus_header:
-            raise ValueError(f"plugin of {self.vehicle!r}: bus {self.bus} without its header")
+            raise CNameError(f"plugin of {self.vehicle!r}: bus {self.bus} without its header")
         if self.config_default and not self.bus:
-            raise ValueError(f"plugin of {self.vehicle!r}: ECU defaults {self.config_default} without a bus")
+            raise CNameError(f"plugin of {self.vehicle!r}: ECU defaults {self.config_default} without a bus")
 
 
 GLUE_FMT = Template("""\

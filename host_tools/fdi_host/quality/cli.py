@@ -22,18 +22,18 @@ from fdi_host.vehicle import add_vehicle_argument, resolve
 
 EXAMPLES = """examples:
   fdi-quality --vehicle romo --out out/quality-romo     # full run: 5 scenarios x 3 seeds, steps at the required sizes,
-                                                      # 30 min fault-free
+                                                        # 30 min fault-free
   fdi-quality --vehicle romo --quick --out out/quality-quick   # CI size: cornering, one seed, 0.3 min fault-free
   fdi-quality --vehicle romo --faults f6 f10 --scenarios cornering slalom --shapes step ramp --multipliers 1 2
   fdi-quality --vehicle romo --trace f6:straight:2001 --out out/trace   # one case step by step: alarms, candidates,
-                                                                      # the exoneration's evidence, ratios plot
-                                                                      # (trace-f6-straight-2001.png)
+                                                                        # the exoneration's evidence, ratios plot
+                                                                        # (trace-f6-straight-2001.png)
   fdi-quality --vehicle romo --trace f6:slalom:2001 --linearity --out out/trace   # and how far each test's response
-                                                      # departs from what its sensitivity predicts (rho), with a
-                                                      # plot (linearity-f6-slalom-2001.png)
+                                                        # departs from what its sensitivity predicts (rho), with a
+                                                        # plot (linearity-f6-slalom-2001.png)
   fdi-quality --vehicle romo --linearity --seeds 2001 --out out/linearity   # the same over every fault x scenario:
-                                                      # where the tests' rho differ by more than the rule's margin
-                                                      # (linearity.json, linearity.md, linearity.png)
+                                                        # where the tests' rho differ by more than the rule's margin
+                                                        # (linearity.json, linearity.md, linearity.png)
   fdi-quality --vehicle romo --ecu noise_allowance=2 --out out/quality-na2   # a study with another ECU setting
   fdi-quality --fleet 25 --out out/fleet      # truth-plant fleet: 25 vehicles x 8 scenarios, the model plant beside,
                                               # false alarms per hour, minimum detectable faults (about 40 min)
