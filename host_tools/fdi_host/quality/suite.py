@@ -163,12 +163,13 @@ def _labels(mask: int, faults: Sequence[str]) -> tuple[str, ...]:
 
 def evaluate_case(
     results: Sequence[EcuResult], spec: FaultSpec, t_ref: float, expected_class: int,
-    faults: Sequence[str] = FAULT_IDS,
+    faults: Sequence[str] = FAULT_IDS, sim_faults: Sequence[str] = FAULT_IDS,
 ) -> tuple[bool, float | None, str, float | None, float, tuple[str, ...], int]:
     """(detected, delay from t_ref, outcome, isolation delay from the detection, exact share, final candidates,
     detections before onset); the final candidates named by `faults` (the table's, bit j = faults[j]; by default the
-    simulator's, FAULT_IDS)."""
-    j = list(faults).index(spec.fault)
+    simulator's, FAULT_IDS); `spec.fault` is the simulator's name, bit j of `sim_faults` (ROMO's FAULT_IDS; a vehicle
+    on the generic simulator: its model's faults, the table's order)."""
+    j = list(sim_faults).index(spec.fault)
     pre = 0
     prev = False
     detect_t: float | None = None

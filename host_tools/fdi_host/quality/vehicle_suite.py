@@ -140,7 +140,7 @@ def run_vehicle_suite(cfg: VehicleSuiteConfig,
                 spec = FaultSpec(fault, onset, sizes[fault] * mult)
                 drive = generic.vehicle_drive(model, sc, [spec], seed, label=plant)
                 det, delay, outcome, iso_delay, _, final, _ = evaluate_case(
-                    _results(v, drive, ecu), spec, onset, table.iso_class[j], table.faults)
+                    _results(v, drive, ecu), spec, onset, table.iso_class[j], table.faults, table.faults)
                 result.cases.append(VehicleCase(
                     fault, seed, spec.magnitude, onset, det, delay, outcome, iso_delay, final,
                     tuple(f for k, f in enumerate(table.faults) if table.iso_class[j] >> k & 1)))
