@@ -70,7 +70,9 @@ KEEPS: dict[str, type[BaseException] | None] = {
     "fdi_host.sim.vehicle_envelope.VehicleDrawError": ValueError,
     "fdi_host.sim.vehicle_sim.SimulationDivergedError": FloatingPointError,
     "fdi_host.tuning.fleet_calibration.CalibrationError": ValueError,
+    "fdi_host.tuning.generic.GenericTuningError": ValueError,
     "fdi_host.tuning.on_log.LogError": ValueError,
+    "fdi_host.vehicle.VehicleError": ValueError,
 }
 
 

@@ -34,7 +34,7 @@ LAYERS: tuple[tuple[str, int], ...] = (
     ("fdi_host.monitor", 15), ("fdi_host.quality", 15),
     ("fdi_host.replay", 16), ("fdi_host.fleet", 16),
     ("fdi_host.diagnosis", 13), ("fdi_host.diagnosis_plots", 10), ("fdi_host.api", 16),
-    ("fdi_host.cli", 17), ("fdi_host.tuning.cli", 17),
+    ("fdi_host.cli", 17), ("fdi_host.tuning.cli", 17), ("fdi_host.vehicle_cli", 17),
 )
 
 

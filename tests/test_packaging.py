@@ -102,7 +102,7 @@ def test_shipped_files_have_one_source_in_the_repository() -> None:
     """Each shipped folder is read from its source in a checkout, and no copy of it is kept in a package folder
     (the wheel's copies are made by the build; scripts/test_wheel.sh compares them byte for byte)."""
     data = (*analysis_resources.PACKAGE_DATA, *host_resources.PACKAGE_DATA)
-    assert {d.source for d in data} == {"analysis/models", "dbc", "host_tools/scenarios"}
+    assert {d.source for d in data} == {"analysis/models", "dbc", "host_tools/scenarios", "host_tools/vehicles"}
     for d in data:
         assert d.sources(REPO), f"{d.source}: nothing to ship"
         assert d.path() == REPO / d.source

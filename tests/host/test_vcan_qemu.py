@@ -42,7 +42,7 @@ cp {bindir}/fdi-can-record {bindir}/fdi-ecu-socketcan {bindir}/fdi-can-play /res
 cd /tmp
 ./fdi-can-record vcan0 /tmp/diag.log --id 200 > /tmp/record.out &
 REC=$!
-./fdi-ecu-socketcan vcan0 --vehicle kin --quiet > /tmp/ecu.out &
+./fdi-ecu-socketcan vcan0 --table kin --quiet > /tmp/ecu.out &
 ECU=$!
 sleep 1
 ./fdi-can-play vcan0 /tmp/drive.log > /tmp/play.out
