@@ -24,7 +24,7 @@ case "$n" in ''|*[!0-9]*) echo "N: the number of vehicles, a whole number" >&2; 
 [ -n "${FDI_RESULTS_SECTION:-}" ] || exec .venv/bin/python scripts/results_doc.py "${FDI_RESULTS_NAME:-fleet_quality}" \
   --run --markdown --display "bash scripts/fleet_quality.sh $*" -- bash scripts/fleet_quality.sh "$@"
 .venv/bin/python -m pip install -q --no-deps --no-build-isolation -e .
-args=(--fleet "$n" --vehicle "$table" --out out/fleet "${@:3}")
+args=(--fleet "$n" --vehicle "$table" --repetitions 3 --out out/fleet "${@:3}")
 if [ -n "${FDI_SCHEDULER:-}" ]; then args+=(--scheduler "$FDI_SCHEDULER"); fi
 if [ -n "${FDI_JOBS:-}" ]; then args+=(--workers "$FDI_JOBS"); fi
 .venv/bin/fdi-quality "${args[@]}"

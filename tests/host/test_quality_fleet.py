@@ -9,8 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fdi_host.ecu.bindings import table_info
 from fdi_host.quality import cli, fleet_plots, fleet_report
 from fdi_host.quality.fleet import MODEL, TRUTH, quick_config, run_fleet_suite
+from fdi_host.quality.fleet_plan import noise_seed
+from fdi_host.quality.suite import QualityError
 from fdi_host.sim.faults import FaultSpec
 from fdi_host.sim.scenario import load_scenario
 from fdi_host.sim.truth_sim import faulty_truth_drive, simulate_truth
@@ -58,6 +61,31 @@ def test_quick_fleet_suite_scores_both_plants(tmp_path: Path) -> None:
     titles = [ax.get_title() for ax in fig.axes]
     assert len(titles) == 4 and all("truth plant, 2 vehicles" in t for t in titles)
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
+
+
+def test_fault_free_repetitions_drive_other_noise_seeds_and_name_the_accusing_tests() -> None:
+    # one vehicle, one scenario, one fault: two fault-free drives on the plan's repetitions 0 and 1 (vehicle 5026's
+    # hard braking in "straight" is where the fleet run of docs/results.md had a false detection)
+    cfg = quick_config("romo", vehicles=1, first_vehicle=5026, faults=("f1",), scenarios=("straight",), workers=1,
+                       model_plant_seeds=(), fault_free_repetitions=2)
+    result = run_fleet_suite(cfg)
+    drives = sorted(result.fault_free, key=lambda d: d.repetition)
+    assert [d.repetition for d in drives] == [0, 1] and {d.plant for d in drives} == {TRUTH}
+    assert drives[0].seed != drives[1].seed and len({round(d.duration_s, 2) for d in drives}) == 1
+    assert len([c for c in result.cases if c.plant == TRUTH]) == 1  # the fault cases only on repetition 0
+    names = {n.split(":")[0] for n in table_info("romo").test_names}
+    for d in drives:  # every counted detection is listed with its time and the tests it accused
+        assert len(d.detections) == d.detection_events
+        for ev in d.detections:
+            assert 0.0 < ev.t_s <= d.duration_s + 0.01 and set(ev.tests) <= names
+    by_test = fleet_report.false_detections_by_test(result)
+    assert sum(sum(v.values()) for v in by_test.values()) >= sum(d.detection_events for d in drives)
+    md = fleet_report.markdown(result)
+    assert "each vehicle and scenario on 2 noise seeds" in md
+    assert ("False detections on the truth plant by accused test" in md) == any(d.detections for d in drives)
+    assert noise_seed(5026, "straight", 1) == drives[1].seed  # the fleet plan's seed of repetition 1
+    with pytest.raises(QualityError, match="repetitions"):
+        quick_config("romo", fault_free_repetitions=5)
 
 
 def test_replot_refuses_a_file_that_is_not_a_fleet_report(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

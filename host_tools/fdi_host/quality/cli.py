@@ -107,6 +107,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--workers", type=int, default=None, help="with --fleet: local processes (default one per core)")
     p.add_argument("--scheduler", default=None, help="with --fleet: a Dask scheduler (tcp://host:8786) instead")
     p.add_argument("--no-sweep", action="store_true", help="with --fleet: no minimum-detectable-fault search")
+    p.add_argument("--repetitions", type=int, metavar="R", default=None,
+                   help="with --fleet: fault-free drives per vehicle and scenario, each on its own noise seed of the "
+                        "fleet plan (1..4, default 1; the fault cases use the first): 27 vehicles x 3 give > 5 h, "
+                        "the false-alarm goal's span")
     p.add_argument("--replot", type=Path, metavar="FLEET_JSON", default=None,
                    help="instead of a run: redraw the plots of a saved fleet run (its fleet.json) into --out "
                         "(default: beside it)")
@@ -127,6 +131,8 @@ def _main(args: argparse.Namespace) -> int:
         return _trace(args)
     if args.fleet is not None:
         return _fleet(args)
+    if args.repetitions is not None:
+        raise InputError("--repetitions: with --fleet only (the model-plant suite drives --fault-free-minutes)")
     cfg = _config(args)
     if args.linearity:
         return _survey(cfg, args.out)
@@ -172,7 +178,8 @@ def _vehicle_suite(args: argparse.Namespace) -> int:
     """The suite of a vehicle on the generic simulator: its model plant, its faults, sizes and scenario."""
     from fdi_host.quality import vehicle_suite as vs
 
-    for option, given in (("--fleet", args.fleet is not None), ("--scenarios", bool(args.scenarios)),
+    for option, given in (("--fleet", args.fleet is not None), ("--repetitions", args.repetitions is not None),
+                          ("--scenarios", bool(args.scenarios)),
                           ("--shapes", bool(args.shapes)), ("--linearity", args.linearity),
                           ("--trace", args.trace is not None)):
         if given:
@@ -200,7 +207,8 @@ def _fleet(args: argparse.Namespace) -> int:
             base, vehicles=args.fleet, scenarios=tuple(args.scenarios) if args.scenarios else base.scenarios,
             faults=tuple(args.faults) if args.faults else (), sizes_file=args.sizes, ecu=args.ecu,
             workers=args.workers, scheduler=args.scheduler, sweep=base.sweep and not args.no_sweep,
-            model_plant_seeds=tuple(args.seeds) if args.seeds else base.model_plant_seeds)
+            model_plant_seeds=tuple(args.seeds) if args.seeds else base.model_plant_seeds,
+            fault_free_repetitions=base.fault_free_repetitions if args.repetitions is None else args.repetitions)
         with _progress("fleet", "task") as progress:
             result = fleet.run_fleet_suite(cfg, progress)
     except (FdiError, OSError) as exc:

@@ -5,7 +5,8 @@ vehicles drawn from the envelope (`fdi_host.sim.vehicle_envelope`), the evaluati
 (`fdi_host.quality.fleet_plan`: no calibration uses their vehicles or noise seeds; the suite refuses others).
 
 One task is one vehicle x scenario: its fault-free drive (with a snapshot at the fault onset, `onset_fraction` of
-the drive), replayed whole through the ECU (false alarms), then every fault case at the onset: the faulty drive
+the drive), replayed whole through the ECU (false alarms; each false detection is kept with the tests it accused, so
+the report says which test alarms where), then every fault case at the onset: the faulty drive
 shares the fault-free part and is simulated from the onset to `post_onset_s` after it (sensor faults only
 recompute the sensors), and the ECU replays it from the drive's start (an ECU runs from the ignition on: its on-line
 estimators learn the vehicle before the fault; `pre_onset_s` replays only that long before the onset instead). A
@@ -14,7 +15,9 @@ plant's suite does (`fdi_host.quality.suite.evaluate_case`), with one more outco
 detected something before the onset (a false alarm in the replayed window): the diagnosis was in alarm already,
 so the case is neither detected nor isolated. Goals of the truth-plant suite (issue 44): detected within 500 ms
 of the onset, isolated exactly within 1 s of the detection, per fault on at least 95 % of the vehicles (a vehicle
-counts when every scenario's case meets the goal).
+counts when every scenario's case meets the goal). `fault_free_repetitions` > 1 drives each truth-plant vehicle and
+scenario fault-free again on the noise seeds of the further repetitions of the fleet plan (more fault-free hours for
+the false-alarm goal: >= 5 h; the fault cases use repetition 0).
 
 Minimum detectable fault: the smallest size on the grid SWEEP_GRID x the required size (up to the fault's
 physical limit) that is detected within 500 ms on at least 95 % of the vehicles, searched from the required size
@@ -47,6 +50,7 @@ from fdi_host.sim.scenario import FLEET_SCENARIOS, load_scenario
 from fdi_host.sim.truth_sim import faulty_truth_drive, simulate_truth
 from fdi_host.sim.vehicle_envelope import draw_vehicle
 from fdi_host.sim.vehicle_sim import SimResult, faulty_drive, simulate
+from fdi_host.tuning.seeds import REPETITIONS
 
 FLEET_DELAY_GOAL_S = 0.5  # detection within 500 ms of the onset
 FLEET_ISOLATION_GOAL_S = 1.0  # exact isolation within 1 s of the detection
@@ -67,6 +71,7 @@ class FleetConfig:
     pre_onset_s: float | None = None  # the replay's start before the onset; None: the drive's start
     post_onset_s: float = 2.0
     sweep: bool = True  # search the minimum detectable fault
+    fault_free_repetitions: int = 1  # fault-free drives per truth-plant vehicle and scenario (noise seeds of the plan)
     model_plant_seeds: tuple[int, ...] = CASE_SEEDS[:1]  # () leaves the model plant's figures out
     sizes_file: Path = DEFAULT_SIZES
     ecu: tuple[tuple[str, float | int | str], ...] = ()
@@ -82,11 +87,14 @@ class FleetConfig:
         bad = [f for f in self.faults if f not in FAULT_IDS]
         if bad:
             raise QualityError(f"unknown fault(s) {bad}; faults are f1..f25")
+        if not 1 <= self.fault_free_repetitions <= REPETITIONS:
+            raise QualityError(f"fault-free repetitions: 1 .. {REPETITIONS} (the noise seeds the fleet plan keeps "
+                               "for each vehicle and scenario)")
         if not 0.0 < self.onset_fraction < 1.0 or (self.pre_onset_s is not None and self.pre_onset_s <= 0.0) \
                 or self.post_onset_s <= FLEET_DELAY_GOAL_S:
             raise QualityError("onset_fraction in (0, 1), pre_onset_s > 0, post_onset_s > the 500 ms goal")
         try:
-            check_evaluation_fleet(self.vehicle_seeds)
+            check_evaluation_fleet(self.vehicle_seeds, self.fault_free_repetitions)
         except ValueError as exc:
             raise QualityError(str(exc)) from exc
 
@@ -120,6 +128,14 @@ class FleetCase:
 
 
 @dataclass(frozen=True)
+class FalseDetection:
+    """A detection in a fault-free drive: when, and the tests accused at its first step."""
+
+    t_s: float  # since the drive's start
+    tests: tuple[str, ...]  # the accused tests' names (MSO<id>)
+
+
+@dataclass(frozen=True)
 class FaultFreeDrive:
     plant: str
     vehicle: int
@@ -130,6 +146,8 @@ class FaultFreeDrive:
     isolation_events: int
     alarm_steps: int
     steps: int
+    repetition: int = 0
+    detections: tuple[FalseDetection, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -143,6 +161,7 @@ class Task:
     fault_free: bool
     config: FleetConfig
     sizes: tuple[tuple[str, float], ...]
+    repetition: int = 0  # the fleet plan's noise-seed repetition of the drive (fault cases: 0)
 
 
 @dataclass(frozen=True)
@@ -182,11 +201,24 @@ def _events(results: Sequence[EcuResult]) -> tuple[int, int, int]:
     return ev, iso, sum(1 for r in results if r.alarm_mask)
 
 
+def _false_detections(results: Sequence[EcuResult], dt: float) -> tuple[FalseDetection, ...]:
+    """Each detection of a fault-free replay: its time and the tests it accused."""
+    out = []
+    prev = False
+    for r in results:
+        if r.detected and not prev:
+            accused = r.accused_mask | r.alarm_mask
+            names = tuple(n.split(":")[0] for i, n in enumerate(r.test_names) if accused >> i & 1)
+            out.append(FalseDetection(round(r.step * dt, 3), names))
+        prev = r.detected
+    return tuple(out)
+
+
 def _base_drive(task: Task, onset: float) -> SimResult:
     scen = load_scenario(task.scenario)
     if task.plant == TRUTH:
         return simulate_truth(scen, [], vehicle=draw_vehicle(task.vehicle),
-                              seed=noise_seed(task.vehicle, task.scenario), snapshots=[onset])
+                              seed=noise_seed(task.vehicle, task.scenario, task.repetition), snapshots=[onset])
     return simulate(scen, [], seed=task.vehicle)
 
 
@@ -212,7 +244,7 @@ def run_task(task: Task) -> TaskResult:
     if task.fault_free:
         ev, iso, alarms = _events(res := replay(cfg.table, base_frames, **ecu))
         ff = FaultFreeDrive(task.plant, task.vehicle, task.scenario, base.seed, float(base.t[-1]), ev, iso, alarms,
-                            len(res))
+                            len(res), task.repetition, _false_detections(res, table_info(cfg.table).dt))
     # The frames before the onset are the fault-free drive's (sensors and noise are causal): encoded once.
     before = [f for f in base_frames if t_start <= f.timestamp < onset]
     info = table_info(cfg.table)
@@ -268,7 +300,10 @@ def _run(tasks: list[Task], cfg: FleetConfig, out: FleetResult, sweep: bool,
         if progress is not None:
             t = r.task
             bad = sum(not c.detected_in_time for c in r.cases)
-            progress(f"{t.plant} {t.vehicle} {t.scenario}: {len(r.cases)} cases, {bad} not detected in time"
+            ff = r.fault_free
+            progress(f"{t.plant} {t.vehicle} {t.scenario}" + (f" (repetition {t.repetition})" if t.repetition else "")
+                     + f": {len(r.cases)} cases, {bad} not detected in time"
+                     + (f", {ff.detection_events} false detections" if ff is not None else "")
                      + (f", ERROR {r.error}" if r.error else ""))
 
 
@@ -356,6 +391,8 @@ def run_fleet_suite(cfg: FleetConfig, progress: Callable[[str], None] | None = N
     cases = tuple((f, 1.0) for f in faults)
     size_items = tuple(sizes.items())
     tasks = [Task(TRUTH, v, s, cases, True, cfg, size_items) for v in cfg.vehicle_seeds for s in cfg.scenarios]
+    tasks += [Task(TRUTH, v, s, (), True, cfg, size_items, rep) for rep in range(1, cfg.fault_free_repetitions)
+              for v in cfg.vehicle_seeds for s in cfg.scenarios]
     tasks += [Task(MODEL, seed, s, cases, True, cfg, size_items) for seed in cfg.model_plant_seeds
               for s in cfg.scenarios]
     _run(tasks, cfg, out, False, progress)

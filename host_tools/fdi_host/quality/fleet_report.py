@@ -19,6 +19,40 @@ def _hours(result: FleetResult, plant: str, vehicle: int | None = None) -> tuple
             sum(d.isolation_events for d in ds))
 
 
+def false_detections_by_test(result: FleetResult, plant: str = TRUTH) -> dict[str, dict[str, int]]:
+    """test -> scenario -> the false detections that accused it (a detection accusing two tests counts for both)."""
+    out: dict[str, dict[str, int]] = {}
+    for d in result.fault_free:
+        if d.plant != plant:
+            continue
+        for ev in d.detections:
+            for test in ev.tests or ("(none)",):
+                per = out.setdefault(test, {})
+                per[d.scenario] = per.get(d.scenario, 0) + 1
+    return dict(sorted(out.items(), key=lambda kv: -sum(kv[1].values())))
+
+
+def _false_detection_lines(result: FleetResult) -> list[str]:
+    """The truth plant's false detections as a table of tests x scenarios, with the first drives named."""
+    by_test = false_detections_by_test(result)
+    if not by_test:
+        return []
+    scen = list(result.config.scenarios)
+    lines = ["", "False detections on the truth plant by accused test and scenario (a detection accusing several tests "
+             "counts for each):", "", "| test | " + " | ".join(scen) + " | all |", "|---|" + "---|" * (len(scen) + 1)]
+    for test, per in by_test.items():
+        lines.append(f"| {test} | " + " | ".join(str(per.get(s, 0) or "") for s in scen)
+                     + f" | {sum(per.values())} |")
+    drives = [(d, ev) for d in result.fault_free if d.plant == TRUTH for ev in d.detections]
+    drives.sort(key=lambda de: (de[0].vehicle, de[0].scenario, de[0].repetition, de[1].t_s))
+    shown = drives[:12]
+    lines += ["", "Where (vehicle, scenario, repetition, time since the start: accused tests"
+              + (f"; the first {len(shown)} of {len(drives)}" if len(drives) > len(shown) else "") + "): "
+              + "; ".join(f"{d.vehicle} {d.scenario} r{d.repetition} {ev.t_s:.2f} s: {' '.join(ev.tests) or '-'}"
+                          for d, ev in shown) + "."]
+    return lines
+
+
 def fault_rows(result: FleetResult) -> list[dict[str, Any]]:
     rows = []
     for f in result.faults:
@@ -54,6 +88,7 @@ def to_dict(result: FleetResult) -> dict[str, Any]:
                                    for v, h in per_vehicle.items()},
         "cases": [dataclasses.asdict(c) for c in result.cases + result.sweep_cases],
         "fault_free_drives": [dataclasses.asdict(d) for d in result.fault_free],
+        "false_detections_by_test": false_detections_by_test(result),
     }
 
 
@@ -102,6 +137,7 @@ def markdown(result: FleetResult) -> str:
     vs = cfg.vehicle_seeds
     th, tev, tiso = _hours(result, TRUTH)
     mh, mev, miso = _hours(result, MODEL)
+    reps = cfg.fault_free_repetitions
     lines = [
         f"## Diagnosis quality on a fleet, table `{result.table}`",
         "",
@@ -113,7 +149,9 @@ def markdown(result: FleetResult) -> str:
         "1 s of the detection, on >= 95 % of the vehicles (every scenario); 'masked': the ECU was in false alarm "
         "before the onset.",
         "",
-        f"Fault-free, truth plant: {th:.2f} h, {tev} false detections ({_per_h(tev, th)}/h), {tiso} false "
+        f"Fault-free, truth plant: {th:.2f} h ("
+        + (f"each vehicle and scenario on {reps} noise seeds" if reps > 1 else "one drive per vehicle and scenario")
+        + f"), {tev} false detections ({_per_h(tev, th)}/h), {tiso} false "
         f"isolations ({_per_h(tiso, th)}/h). Model plant: {mh:.2f} h, {mev} false detections, {miso} false "
         "isolations.",
         "",
@@ -131,6 +169,7 @@ def markdown(result: FleetResult) -> str:
             f"{r['truth_wrong']} | {r['model_detected_in_time']}/{r['model_cases']} | "
             f"{r['model_isolated_in_time']}/{r['model_cases']} | "
             f"{'none' if mdf is None else f'x{mdf:g}'}{': ' + r['mdf_reason'] if r['mdf_reason'] else ''} |")
+    lines += _false_detection_lines(result)
     lines += ["", "| vehicle | fault-free h | false detections /h | false isolations /h |", "|---|---|---|---|"]
     for v in vs:
         h, ev, iso = _hours(result, TRUTH, v)
