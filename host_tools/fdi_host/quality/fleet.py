@@ -190,28 +190,19 @@ class FleetResult:
     mdf: dict[str, dict[str, Any]] = field(default_factory=dict)  # fault -> search outcome
 
 
-def _events(results: Sequence[EcuResult]) -> tuple[int, int, int]:
-    """(detection events, isolation events, alarm steps) of a replay."""
-    ev = iso = 0
+def _events(results: Sequence[EcuResult], dt: float) -> tuple[tuple[FalseDetection, ...], int, int]:
+    """(each detection with its time and the tests it accused, isolation events, alarm steps) of a replay."""
+    detections = []
+    iso = 0
     prev_d = prev_i = False
     for r in results:
-        ev += int(r.detected and not prev_d)
-        iso += int(r.isolated and not prev_i)
-        prev_d, prev_i = r.detected, r.isolated
-    return ev, iso, sum(1 for r in results if r.alarm_mask)
-
-
-def _false_detections(results: Sequence[EcuResult], dt: float) -> tuple[FalseDetection, ...]:
-    """Each detection of a fault-free replay: its time and the tests it accused."""
-    out = []
-    prev = False
-    for r in results:
-        if r.detected and not prev:
+        if r.detected and not prev_d:
             accused = r.accused_mask | r.alarm_mask
             names = tuple(n.split(":")[0] for i, n in enumerate(r.test_names) if accused >> i & 1)
-            out.append(FalseDetection(round(r.step * dt, 3), names))
-        prev = r.detected
-    return tuple(out)
+            detections.append(FalseDetection(round(r.step * dt, 3), names))
+        iso += int(r.isolated and not prev_i)
+        prev_d, prev_i = r.detected, r.isolated
+    return tuple(detections), iso, sum(1 for r in results if r.alarm_mask)
 
 
 def _base_drive(task: Task, onset: float) -> SimResult:
@@ -240,14 +231,14 @@ def run_task(task: Task) -> TaskResult:
     ecu: dict[str, Any] = dict(cfg.ecu)
     t_start = 0.0 if cfg.pre_onset_s is None else max(0.0, onset - cfg.pre_onset_s)
     base_frames = build_frames(base, db, t_from=0.0 if task.fault_free else t_start)
+    info = table_info(cfg.table)
     ff = None
     if task.fault_free:
-        ev, iso, alarms = _events(res := replay(cfg.table, base_frames, **ecu))
-        ff = FaultFreeDrive(task.plant, task.vehicle, task.scenario, base.seed, float(base.t[-1]), ev, iso, alarms,
-                            len(res), task.repetition, _false_detections(res, table_info(cfg.table).dt))
+        detections, iso, alarms = _events(res := replay(cfg.table, base_frames, **ecu), info.dt)
+        ff = FaultFreeDrive(task.plant, task.vehicle, task.scenario, base.seed, float(base.t[-1]), len(detections),
+                            iso, alarms, len(res), task.repetition, detections)
     # The frames before the onset are the fault-free drive's (sensors and noise are causal): encoded once.
     before = [f for f in base_frames if t_start <= f.timestamp < onset]
-    info = table_info(cfg.table)
     end = onset + cfg.post_onset_s
     cases = []
     for fault, mult in task.cases:
